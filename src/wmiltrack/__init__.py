@@ -1,0 +1,43 @@
+"""wmiltrack: fast single-object visual tracking by online weighted multiple-instance learning.
+
+The public names are loaded on first use, so that ``import wmiltrack.metrics`` and the
+command line start quickly and work even before the compiled core is needed.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
+
+try:
+    __version__ = version("wmiltrack")
+except PackageNotFoundError:  # running from a source tree that was never installed
+    __version__ = "0+unknown"
+
+from .result import TrackResult
+
+if TYPE_CHECKING:
+    from .params import Params, variants
+    from .tracker import Tracker
+
+_LAZY = {
+    "Tracker": "tracker",
+    "Params": "params",
+    "variants": "params",
+}
+
+__all__ = ["Params", "TrackResult", "Tracker", "__version__", "variants"]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'wmiltrack' has no attribute {name!r}")
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -1,0 +1,32 @@
+"""The value every tracker in wmiltrack returns for one frame."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+Box = tuple[float, float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class TrackResult:
+    """Outcome of one ``update``.
+
+    Attributes
+    ----------
+    box:
+        ``(x, y, w, h)`` of the target in pixel coordinates (top-left corner, width, height).
+    score:
+        Confidence in ``[0, 1]``; ``nan`` when the tracker gives none (some OpenCV trackers).
+    ok:
+        ``False`` when the tracker considers the target lost (score below the variant's
+        ``lost_threshold``, or an OpenCV tracker reporting failure).
+    """
+
+    box: Box
+    score: float
+    ok: bool = True
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        """Unpack as OpenCV does: ``ok, box = tracker.update(frame)``."""
+        yield self.ok
+        yield self.box
