@@ -1,0 +1,643 @@
+"""Tracking sequences: OTB-style folders, plain image folders, video files and in-memory frames.
+
+An OTB sequence folder looks like::
+
+    <Seq>/img/0001.jpg, 0002.jpg, ...
+    <Seq>/groundtruth_rect.txt      one "x,y,w,h" line per annotated frame
+    <Seq>/start.txt                 optional: the image the first ground-truth line belongs to
+
+Ground-truth boxes are used **exactly as written in the files**: ``(x, y, w, h)`` floats with the
+published coordinates. OTB publishes 1-based pixel coordinates; no ``-1`` shift is applied here,
+so the numbers you get are the numbers in the file. Lines reading ``NaN`` (target absent, as in
+the TLD-derived sequences) become rows of ``nan``.
+
+Frames are returned as OpenCV decodes them: BGR ``uint8`` arrays of shape ``(H, W, 3)``
+(grayscale images are expanded to three channels).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from collections.abc import Iterable, Iterator
+from collections.abc import Sequence as AbcSequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "DATA_ENV",
+    "GT_FILE",
+    "IMAGE_EXTENSIONS",
+    "Sequence",
+    "default_otb_root",
+    "list_otb_sequences",
+    "load_dataset",
+    "load_otb_sequence",
+    "natural_key",
+    "open_input",
+    "read_boxes",
+    "write_boxes",
+]
+
+DATA_ENV = "WMILTRACK_OTB"
+"""Environment variable that overrides the folder holding the OTB sequences."""
+
+GT_FILE = "groundtruth_rect.txt"
+"""Name of the ground-truth file inside an OTB sequence folder."""
+
+START_FILE = "start.txt"
+"""Optional file inside an OTB sequence folder: the image the first ground-truth line belongs to."""
+
+IMAGE_EXTENSIONS = frozenset(
+    {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pbm"}
+)
+"""File suffixes (lower case) treated as images."""
+
+Frame = NDArray[np.uint8]
+Box = tuple[float, float, float, float]
+
+_SPLIT = re.compile(r"[,\t ;]+")
+_DIGITS = re.compile(r"(\d+)")
+
+
+def default_otb_root() -> Path:
+    """Return the folder holding the OTB sequences.
+
+    Returns
+    -------
+    pathlib.Path
+        ``$WMILTRACK_OTB`` (see :data:`DATA_ENV`) when that variable is set and non-empty,
+        otherwise ``<current working directory>/../shared/data/otb``. The fallback is relative
+        to the working directory, not to this file, because the installed package no longer
+        lives next to the repository; run from the repository root or set the variable.
+        The folder is not checked for existence.
+    """
+    env = os.environ.get(DATA_ENV, "").strip()
+    if env:
+        return Path(env).expanduser()
+    return (Path.cwd() / ".." / "shared" / "data" / "otb").resolve()
+
+
+def natural_key(name: str) -> tuple[Any, ...]:
+    """Sort key ordering embedded numbers numerically (``img2`` before ``img10``).
+
+    Parameters
+    ----------
+    name:
+        A file name.
+
+    Returns
+    -------
+    tuple
+        Alternating lower-cased text and integer parts, followed by ``name`` itself to break ties.
+    """
+    parts = _DIGITS.split(name)
+    key: list[Any] = [int(p) if i % 2 else p.lower() for i, p in enumerate(parts)]
+    return (tuple(key), name)
+
+
+def _as_box_array(boxes: ArrayLike | Iterable[Any]) -> NDArray[np.float64]:
+    """Coerce boxes (array-like or objects with a ``box`` attribute) to an ``(n, 4)`` array."""
+    if not isinstance(boxes, np.ndarray):
+        items = list(boxes)  # type: ignore[arg-type]
+        rows = [getattr(b, "box", b) for b in items]
+        arr = np.asarray(rows, dtype=np.float64) if rows else np.zeros((0, 4))
+    else:
+        arr = np.asarray(boxes, dtype=np.float64)
+    if arr.ndim == 1 and arr.size == 4:
+        arr = arr.reshape(1, 4)
+    if arr.ndim != 2 or arr.shape[1] != 4:
+        raise ValueError(f"boxes must have shape (n, 4), got {arr.shape}")
+    return arr
+
+
+def read_boxes(path: str | os.PathLike[str]) -> NDArray[np.float64]:
+    """Read one ``x,y,w,h`` box per line.
+
+    Parameters
+    ----------
+    path:
+        Text file. Values may be separated by commas, tabs, spaces or semicolons (mixed is
+        fine); blank lines are skipped; ``NaN`` is kept as ``nan``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n, 4)`` float64 array, exactly the numbers written in the file.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    ValueError
+        If a line does not hold exactly four numbers.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"box file not found: {p}")
+    rows: list[list[float]] = []
+    with p.open(encoding="utf-8-sig") as fh:
+        for lineno, line in enumerate(fh, start=1):
+            text = line.strip()
+            if not text:
+                continue
+            fields = [f for f in _SPLIT.split(text) if f]
+            if len(fields) != 4:
+                raise ValueError(
+                    f"{p}:{lineno}: expected 4 values (x, y, w, h), got {len(fields)}: {text!r}"
+                )
+            try:
+                rows.append([float(f) for f in fields])
+            except ValueError:
+                raise ValueError(f"{p}:{lineno}: not a number in {text!r}") from None
+    if not rows:
+        return np.zeros((0, 4), dtype=np.float64)
+    return np.asarray(rows, dtype=np.float64)
+
+
+def _fmt(value: float) -> str:
+    if math.isnan(value):
+        return "NaN"
+    if math.isfinite(value) and value.is_integer():
+        return str(int(value))
+    return repr(value)
+
+
+def write_boxes(path: str | os.PathLike[str], boxes: ArrayLike | Iterable[Any]) -> None:
+    """Write one ``x,y,w,h`` line per box (comma separated, ``NaN`` for missing boxes).
+
+    Parameters
+    ----------
+    path:
+        Destination file; its parent folders are created.
+    boxes:
+        ``(n, 4)`` array-like, or an iterable of objects with a ``box`` attribute
+        (such as :class:`wmiltrack.TrackResult`). Integral values are written without a
+        decimal point, others with full precision, so :func:`read_boxes` gives them back exactly.
+    """
+    arr = _as_box_array(boxes)
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    lines = [",".join(_fmt(float(v)) for v in row) for row in arr]
+    p.write_text("".join(line + "\n" for line in lines), encoding="utf-8")
+
+
+def _read_image(path: Path) -> Frame:
+    img = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if img is None:
+        if not path.exists():
+            raise FileNotFoundError(f"image not found: {path}")
+        raise ValueError(f"could not decode image {path} (corrupt or unsupported format)")
+    return np.ascontiguousarray(img, dtype=np.uint8)
+
+
+def _as_frame(img: ArrayLike) -> Frame:
+    arr = np.asarray(img)
+    if arr.dtype != np.uint8:
+        raise ValueError(f"frames must be uint8, got {arr.dtype}")
+    if arr.ndim == 2:
+        arr = cv2.cvtColor(arr, cv2.COLOR_GRAY2BGR)
+    if arr.ndim != 3 or arr.shape[2] != 3:
+        raise ValueError(f"frames must be HxWx3 BGR (or HxW gray), got shape {arr.shape}")
+    return arr
+
+
+@dataclass(eq=False)
+class Sequence:
+    """A tracking sequence: frames plus optional ground truth.
+
+    Exactly one frame source is used: ``paths`` (image files, decoded on demand), ``video``
+    (a file read with :class:`cv2.VideoCapture`) or ``frames`` (in-memory BGR ``uint8`` arrays).
+
+    Attributes
+    ----------
+    name:
+        Sequence name (the folder or file name for loaded data).
+    groundtruth:
+        ``(n_frames, 4)`` float64 ``x, y, w, h`` boxes as written in the annotation file,
+        with ``nan`` rows where the target is absent; ``None`` when unknown.
+    fps:
+        Frame rate when known (videos, synthetic sequences), else ``None``.
+    paths:
+        Image files, one per frame, in order.
+    video:
+        Video file.
+    frames:
+        In-memory frames.
+    meta:
+        Free-form extra per-sequence information (synthetic sequences store per-frame
+        occlusion fractions and illumination gains here).
+    """
+
+    name: str
+    groundtruth: NDArray[np.float64] | None = None
+    fps: float | None = None
+    paths: tuple[Path, ...] | None = field(default=None, repr=False)
+    video: Path | None = field(default=None, repr=False)
+    frames: list[Frame] | None = field(default=None, repr=False)
+    meta: dict[str, Any] = field(default_factory=dict, repr=False)
+    _cache: list[Frame] | None = field(default=None, init=False, repr=False)
+    _n_video: int | None = field(default=None, init=False, repr=False)
+    _cap: Any = field(default=None, init=False, repr=False)
+    _cap_pos: int = field(default=0, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        sources = sum(s is not None for s in (self.paths, self.video, self.frames))
+        if sources != 1:
+            raise ValueError("give exactly one of paths=, video= or frames=")
+        if self.paths is not None:
+            self.paths = tuple(Path(p) for p in self.paths)
+        if self.frames is not None:
+            self.frames = [_as_frame(f) for f in self.frames]
+            self._cache = self.frames
+        if self.video is not None:
+            self.video = Path(self.video)
+            cap = cv2.VideoCapture(str(self.video))
+            try:
+                if not cap.isOpened():
+                    raise ValueError(f"could not open video {self.video}")
+                if self.fps is None:
+                    fps = float(cap.get(cv2.CAP_PROP_FPS))
+                    self.fps = fps if math.isfinite(fps) and fps > 0 else None
+            finally:
+                cap.release()
+        if self.groundtruth is not None:
+            gt = np.asarray(self.groundtruth, dtype=np.float64)
+            if gt.ndim != 2 or gt.shape[1] != 4:
+                raise ValueError(f"groundtruth must have shape (n, 4), got {gt.shape}")
+            self.groundtruth = gt
+            if len(gt) != len(self):
+                raise ValueError(
+                    f"{self.name}: {len(gt)} ground-truth boxes for {len(self)} frames"
+                )
+
+    # ------------------------------------------------------------------ size and access
+    def __len__(self) -> int:
+        if self._cache is not None:
+            return len(self._cache)
+        if self.paths is not None:
+            return len(self.paths)
+        if self._n_video is None:
+            self._n_video = self._count_video_frames()
+        return self._n_video
+
+    def _count_video_frames(self) -> int:
+        cap = cv2.VideoCapture(str(self.video))
+        n = 0
+        try:
+            while cap.grab():
+                n += 1
+        finally:
+            cap.release()
+        return n
+
+    def _index(self, i: int) -> int:
+        n = len(self)
+        j = int(i) + n if int(i) < 0 else int(i)
+        if not 0 <= j < n:
+            raise IndexError(f"frame {i} out of range for {self.name!r} with {n} frames")
+        return j
+
+    def frame(self, i: int) -> Frame:
+        """Return frame ``i`` (negative indices count from the end).
+
+        Parameters
+        ----------
+        i:
+            Frame index.
+
+        Returns
+        -------
+        numpy.ndarray
+            BGR ``uint8`` array ``(H, W, 3)``. In-memory and cached frames are returned
+            without copying; do not modify them in place.
+
+        Raises
+        ------
+        IndexError
+            If ``i`` is out of range.
+        ValueError
+            If the image or video frame cannot be decoded.
+        """
+        j = self._index(i)
+        if self._cache is not None:
+            return self._cache[j]
+        if self.paths is not None:
+            return _read_image(self.paths[j])
+        return self._video_frame(j)
+
+    def _video_frame(self, j: int) -> Frame:
+        # Sequential reads are exact; seeking with CAP_PROP_POS_FRAMES is not for every codec,
+        # so going backwards reopens the file and skips forward with grab().
+        if self._cap is None or j < self._cap_pos:
+            self.close()
+            self._cap = cv2.VideoCapture(str(self.video))
+            self._cap_pos = 0
+            if not self._cap.isOpened():
+                raise ValueError(f"could not open video {self.video}")
+        while self._cap_pos < j:
+            if not self._cap.grab():
+                raise ValueError(f"{self.video}: video ended before frame {j}")
+            self._cap_pos += 1
+        ok, img = self._cap.read()
+        if not ok or img is None:
+            raise ValueError(f"{self.video}: could not decode frame {j}")
+        self._cap_pos += 1
+        return _as_frame(img)
+
+    def close(self) -> None:
+        """Release the video reader held open by :meth:`frame` (no-op for other sources)."""
+        if self._cap is not None:
+            self._cap.release()
+            self._cap = None
+            self._cap_pos = 0
+
+    def __iter__(self) -> Iterator[Frame]:
+        """Yield the frames in order (decoded one at a time unless :meth:`load` was called)."""
+        if self._cache is not None:
+            yield from self._cache
+            return
+        if self.paths is not None:
+            for p in self.paths:
+                yield _read_image(p)
+            return
+        cap = cv2.VideoCapture(str(self.video))
+        if not cap.isOpened():
+            raise ValueError(f"could not open video {self.video}")
+        try:
+            n = 0
+            while True:
+                ok, img = cap.read()
+                if not ok or img is None:
+                    break
+                n += 1
+                yield _as_frame(img)
+            self._n_video = n
+        finally:
+            cap.release()
+
+    def load(self) -> list[Frame]:
+        """Decode every frame once and keep them in memory.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            The frames; later :meth:`frame` and iteration use this cache.
+        """
+        if self._cache is None:
+            frames = list(self)
+            if self.groundtruth is not None and len(frames) != len(self.groundtruth):
+                raise ValueError(
+                    f"{self.name}: decoded {len(frames)} frames but have "
+                    f"{len(self.groundtruth)} ground-truth boxes"
+                )
+            self.close()
+            self._cache = frames
+        return self._cache
+
+    # ------------------------------------------------------------------ ground truth
+    @property
+    def init_box(self) -> Box:
+        """Ground-truth box ``(x, y, w, h)`` of frame 0, the box a tracker is started with.
+
+        Raises
+        ------
+        ValueError
+            If the sequence has no ground truth, or the target is absent (``nan``) in frame 0.
+        """
+        if self.groundtruth is None or len(self.groundtruth) == 0:
+            raise ValueError(f"sequence {self.name!r} has no ground truth: give the box yourself")
+        row = self.groundtruth[0]
+        if not np.all(np.isfinite(row)):
+            raise ValueError(
+                f"sequence {self.name!r}: the target is not annotated in frame 0 ({row.tolist()})"
+            )
+        x, y, w, h = (float(v) for v in row)
+        return (x, y, w, h)
+
+    @property
+    def valid(self) -> NDArray[np.bool_]:
+        """Boolean mask of frames whose ground truth is present (all four values finite).
+
+        Raises
+        ------
+        ValueError
+            If the sequence has no ground truth.
+        """
+        if self.groundtruth is None:
+            raise ValueError(f"sequence {self.name!r} has no ground truth")
+        return np.asarray(np.all(np.isfinite(self.groundtruth), axis=1))
+
+
+# ---------------------------------------------------------------------- loading
+def _list_images(folder: Path) -> list[Path]:
+    files = [
+        p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS
+    ]
+    files.sort(key=lambda p: natural_key(p.name))
+    return files
+
+
+def _read_start(path: Path, images: list[Path]) -> int:
+    """0-based position in ``images`` of the image named by ``start.txt``."""
+    text = path.read_text(encoding="utf-8-sig").split()
+    if len(text) != 1:
+        raise ValueError(f"{path}: expected a single 1-based image index, got {text!r}")
+    try:
+        start = int(float(text[0]))
+    except ValueError:
+        raise ValueError(f"{path}: not an image index: {text[0]!r}") from None
+    for pos, p in enumerate(images):
+        digits = _DIGITS.findall(p.stem)
+        if digits and int(digits[-1]) == start:
+            return pos
+    if 1 <= start <= len(images):
+        return start - 1
+    raise ValueError(
+        f"{path}: start image {start} is neither an image number in the folder nor a "
+        f"position among its {len(images)} images"
+    )
+
+
+def _image_sequence(
+    name: str, img_dir: Path, gt_file: Path | None, start_file: Path | None
+) -> Sequence:
+    images = _list_images(img_dir)
+    if not images:
+        exts = ", ".join(sorted(IMAGE_EXTENSIONS))
+        raise ValueError(f"no images in {img_dir} (looked for {exts})")
+    if start_file is not None and start_file.is_file():
+        images = images[_read_start(start_file, images) :]
+    gt: NDArray[np.float64] | None = None
+    if gt_file is not None:
+        gt = read_boxes(gt_file)
+        if len(gt) == 0:
+            raise ValueError(f"{gt_file} holds no boxes")
+        if len(gt) > len(images):
+            raise ValueError(
+                f"{gt_file} has {len(gt)} boxes but {img_dir} only {len(images)} images"
+                + (" after start.txt" if start_file is not None and start_file.is_file() else "")
+            )
+        images = images[: len(gt)]  # annotation covers only the first frames (e.g. Football1)
+    _read_image(images[0])  # fail early on an unreadable folder
+    return Sequence(name=name, groundtruth=gt, paths=tuple(images))
+
+
+def _is_otb_folder(path: Path) -> bool:
+    return (path / "img").is_dir() and (path / GT_FILE).is_file()
+
+
+def load_otb_sequence(path: str | os.PathLike[str]) -> Sequence:
+    """Load an OTB-layout sequence folder.
+
+    Parameters
+    ----------
+    path:
+        Folder holding ``img/`` and ``groundtruth_rect.txt`` (optionally ``start.txt``).
+
+    Returns
+    -------
+    Sequence
+        Image-backed sequence named after the folder. Images are taken in natural order.
+        If ``start.txt`` exists, it names the image of the first ground-truth line: the image
+        whose number equals its value (OTB convention, e.g. ``300`` -> ``0300.jpg``), or, if no
+        file has that number, the value-th image (1-based). When the ground truth has fewer lines
+        than there are images, the sequence is cut to the annotated frames (Football1: 81 images,
+        74 boxes -> 74 frames). Boxes are kept exactly as written (no 1-based shift).
+
+    Raises
+    ------
+    FileNotFoundError
+        If the folder, ``img/`` or the ground-truth file is missing.
+    ValueError
+        If there are no images, more boxes than images, a malformed box line, or the first
+        image cannot be decoded.
+    """
+    p = Path(path)
+    if not p.is_dir():
+        raise FileNotFoundError(f"sequence folder not found: {p}")
+    img_dir = p / "img"
+    gt_file = p / GT_FILE
+    if not img_dir.is_dir():
+        raise FileNotFoundError(f"{p} has no img/ folder (expected OTB layout)")
+    if not gt_file.is_file():
+        raise FileNotFoundError(f"{p} has no {GT_FILE}")
+    return _image_sequence(p.name, img_dir, gt_file, p / START_FILE)
+
+
+def list_otb_sequences(root: str | os.PathLike[str] | None = None) -> list[Path]:
+    """List the OTB sequence folders under ``root``.
+
+    Parameters
+    ----------
+    root:
+        Folder to scan (not recursive); ``None`` means :func:`default_otb_root`.
+
+    Returns
+    -------
+    list of pathlib.Path
+        Sub-folders holding ``img/`` and ``groundtruth_rect.txt``, sorted by name.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``root`` is not a folder.
+    """
+    r = default_otb_root() if root is None else Path(root)
+    if not r.is_dir():
+        raise FileNotFoundError(
+            f"OTB root not found: {r} (set {DATA_ENV} to the folder holding the sequences)"
+        )
+    return sorted((p for p in r.iterdir() if p.is_dir() and _is_otb_folder(p)), key=lambda p: p.name)
+
+
+def load_dataset(
+    root: str | os.PathLike[str] | None = None, names: AbcSequence[str] | None = None
+) -> list[Sequence]:
+    """Load several OTB sequences.
+
+    Parameters
+    ----------
+    root:
+        Folder holding the sequence folders; ``None`` means :func:`default_otb_root`.
+    names:
+        Sequence names to load, in this order; ``None`` loads all of them (sorted by name).
+
+    Returns
+    -------
+    list of Sequence
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``root`` or a requested sequence is missing (the message lists what is available).
+    """
+    available = list_otb_sequences(root)
+    if names is None:
+        return [load_otb_sequence(p) for p in available]
+    if isinstance(names, str):
+        names = [names]
+    by_name = {p.name: p for p in available}
+    missing = [n for n in names if n not in by_name]
+    if missing:
+        raise FileNotFoundError(
+            f"sequence(s) not found: {', '.join(missing)}; available: {', '.join(sorted(by_name))}"
+        )
+    return [load_otb_sequence(by_name[n]) for n in names]
+
+
+def open_input(path: str | os.PathLike[str]) -> Sequence:
+    """Open whatever the user pointed at as a :class:`Sequence`.
+
+    Parameters
+    ----------
+    path:
+        One of
+
+        * an OTB sequence folder (``img/`` + ``groundtruth_rect.txt``): loaded with ground truth
+          by :func:`load_otb_sequence`;
+        * a folder with an ``img/`` sub-folder but no ground truth: its images, no ground truth;
+        * a folder of images, taken in natural order (``2.png`` before ``10.png``); a
+          ``groundtruth_rect.txt`` next to them is used if present;
+        * a video file, read with :class:`cv2.VideoCapture`.
+
+    Returns
+    -------
+    Sequence
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``path`` does not exist.
+    ValueError
+        If a folder holds no images, the first image cannot be decoded, the path is a single
+        image, or the video cannot be opened or holds no readable frame.
+    """
+    p = Path(path).expanduser()
+    if not p.exists():
+        raise FileNotFoundError(f"input not found: {p}")
+    if p.is_dir():
+        if _is_otb_folder(p):
+            return load_otb_sequence(p)
+        if (p / "img").is_dir():
+            return _image_sequence(p.name, p / "img", None, None)
+        gt = p / GT_FILE
+        return _image_sequence(p.name, p, gt if gt.is_file() else None, p / START_FILE)
+    if p.suffix.lower() in IMAGE_EXTENSIONS:
+        raise ValueError(f"{p} is a single image; pass the folder holding the frames instead")
+    cap = cv2.VideoCapture(str(p))
+    try:
+        if not cap.isOpened():
+            raise ValueError(f"could not open {p} as a video (unknown format or corrupt file)")
+        ok, img = cap.read()
+        if not ok or img is None:
+            raise ValueError(f"{p}: video holds no readable frame")
+    finally:
+        cap.release()
+    return Sequence(name=p.stem, video=p)
