@@ -1,0 +1,385 @@
+"""OpenCV's trackers behind wmiltrack's tracker interface, to compare against.
+
+``make_tracker("opencv:KCF")`` and ``make_tracker("rcwmil")`` give objects with the same two
+methods, ``init(frame, box)`` and ``update(frame) -> TrackResult``, so the benchmark code never
+needs to know which library it runs.
+
+Which wheel has which tracker (checked with OpenCV 5.0.0.93):
+
+============  =========================================  ===================================
+tracker       ``opencv-python-headless``                 ``opencv-contrib-python-headless``
+============  =========================================  ===================================
+MIL           ``cv2.TrackerMIL_create``                  same
+KCF           --                                         ``cv2.TrackerKCF_create``
+CSRT          --                                         ``cv2.TrackerCSRT_create``
+MOSSE         --                                         ``cv2.legacy.TrackerMOSSE_create``
+MedianFlow    --                                         ``cv2.legacy.TrackerMedianFlow_create``
+TLD           --                                         ``cv2.legacy.TrackerTLD_create``
+Boosting      --                                         ``cv2.legacy.TrackerBoosting_create``
+============  =========================================  ===================================
+
+Both wheels install the same ``cv2`` package, so only one can be installed at a time; a
+tracker missing from the installed one raises :class:`TrackerUnavailable` whose message
+gives the commands to swap wheels.  (The DNN trackers DaSiamRPN, Nano and Vit need model
+files and are not wrapped.)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from importlib import import_module
+from importlib.metadata import PackageNotFoundError, version
+from typing import Any, Literal, Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from .result import Box, TrackResult
+
+__all__ = [
+    "OPENCV_TRACKERS",
+    "OpenCVTracker",
+    "TrackerLike",
+    "TrackerUnavailable",
+    "available_opencv_trackers",
+    "make_tracker",
+    "parse_opencv_name",
+]
+
+#: Names of the OpenCV trackers that :class:`OpenCVTracker` wraps.
+OPENCV_TRACKERS: tuple[str, ...] = ("MIL", "KCF", "CSRT", "MOSSE", "MedianFlow", "TLD", "Boosting")
+
+# name -> (factories tried in order as dotted paths under cv2, Params class or None)
+_FACTORIES: dict[str, tuple[tuple[str, ...], str | None]] = {
+    "MIL": (("TrackerMIL_create", "legacy.TrackerMIL_create"), "TrackerMIL_Params"),
+    "KCF": (("TrackerKCF_create", "legacy.TrackerKCF_create"), "TrackerKCF_Params"),
+    "CSRT": (("TrackerCSRT_create", "legacy.TrackerCSRT_create"), "TrackerCSRT_Params"),
+    "MOSSE": (("legacy.TrackerMOSSE_create", "TrackerMOSSE_create"), None),
+    "MedianFlow": (("legacy.TrackerMedianFlow_create", "TrackerMedianFlow_create"), None),
+    "TLD": (("legacy.TrackerTLD_create", "TrackerTLD_create"), None),
+    "Boosting": (("legacy.TrackerBoosting_create", "TrackerBoosting_create"), None),
+}
+
+_CONTRIB_ONLY = frozenset(OPENCV_TRACKERS) - {"MIL"}
+
+_PREFIX = "opencv:"
+
+Frame = npt.NDArray[np.uint8]
+BoxLike = Sequence[float] | npt.NDArray[Any]
+
+
+@runtime_checkable
+class TrackerLike(Protocol):
+    """What the evaluation code needs of a tracker (``wmiltrack.Tracker`` and the peers)."""
+
+    def init(self, frame: Frame, box: BoxLike) -> object:
+        """Start tracking the target in ``box`` (``x, y, w, h``) of ``frame``."""
+        ...
+
+    def update(self, frame: Frame) -> TrackResult:
+        """Locate the target in the next frame."""
+        ...
+
+
+class TrackerUnavailable(RuntimeError):
+    """An OpenCV tracker is not part of the installed ``cv2`` build."""
+
+
+def _cv2() -> Any:
+    return import_module("cv2")
+
+
+def _lookup(cv2: Any, dotted: str) -> Any:
+    obj: Any = cv2
+    for part in dotted.split("."):
+        obj = getattr(obj, part, None)
+        if obj is None:
+            return None
+    return obj
+
+
+def _installed_opencv() -> tuple[str, str]:
+    """Return the distribution that provides ``cv2`` and its version."""
+    for dist in (
+        "opencv-python-headless",
+        "opencv-contrib-python-headless",
+        "opencv-python",
+        "opencv-contrib-python",
+    ):
+        try:
+            return dist, version(dist)
+        except PackageNotFoundError:
+            continue
+    return "opencv-python-headless", str(getattr(_cv2(), "__version__", "<version>"))
+
+
+def _swap_hint(name: str) -> str:
+    dist, ver = _installed_opencv()
+    if "contrib" in dist:
+        return (
+            f"OpenCV tracker {name!r} is not in the installed cv2 ({dist} {ver}), although "
+            "that is a contrib build; this OpenCV version may have dropped it."
+        )
+    contrib = dist.replace("opencv-", "opencv-contrib-", 1)
+    where = " or ".join(f"cv2.{p}" for p in _FACTORIES[name][0])
+    return (
+        f"OpenCV tracker {name!r} is not in the installed cv2 ({dist} {ver}): it comes with "
+        f"the contrib wheel {contrib} (as {where}). Both wheels install the same 'cv2' "
+        "package and overwrite each other, so swap one for the other:\n"
+        f"    pip uninstall -y {dist} && pip install {contrib}=={ver}\n"
+        f"and to go back:\n"
+        f"    pip uninstall -y {contrib} && pip install {dist}=={ver}"
+    )
+
+
+def parse_opencv_name(name: str) -> str:
+    """Canonical spelling of an OpenCV tracker name.
+
+    Parameters
+    ----------
+    name:
+        ``"kcf"``, ``"KCF"``, ``"opencv:medianflow"``... (case-insensitive, prefix optional).
+
+    Returns
+    -------
+    str
+        The entry of :data:`OPENCV_TRACKERS`, e.g. ``"MedianFlow"``.
+
+    Raises
+    ------
+    ValueError
+        If the name is not one of :data:`OPENCV_TRACKERS`; the message lists them.
+    """
+    key = name.strip()
+    if key.lower().startswith(_PREFIX):
+        key = key[len(_PREFIX) :]
+    for known in OPENCV_TRACKERS:
+        if known.lower() == key.lower():
+            return known
+    raise ValueError(
+        f"unknown OpenCV tracker {name!r}; valid names: "
+        + ", ".join(f"opencv:{n}" for n in OPENCV_TRACKERS)
+    )
+
+
+def _factory(name: str) -> Any:
+    cv2 = _cv2()
+    for path in _FACTORIES[name][0]:
+        fn = _lookup(cv2, path)
+        if fn is not None:
+            return fn
+    return None
+
+
+def available_opencv_trackers() -> list[str]:
+    """Names from :data:`OPENCV_TRACKERS` that the installed ``cv2`` provides.
+
+    Returns
+    -------
+    list of str
+        E.g. ``["MIL"]`` with ``opencv-python-headless``, all seven with the contrib wheel.
+    """
+    return [n for n in OPENCV_TRACKERS if _factory(n) is not None]
+
+
+def _frame(frame: npt.ArrayLike) -> Frame:
+    if not isinstance(frame, np.ndarray):
+        raise TypeError(f"frame must be a numpy array, not {type(frame).__name__}")
+    if frame.dtype != np.uint8:
+        raise ValueError(f"frame must be uint8 (as cv2.imread gives), not {frame.dtype}")
+    if not (frame.ndim == 2 or (frame.ndim == 3 and frame.shape[2] in (1, 3))):
+        raise ValueError(f"frame must be (h, w) gray or (h, w, 3) BGR; got shape {frame.shape}")
+    if frame.shape[0] < 1 or frame.shape[1] < 1:
+        raise ValueError(f"empty frame of shape {frame.shape}")
+    return frame
+
+
+def _int_box(box: BoxLike, shape: tuple[int, ...]) -> tuple[int, int, int, int]:
+    """Round a float ``x, y, w, h`` box to integer pixels inside the frame."""
+    try:
+        vals = [float(v) for v in box]
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"box must be 4 numbers x, y, w, h; got {box!r}") from exc
+    if len(vals) != 4:
+        raise ValueError(f"box must be 4 numbers x, y, w, h; got {len(vals)} values")
+    if not all(math.isfinite(v) for v in vals):
+        raise ValueError(f"box has a NaN or infinite value: {vals}")
+    x, y, w, h = vals
+    if w <= 0 or h <= 0:
+        raise ValueError(f"box width and height must be positive; got w={w}, h={h}")
+    height, width = int(shape[0]), int(shape[1])
+    x0 = max(0, round(x))
+    y0 = max(0, round(y))
+    x1 = min(width, round(x + w))
+    y1 = min(height, round(y + h))
+    if x1 - x0 < 2 or y1 - y0 < 2:
+        raise ValueError(
+            f"box {tuple(vals)} leaves less than 2x2 pixels inside the {width}x{height} frame"
+        )
+    return x0, y0, x1 - x0, y1 - y0
+
+
+class OpenCVTracker:
+    """One of OpenCV's trackers with wmiltrack's ``init``/``update`` interface.
+
+    Parameters
+    ----------
+    name:
+        One of :data:`OPENCV_TRACKERS`, case-insensitive, with or without ``"opencv:"``.
+    seed:
+        Passed to ``cv2.setRNGSeed`` before each ``init`` (MIL and Boosting draw samples).
+    lost_box:
+        What ``update`` reports as the box when OpenCV says the target was not found:
+        ``"nan"`` (default: no box, scored as a miss) or ``"hold"`` (the last box found).
+    **params:
+        Attributes of the tracker's ``cv2.Tracker*_Params`` (MIL, KCF and CSRT only), e.g.
+        ``detect_thresh=0.3`` for KCF.
+
+    Raises
+    ------
+    ValueError
+        Unknown name, or params the tracker does not have.
+    TrackerUnavailable
+        The installed ``cv2`` does not provide this tracker; the message says how to get it.
+
+    Attributes
+    ----------
+    name:
+        ``"opencv:<NAME>"``, e.g. ``"opencv:KCF"``.
+    kind:
+        The OpenCV name, e.g. ``"KCF"``.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        seed: int = 0,
+        *,
+        lost_box: Literal["nan", "hold"] = "nan",
+        **params: Any,
+    ) -> None:
+        self.kind: str = parse_opencv_name(name)
+        self.name: str = f"opencv:{self.kind}"
+        self.seed = int(seed)
+        if lost_box not in ("nan", "hold"):
+            raise ValueError(f"lost_box must be 'nan' or 'hold', not {lost_box!r}")
+        self.lost_box = lost_box
+        self._create = _factory(self.kind)
+        if self._create is None:
+            raise TrackerUnavailable(_swap_hint(self.kind))
+        self._params = self._make_params(params)
+        self._tracker: Any = None
+        self._last: Box = (math.nan,) * 4
+
+    def _make_params(self, params: dict[str, Any]) -> Any:
+        if not params:
+            return None
+        params_name = _FACTORIES[self.kind][1]
+        cls = None if params_name is None else getattr(_cv2(), params_name, None)
+        if cls is None:
+            raise ValueError(f"{self.name} takes no parameters; got {sorted(params)}")
+        p = cls()
+        known = sorted(a for a in dir(p) if not a.startswith("_"))
+        for key, value in params.items():
+            if key not in known:
+                raise ValueError(
+                    f"{self.name} has no parameter {key!r}; it has: {', '.join(known)}"
+                )
+            setattr(p, key, value)
+        return p
+
+    def __repr__(self) -> str:
+        return f"OpenCVTracker({self.kind!r}, seed={self.seed})"
+
+    def init(self, frame: Frame, box: BoxLike) -> None:
+        """Start tracking ``box`` in ``frame`` with a fresh OpenCV tracker.
+
+        Parameters
+        ----------
+        frame:
+            ``(h, w, 3)`` BGR or ``(h, w)`` gray uint8 image.
+        box:
+            ``(x, y, w, h)``; floats are rounded to whole pixels (corners rounded, so the box
+            covers the pixels nearest to the float one) and clipped to the frame.
+
+        Raises
+        ------
+        ValueError
+            NaN/infinite values, non-positive size, or less than 2x2 pixels inside the frame.
+        RuntimeError
+            OpenCV refused to initialise.
+        """
+        img = _frame(frame)
+        ibox = _int_box(box, img.shape)
+        _cv2().setRNGSeed(self.seed)
+        tracker = self._create() if self._params is None else self._create(self._params)
+        ok = tracker.init(img, ibox)
+        if ok is False:  # legacy trackers return a bool, the others None
+            raise RuntimeError(f"{self.name} failed to initialise on box {ibox}")
+        self._tracker = tracker
+        self._last = tuple(float(v) for v in ibox)  # type: ignore[assignment]
+
+    def update(self, frame: Frame) -> TrackResult:
+        """Track into the next frame.
+
+        Parameters
+        ----------
+        frame:
+            The next image, same kind as the one given to :meth:`init`.
+
+        Returns
+        -------
+        TrackResult
+            ``score`` is always NaN (OpenCV gives none); ``ok`` is OpenCV's "found" flag;
+            ``box`` is NaN (or the last box, with ``lost_box="hold"``) when not found.
+
+        Raises
+        ------
+        RuntimeError
+            If :meth:`init` was not called.
+        """
+        if self._tracker is None:
+            raise RuntimeError(f"{self.name}: call init() before update()")
+        found, rect = self._tracker.update(_frame(frame))
+        found = bool(found)
+        if found:
+            self._last = (float(rect[0]), float(rect[1]), float(rect[2]), float(rect[3]))
+            return TrackResult(self._last, math.nan, True)
+        box: Box = self._last if self.lost_box == "hold" else (math.nan,) * 4
+        return TrackResult(box, math.nan, False)
+
+
+def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
+    """Create a tracker from a name.
+
+    Parameters
+    ----------
+    spec:
+        ``"opencv:NAME"`` (NAME case-insensitive, one of :data:`OPENCV_TRACKERS`) for an
+        :class:`OpenCVTracker`; anything else is a wmiltrack variant name (``"rcwmil"``,
+        ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``) given to ``wmiltrack.Tracker``.
+    seed:
+        Random seed of the tracker.
+    **params:
+        Parameters of the tracker (OpenCV Params attributes, or ``wmiltrack.Tracker``'s).
+
+    Returns
+    -------
+    TrackerLike
+        An object with ``init(frame, box)`` and ``update(frame) -> TrackResult``.
+
+    Raises
+    ------
+    ValueError
+        Unknown OpenCV name (the message lists the valid ones), or a bad variant.
+    TrackerUnavailable
+        The OpenCV tracker is not in the installed ``cv2``.
+    """
+    s = spec.strip()
+    if s.lower().startswith(_PREFIX):
+        return OpenCVTracker(s[len(_PREFIX) :], seed=seed, **params)
+    from .tracker import Tracker  # the compiled core is loaded only now
+
+    tracker: TrackerLike = Tracker(s, seed=seed, **params)
+    return tracker
