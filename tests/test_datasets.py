@@ -149,9 +149,7 @@ def test_more_boxes_than_images_is_an_error(tmp_path: Path) -> None:
 
 def test_start_file_by_image_number(tmp_path: Path) -> None:
     # images 0300..0307; start.txt names image 302 -> first GT line belongs to 0302
-    path = make_otb(
-        tmp_path, n_images=8, first_number=300, start="302\n", gt_lines=["1,2,3,4"] * 4
-    )
+    path = make_otb(tmp_path, n_images=8, first_number=300, start="302\n", gt_lines=["1,2,3,4"] * 4)
     seq = load_otb_sequence(path)
     assert len(seq) == 4
     assert seq.paths is not None and seq.paths[0].name == "0302.png"
@@ -250,7 +248,10 @@ def test_open_input_image_folder_natural_order(tmp_path: Path) -> None:
     seq = open_input(d)
     assert seq.groundtruth is None
     assert seq.paths is not None and [p.name for p in seq.paths] == [
-        "f1.png", "f2.png", "f3.png", "f10.png"
+        "f1.png",
+        "f2.png",
+        "f3.png",
+        "f10.png",
     ]
     assert [_frame_id(f) for f in seq] == [1, 2, 3, 10]
     with pytest.raises(ValueError, match="no ground truth"):
@@ -291,7 +292,7 @@ def test_open_input_errors(tmp_path: Path) -> None:
 def _write_video(path: Path, n: int) -> bool:
     for fourcc in ("MJPG", "mp4v"):
         target = path.with_suffix(".avi" if fourcc == "MJPG" else ".mp4")
-        writer = cv2.VideoWriter(str(target), cv2.VideoWriter_fourcc(*fourcc), 20.0, (W, H))
+        writer = cv2.VideoWriter(str(target), cv2.VideoWriter.fourcc(*fourcc), 20.0, (W, H))
         if not writer.isOpened():
             continue
         for k in range(n):
@@ -333,7 +334,7 @@ def test_in_memory_sequence() -> None:
     frames = [_img(k) for k in range(3)]
     seq = Sequence("mem", groundtruth=np.zeros((3, 4)), fps=30.0, frames=frames)
     assert len(seq) == 3 and seq.load() is seq.load()
-    assert seq.frame(1) is seq.frames[1]  # type: ignore[index]
+    assert seq.frames is not None and seq.frame(1) is seq.frames[1]
     assert "mem" in repr(seq)
 
 
@@ -385,7 +386,7 @@ def test_real_all_sequences_load(otb_root: Path) -> None:
         assert s.groundtruth is not None and s.groundtruth.shape == (n, 4), s.name
         first = s.frame(0)
         assert first.dtype == np.uint8 and first.ndim == 3 and first.shape[2] == 3
-        x, y, w, h = s.init_box
+        _, _, w, h = s.init_box
         assert w > 0 and h > 0
         if s.name in manifest:
             frames, width, height = manifest[s.name]

@@ -437,9 +437,7 @@ class Sequence:
 
 # ---------------------------------------------------------------------- loading
 def _list_images(folder: Path) -> list[Path]:
-    files = [
-        p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS
-    ]
+    files = [p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS]
     files.sort(key=lambda p: natural_key(p.name))
     return files
 
@@ -554,7 +552,9 @@ def list_otb_sequences(root: str | os.PathLike[str] | None = None) -> list[Path]
         raise FileNotFoundError(
             f"OTB root not found: {r} (set {DATA_ENV} to the folder holding the sequences)"
         )
-    return sorted((p for p in r.iterdir() if p.is_dir() and _is_otb_folder(p)), key=lambda p: p.name)
+    return sorted(
+        (p for p in r.iterdir() if p.is_dir() and _is_otb_folder(p)), key=lambda p: p.name
+    )
 
 
 def load_dataset(
