@@ -248,6 +248,7 @@ class Sequence:
     _cap_pos: int = field(default=0, init=False, repr=False)
 
     def __post_init__(self) -> None:
+        """Check the frame source and the ground truth's shape and length."""
         sources = sum(s is not None for s in (self.paths, self.video, self.frames))
         if sources != 1:
             raise ValueError("give exactly one of paths=, video= or frames=")
@@ -279,6 +280,7 @@ class Sequence:
 
     # ------------------------------------------------------------------ size and access
     def __len__(self) -> int:
+        """Return the number of frames (a video is counted by reading it through once)."""
         if self._cache is not None:
             return len(self._cache)
         if self.paths is not None:

@@ -51,7 +51,7 @@ _STREAMS = ("background", "target", "path", "occlusion", "illumination", "clutte
 def _octave_noise(
     rng: np.random.Generator, h: int, w: int, cells: list[float], weights: list[float]
 ) -> F32:
-    """Sum of bicubic-upsampled random grids; ``cells`` are grid spacings in pixels. Range [0, 1]."""
+    """Sum of bicubic-upsampled random grids (``cells``: grid spacings in pixels), in [0, 1]."""
     out = np.zeros((h, w), np.float32)
     for cell, weight in zip(cells, weights):
         gh = max(2, math.ceil(h / cell) + 2)
