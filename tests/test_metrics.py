@@ -132,9 +132,7 @@ def test_half_good_half_offset() -> None:
     pred = np.array([[0, 0, 10, 10], [0, 0, 10, 10], [5, 0, 10, 10], [5, 0, 10, 10]], float)
     # IoU 1, 1, 1/3, 1/3;  centre errors 0, 0, 5, 5
     r = ope_metrics(pred, gt)
-    expected = [
-        (np.array([1, 1, 1 / 3, 1 / 3]) > t).mean() for t in SUCCESS_THRESHOLDS.tolist()
-    ]
+    expected = [(np.array([1, 1, 1 / 3, 1 / 3]) > t).mean() for t in SUCCESS_THRESHOLDS.tolist()]
     assert r.success_curve == pytest.approx(expected)
     # thresholds 0 .. 0.30 (7 points) -> 1.0;  0.35 .. 0.95 (13) -> 0.5;  1.0 -> 0
     assert r.auc == pytest.approx((7 * 1.0 + 13 * 0.5) / 21)

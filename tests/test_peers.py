@@ -9,7 +9,7 @@ import pytest
 
 cv2 = pytest.importorskip("cv2")
 
-from wmiltrack.peers import (  # noqa: E402
+from wmiltrack.peers import (
     OPENCV_TRACKERS,
     OpenCVTracker,
     TrackerLike,
@@ -18,7 +18,7 @@ from wmiltrack.peers import (  # noqa: E402
     make_tracker,
     parse_opencv_name,
 )
-from wmiltrack.result import TrackResult  # noqa: E402
+from wmiltrack.result import TrackResult
 
 
 def _frames(n: int = 4) -> tuple[list[np.ndarray], list[tuple[int, int, int, int]]]:

@@ -181,7 +181,8 @@ def valid_mask(gt: npt.ArrayLike) -> BoolArray:
         that is not positive (target absent or unannotated).
     """
     g = as_boxes(gt, "gt")
-    return np.all(np.isfinite(g), axis=1) & (g[:, 2] > 0) & (g[:, 3] > 0)
+    ok: BoolArray = np.all(np.isfinite(g), axis=1) & (g[:, 2] > 0) & (g[:, 3] > 0)
+    return ok
 
 
 @dataclass(frozen=True)

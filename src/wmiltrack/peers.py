@@ -73,7 +73,7 @@ BoxLike = Sequence[float] | npt.NDArray[Any]
 class TrackerLike(Protocol):
     """What the evaluation code needs of a tracker (``wmiltrack.Tracker`` and the peers)."""
 
-    def init(self, frame: Frame, box: BoxLike) -> object:
+    def init(self, frame: Frame, box: Box) -> object:
         """Start tracking the target in ``box`` (``x, y, w, h``) of ``frame``."""
         ...
 

@@ -192,7 +192,8 @@ def run_supervised(
 
     while start is not None:
         tracker = make_tracker()
-        init_box = tuple(float(v) for v in g[start])
+        x, y, w, h = (float(v) for v in g[start])
+        init_box = (x, y, w, h)
         tracker.init(frames[start], init_box)
         init_frames.append(start)
         boxes[start] = g[start]
