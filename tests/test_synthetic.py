@@ -101,7 +101,7 @@ def test_rendered_target_follows_groundtruth() -> None:
         a = ref[yi : yi + int(h) - 4, xi : xi + int(w) - 4].astype(float)
         b = seq.frame(t)[yi + dy : yi + dy + int(h) - 4, xi + dx : xi + dx + int(w) - 4]
         errors.append(np.abs(a - b).mean())
-    assert max(errors) < 25  # bilinear sub-pixel shifts only
+    assert max(errors) < 6  # rounding to whole pixels only (a 2 px misplacement gives ~8)
 
 
 def test_occlusion_covers_part_of_target() -> None:
