@@ -219,3 +219,58 @@ def test_bad_arguments() -> None:
         evaluate_sequences([], [FakeSeq("S", gt, frames)], progress=False)
     with pytest.raises(ValueError):
         evaluate_sequences(["opencv:MIL"], [FakeSeq("S", gt, frames)], repeats=0, progress=False)
+
+
+def _load_compare() -> object:
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "compare.py"
+    spec = importlib.util.spec_from_file_location("compare_benchmark", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_compare_script_on_a_tiny_otb_folder(
+    tmp_path: object, capsys: pytest.CaptureFixture[str]
+) -> None:
+    cv2 = pytest.importorskip("cv2")
+    from pathlib import Path
+
+    root = Path(str(tmp_path)) / "otb"
+    for name, x0 in (("Alpha", 40), ("Beta", 20)):
+        frames, gt = _moving(5, seed=x0, x0=x0)
+        (root / name / "img").mkdir(parents=True)
+        for i, f in enumerate(frames, start=1):
+            cv2.imwrite(str(root / name / "img" / f"{i:04d}.png"), f)
+        lines = [",".join(str(int(v)) for v in row) for row in gt]
+        (root / name / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n")
+    out = Path(str(tmp_path)) / "res" / "out.json"
+    compare = _load_compare()
+    rc = compare.main(  # type: ignore[attr-defined]
+        [
+            str(root),
+            "--trackers",
+            "opencv:MIL",
+            "--repeats",
+            "2",
+            "--no-progress",
+            "--json",
+            str(out),
+        ]
+    )
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "| Alpha | opencv:MIL | 5 |" in text and "| Beta | opencv:MIL | 5 |" in text
+    assert "**mean (2 seq)**" in text
+    data = json.loads(out.read_text())
+    assert data["args"]["sequences"] == ["Alpha", "Beta"]
+    assert len(data["records"]) == 2 and len(data["records"][0]["fps_runs"]) == 2
+    assert data["summary"]["opencv:MIL"]["fps_ratio"] == pytest.approx(1.0)
+    # unknown sequence and unknown tracker: clear message, exit status 2
+    assert compare.main([str(root), "--trackers", "opencv:MIL", "--sequences", "Nope"]) == 2  # type: ignore[attr-defined]
+    assert compare.main([str(root), "--trackers", "opencv:Nope"]) == 2  # type: ignore[attr-defined]
+    err = capsys.readouterr().err
+    assert "available: Alpha, Beta" in err and "valid names" in err

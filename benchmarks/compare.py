@@ -1,0 +1,218 @@
+"""Compare trackers on OTB sequences: accuracy (one-pass) and update-only speed.
+
+Usage::
+
+    python benchmarks/compare.py ../shared/data/otb
+    python benchmarks/compare.py ../shared/data/otb --trackers rcwmil,ct,opencv:MIL \\
+        --sequences David,Coke --repeats 3 --json results/compare.json
+
+Every tracker runs on the same frames, decoded before any timing starts, one sequence at a
+time.  The table lists per sequence and in the mean: success AUC (21 thresholds, IoU > t),
+success rate at IoU 0.5, precision at 20 px, mean centre error, update-only FPS and the FPS
+ratio to the reference tracker (``opencv:MIL`` unless ``--reference`` says otherwise), which
+is always run too, in the same session, so the ratio compares like with like.
+
+With ``--repeats R`` each (tracker, sequence) runs R times, the trackers interleaved within
+each round; FPS is the median of the R runs, and the accuracy figures come from the first
+run (all runs use the same ``--seed``; the JSON records whether they gave identical boxes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import sys
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+try:
+    import wmiltrack  # noqa: F401
+except ImportError:  # running from a checkout that was not installed
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from wmiltrack.datasets import Sequence as OTBSequence
+from wmiltrack.datasets import list_otb_sequences, load_otb_sequence
+from wmiltrack.evaluation import evaluate_sequences, format_table, summarize
+from wmiltrack.peers import TrackerUnavailable, make_tracker
+
+DEFAULT_TRACKERS = "rcwmil,opencv:MIL"
+
+
+class LazySequences:
+    """Sized iterable that loads one OTB sequence at a time (frames freed after use)."""
+
+    def __init__(self, paths: Sequence[Path]) -> None:
+        self.paths = list(paths)
+
+    def __len__(self) -> int:
+        return len(self.paths)
+
+    def __iter__(self) -> Iterator[OTBSequence]:
+        for p in self.paths:
+            yield load_otb_sequence(p)
+
+
+def _split(text: str | None) -> list[str]:
+    return [t.strip() for t in (text or "").split(",") if t.strip()]
+
+
+def environment() -> dict[str, Any]:
+    """Versions and machine facts that the timings depend on."""
+    import cv2
+    import numpy as np
+
+    from wmiltrack.peers import _installed_opencv
+
+    dist, ver = _installed_opencv()
+    return {
+        "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "cpu_count": os.cpu_count(),
+        "numpy": np.__version__,
+        "opencv": f"{dist} {ver}",
+        "opencv_threads": cv2.getNumThreads(),
+        "wmiltrack": getattr(sys.modules.get("wmiltrack"), "__version__", "?"),
+    }
+
+
+def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
+    """Command-line arguments."""
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0] if __doc__ else None,
+        epilog=(
+            "FPS counts tracker.update() time only (frames pre-decoded, init excluded). "
+            "With --repeats the FPS is the median over runs and accuracy is from the first run."
+        ),
+    )
+    ap.add_argument("root", type=Path, help="folder holding OTB sequence folders")
+    ap.add_argument(
+        "--trackers",
+        default=DEFAULT_TRACKERS,
+        help=f"comma-separated tracker names (default {DEFAULT_TRACKERS}); "
+        "wmiltrack variants or opencv:NAME",
+    )
+    ap.add_argument("--sequences", default=None, help="comma-separated names (default: all)")
+    ap.add_argument("--repeats", type=int, default=1, help="runs per tracker and sequence")
+    ap.add_argument("--seed", type=int, default=0, help="tracker seed")
+    ap.add_argument("--reference", default="opencv:MIL", help="tracker FPS ratios refer to")
+    ap.add_argument("--json", type=Path, default=None, help="write all results to this file")
+    ap.add_argument("--style", choices=("markdown", "plain"), default="markdown")
+    ap.add_argument(
+        "--cv-threads",
+        type=int,
+        default=None,
+        help="cv2.setNumThreads(N) before running (default: OpenCV's own choice)",
+    )
+    ap.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    args = ap.parse_args(argv)
+    if args.repeats < 1:
+        ap.error("--repeats must be at least 1")
+    return args
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the comparison; return the process exit status."""
+    args = parse_args(argv)
+    trackers = _split(args.trackers)
+    if not trackers:
+        print("no trackers given", file=sys.stderr)
+        return 2
+    if args.reference not in trackers:
+        trackers.append(args.reference)
+    # fail before any long run if a tracker cannot even be created
+    for spec in trackers:
+        try:
+            make_tracker(spec, seed=args.seed)
+        except (TrackerUnavailable, ValueError, ImportError) as exc:
+            print(f"cannot create tracker {spec!r}: {exc}", file=sys.stderr)
+            return 2
+
+    try:
+        paths = list_otb_sequences(args.root)
+    except FileNotFoundError as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    wanted = _split(args.sequences)
+    if wanted:
+        by_name = {p.name: p for p in paths}
+        missing = [n for n in wanted if n not in by_name]
+        if missing:
+            print(
+                f"sequence(s) not found: {', '.join(missing)}; "
+                f"available: {', '.join(sorted(by_name))}",
+                file=sys.stderr,
+            )
+            return 2
+        paths = [by_name[n] for n in wanted]
+    if not paths:
+        print(f"no OTB sequence under {args.root}", file=sys.stderr)
+        return 2
+
+    if args.cv_threads is not None:
+        import cv2
+
+        cv2.setNumThreads(args.cv_threads)
+    env = environment()
+    print(
+        f"# {len(paths)} sequences, trackers {', '.join(trackers)}, repeats {args.repeats}, "
+        f"seed {args.seed}\n# python {env['python']}, numpy {env['numpy']}, {env['opencv']} "
+        f"({env['opencv_threads']} threads), wmiltrack {env['wmiltrack']}, "
+        f"{env['cpu_count']} CPUs\n"
+    )
+    t0 = time.perf_counter()
+    records = evaluate_sequences(
+        trackers,
+        LazySequences(paths),
+        seed=args.seed,
+        repeats=args.repeats,
+        progress=not args.no_progress,
+    )
+    wall = time.perf_counter() - t0
+    print(format_table(records, reference=args.reference, style=args.style))
+    print(f"\n(wall time {wall:.1f} s)")
+
+    if args.json is not None:
+        out = {
+            "environment": env,
+            "args": {
+                "root": str(args.root),
+                "trackers": trackers,
+                "sequences": [p.name for p in paths],
+                "repeats": args.repeats,
+                "seed": args.seed,
+                "reference": args.reference,
+                "accuracy_from": "first run",
+                "fps": "median over runs of update-only FPS",
+            },
+            "summary": summarize(records, reference=args.reference),
+            "records": [r.to_dict() for r in records],
+        }
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(_clean(out), indent=1, allow_nan=False))
+        print(f"wrote {args.json}")
+    return 1 if any(r.error is not None for r in records) else 0
+
+
+def _clean(obj: Any) -> Any:
+    """NaN -> None, infinities -> strings, recursively (strict JSON)."""
+    if isinstance(obj, float):
+        if math.isnan(obj):
+            return None
+        if obj in (float("inf"), float("-inf")):
+            return str(obj)
+        return obj
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    return obj
+
+
+if __name__ == "__main__":
+    sys.exit(main())
