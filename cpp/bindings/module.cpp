@@ -1,0 +1,9 @@
+// The compiled core of wmiltrack: integral images, Haar feature projection, candidate scoring.
+#include "common.hpp"
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "wmiltrack's C++/Eigen core: integral images, Haar-like features, candidate scoring";
+  wmiltrack::bindings::bind_integral(m);
+  wmiltrack::bindings::bind_haar(m);
+  wmiltrack::bindings::bind_scoring(m);
+}

@@ -1,0 +1,51 @@
+// Gaussian naive-Bayes weak classifiers and candidate scoring over a search grid.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "wmiltrack/haar.hpp"
+#include "wmiltrack/integral.hpp"
+
+namespace wmiltrack {
+
+// Per-feature log-likelihood ratio of two Gaussians with the references' guards:
+//   p_c(x) = exp(-(x - mu_c)^2 / (2 sigma_c^2 + eps)) / (sigma_c + eps),  eps = 1e-30
+//   h(x)   = ln(p_1(x) + guard) - ln(p_0(x) + guard)
+// guard = 1e-30 for the compressive-tracking family, 1e-5 for MILTrack.
+class WeakGaussians {
+ public:
+  WeakGaussians(const double* mu1, const double* sigma1, const double* mu0, const double* sigma0,
+                int n, double guard);
+
+  int size() const { return static_cast<int>(mu1_.size()); }
+
+  // out[i] (+)= h_k(x[i]) for i < n; `scratch` needs 2n doubles.
+  void log_ratio(int k, const double* x, int n, double* out, bool accumulate,
+                 double* scratch) const;
+
+ private:
+  std::vector<double> mu1_, a1_, lb1_, mu0_, a0_, lb0_;
+  double guard_;
+  double fast_cut_;  // above this log-density the guard cannot change a double
+};
+
+// Largest i with (i * step)^2 < radius^2: the grid spans offsets -n*step .. n*step.
+inline int grid_half_size(int radius, int step) { return (radius + step - 1) / step - 1; }
+
+struct GridResult {
+  int dx = 0;
+  int dy = 0;
+  double score = 0.0;
+  int candidates = 0;  // 0: no candidate box fits in the frame; dx = dy = 0 then
+};
+
+// Scores the boxes `box` + (i*step, j*step) with (i*step)^2 + (j*step)^2 < radius^2 that lie
+// fully inside the frame, as the sum of the selected features' log ratios. Returns the first
+// maximum in row-major order (dy outer, dx inner). When `scores` is not null it receives the
+// (2n+1) x (2n+1) grid, -inf where no candidate was scored.
+GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* selected,
+                      int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
+                      int step, int frame_width, int frame_height, double* scores);
+
+}  // namespace wmiltrack

@@ -1,0 +1,87 @@
+#include "wmiltrack/haar.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace wmiltrack {
+
+FeatureBank::FeatureBank(std::vector<std::int32_t> starts, std::vector<Rect> rects,
+                         std::vector<double> weights)
+    : starts_(std::move(starts)), rects_(std::move(rects)), weights_(std::move(weights)) {
+  if (starts_.size() < 2 || starts_.front() != 0) {
+    throw std::invalid_argument("feature bank: starts must begin with 0 and hold >= 1 feature");
+  }
+  if (rects_.size() != weights_.size() ||
+      static_cast<std::size_t>(starts_.back()) != rects_.size()) {
+    throw std::invalid_argument("feature bank: starts, rects and weights disagree in length");
+  }
+  for (std::size_t f = 0; f + 1 < starts_.size(); ++f) {
+    if (starts_[f + 1] <= starts_[f]) {
+      throw std::invalid_argument("feature bank: every feature needs at least one rectangle");
+    }
+  }
+  int x0 = std::numeric_limits<int>::max(), y0 = x0;
+  int x1 = std::numeric_limits<int>::min(), y1 = x1;
+  for (const Rect& r : rects_) {
+    if (r.x < 0 || r.y < 0 || r.w <= 0 || r.h <= 0) {
+      throw std::invalid_argument("feature bank: rectangles need x, y >= 0 and w, h > 0");
+    }
+    x0 = std::min(x0, r.x);
+    y0 = std::min(y0, r.y);
+    x1 = std::max(x1, r.x + r.w);
+    y1 = std::max(y1, r.y + r.h);
+  }
+  extent_ = Rect{x0, y0, x1 - x0, y1 - y0};
+}
+
+CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* features,
+                                   int n_features, std::ptrdiff_t stride) {
+  const bool all = features == nullptr;
+  const int n = all ? bank.size() : n_features;
+  starts_.reserve(static_cast<std::size_t>(n) + 1);
+  starts_.push_back(0);
+  for (int k = 0; k < n; ++k) {
+    const int f = all ? k : features[k];
+    if (f < 0 || f >= bank.size()) {
+      throw std::out_of_range("feature index " + std::to_string(f) + " outside the bank of " +
+                              std::to_string(bank.size()));
+    }
+    for (int r = bank.starts()[f]; r < bank.starts()[f + 1]; ++r) {
+      const Rect& q = bank.rects()[r];
+      const std::ptrdiff_t top = q.y * stride + q.x;
+      const std::ptrdiff_t bottom = (q.y + q.h) * stride + q.x;
+      corners_.push_back(Corners{top, top + q.w, bottom, bottom + q.w, bank.weights()[r]});
+    }
+    starts_.push_back(static_cast<std::int32_t>(corners_.size()));
+  }
+}
+
+void check_boxes_covered(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* xs,
+                         const std::int32_t* ys, int n_boxes) {
+  const Rect& e = bank.extent();
+  for (int n = 0; n < n_boxes; ++n) {
+    if (!ii.covers(Rect{xs[n] + e.x, ys[n] + e.y, e.w, e.h})) {
+      throw std::out_of_range("box at (" + std::to_string(xs[n]) + ", " + std::to_string(ys[n]) +
+                              ") reaches outside the integral image's region");
+    }
+  }
+}
+
+void project(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* features,
+             int n_features, const std::int32_t* xs, const std::int32_t* ys, int n_boxes,
+             double* out) {
+  check_boxes_covered(ii, bank, xs, ys, n_boxes);
+  const CompiledFeatures compiled(bank, features, n_features, ii.stride());
+  const int n_out = compiled.size();
+  const std::ptrdiff_t s = ii.stride();
+  for (int n = 0; n < n_boxes; ++n) {
+    const std::int64_t* base = ii.data() + (ys[n] - ii.y0()) * s + (xs[n] - ii.x0());
+    for (int k = 0; k < n_out; ++k) {
+      out[static_cast<std::ptrdiff_t>(k) * n_boxes + n] = compiled.value(base, k);
+    }
+  }
+}
+
+}  // namespace wmiltrack

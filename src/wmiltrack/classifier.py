@@ -1,0 +1,56 @@
+"""Gaussian naive-Bayes weak classifiers, one per feature and class, updated online."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .params import Params
+
+
+class GaussianPool:
+    """Class-conditional Gaussians N(mu1, sigma1) (target) and N(mu0, sigma0) (background).
+
+    ``update`` follows spec section 1.1 (``classifier="gaussian"``: CT, FCT, WMIL, rcwmil)
+    or section 1.2 (``classifier="mil"``: MILTrack), with lambda = ``learning_rate``
+    weighting the old model.
+    """
+
+    def __init__(self, params: Params) -> None:
+        m = params.num_features
+        self.params = params
+        self.mu1 = np.zeros(m)
+        self.sigma1 = np.ones(m)
+        self.mu0 = np.zeros(m)
+        self.sigma0 = np.ones(m)
+        self._seen = [False, False]  # has class 0 / 1 been updated yet
+
+    def update(self, positives: np.ndarray, negatives: np.ndarray) -> None:
+        """Fold in the feature values (M x n) of one frame's positive and negative samples."""
+        self.mu1, self.sigma1 = self._update_class(1, self.mu1, self.sigma1, positives)
+        self.mu0, self.sigma0 = self._update_class(0, self.mu0, self.sigma0, negatives)
+
+    def _update_class(self, cls: int, mu: np.ndarray, sigma: np.ndarray,
+                      values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if values.shape[1] == 0:  # no sample of this class in this frame: keep the model
+            return mu, sigma
+        p = self.params
+        lam = p.learning_rate
+        first = not self._seen[cls]
+        self._seen[cls] = True
+        mean = values.mean(axis=1)
+        if p.classifier == "mil":
+            # MILTrack: stores the variance; the first update is direct; later ones blend the
+            # variance around the *updated* mean.
+            if first:
+                var = values.var(axis=1) + 1e-9
+                new_mu = mean
+            else:
+                new_mu = lam * mu + (1.0 - lam) * mean
+                var = lam * sigma**2 + (1.0 - lam) * ((values - new_mu[:, None]) ** 2).mean(axis=1)
+            return new_mu, np.maximum(np.sqrt(var), p.sigma_floor)
+        std = values.std(axis=1)
+        if first and p.first_update == "direct":
+            return mean, np.maximum(std, p.sigma_floor)
+        new_sigma = np.sqrt(lam * sigma**2 + (1.0 - lam) * std**2 + lam * (1.0 - lam) * (mu - mean) ** 2)
+        new_mu = lam * mu + (1.0 - lam) * mean
+        return new_mu, np.maximum(new_sigma, p.sigma_floor)

@@ -1,0 +1,129 @@
+"""Feature banks: which rectangles, with which weights, make up each Haar-like feature.
+
+A bank is drawn once per ``init`` from the tracker's seeded generator, relative to the
+box's top-left corner, and handed to the C++ core as three flat arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .params import Params
+
+
+@dataclass(frozen=True)
+class BankArrays:
+    """Features in compressed form: feature f owns ``rects[starts[f]:starts[f + 1]]``.
+
+    Attributes
+    ----------
+    starts : (M + 1,) int32
+    rects : (R, 4) int32 of ``x, y, w, h`` relative to the box's top-left corner
+    weights : (R,) float64
+    subregion : (M,) int32, the sub-region of each feature (-1 for ``random`` features)
+    """
+
+    starts: np.ndarray
+    rects: np.ndarray
+    weights: np.ndarray
+    subregion: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return int(self.starts.size - 1)
+
+
+def min_box_size(params: Params) -> tuple[int, int]:
+    """Smallest ``(w, h)`` a box may have for this variant's features."""
+    if params.feature_kind == "subregion":
+        side = int(math.isqrt(params.num_subregions)) if params.subregion_mode == "grid" else 1
+        need = max(2 * side, params.min_box_size)
+    else:
+        x_lo, x_hi_off, w_lo, w_end_off = params.rect_bounds
+        # the widest x range must be non-empty and leave room for the narrowest rectangle
+        need = max(x_lo + x_hi_off, x_lo + w_lo + w_end_off, params.min_box_size)
+    return need, need
+
+
+def check_box_size(params: Params, w: int, h: int) -> None:
+    """Raise ``ValueError`` when a ``w x h`` box is too small for the variant's features."""
+    mw, mh = min_box_size(params)
+    if w < mw or h < mh:
+        raise ValueError(
+            f"box is {w}x{h} pixels (after clipping to the frame); variant {params.variant!r} "
+            f"needs at least {mw}x{mh}"
+        )
+
+
+def _subregions(params: Params, w: int, h: int, rng: np.random.Generator) -> list[tuple[int, int, int, int]]:
+    """Origin and size of the sub-region of each feature."""
+    m = params.num_features
+    if params.subregion_mode == "grid":
+        side = math.isqrt(params.num_subregions)
+        xs = [w * i // side for i in range(side + 1)]
+        ys = [h * i // side for i in range(side + 1)]
+        cells = [(xs[i], ys[j], xs[i + 1] - xs[i], ys[j + 1] - ys[j]) for j in range(side) for i in range(side)]
+        return [cells[f % len(cells)] for f in range(m)]
+    sw, sh = max(w // 2, 1), max(h // 2, 1)
+    return [(int(rng.integers(0, w - sw + 1)), int(rng.integers(0, h - sh + 1)), sw, sh) for _ in range(m)]
+
+
+def _side_range(params: Params, size: int) -> tuple[int, int]:
+    """Allowed rectangle side within a sub-region side of ``size`` (spec section 7)."""
+    lo = min(size, max(params.rect_min_size, math.ceil(params.beta_min * size)))
+    hi = max(lo, min(size, math.floor(params.beta_max * size)))
+    return lo, hi
+
+
+def make_bank(params: Params, w: int, h: int, rng: np.random.Generator) -> BankArrays:
+    """Draw the variant's feature bank for a ``w x h`` box."""
+    check_box_size(params, w, h)
+    m = params.num_features
+    counts = rng.integers(params.rects_min, params.rects_max + 1, size=m)
+    starts = np.zeros(m + 1, dtype=np.int32)
+    np.cumsum(counts, out=starts[1:])
+    n_rects = int(starts[-1])
+    rects = np.empty((n_rects, 4), dtype=np.int32)
+    weights = np.empty(n_rects, dtype=np.float64)
+    subregion = np.full(m, -1, dtype=np.int32)
+
+    if params.feature_kind == "subregion":
+        regions = _subregions(params, w, h, rng)
+        for f in range(m):
+            ox, oy, sw, sh = regions[f]
+            subregion[f] = f % params.num_subregions if params.subregion_mode == "grid" else -1
+            wlo, whi = _side_range(params, sw)
+            hlo, hhi = _side_range(params, sh)
+            for r in range(starts[f], starts[f + 1]):
+                rw = int(rng.integers(wlo, whi + 1))
+                rh = int(rng.integers(hlo, hhi + 1))
+                rx = int(rng.integers(0, sw - rw + 1))
+                ry = int(rng.integers(0, sh - rh + 1))
+                sign = 1.0 if rng.random() < params.positive_prob else -1.0
+                rects[r] = (ox + rx, oy + ry, rw, rh)
+                weights[r] = sign / (rw * rh) if params.area_normalize else sign
+    else:
+        x_lo, x_hi_off, w_lo, w_end_off = params.rect_bounds
+        for f in range(m):
+            n = int(counts[f])
+            for r in range(starts[f], starts[f + 1]):
+                rx = int(rng.integers(x_lo, w - x_hi_off + 1))
+                ry = int(rng.integers(x_lo, h - x_hi_off + 1))
+                rw = int(rng.integers(w_lo, max(w_lo, w - rx - w_end_off) + 1))
+                rh = int(rng.integers(w_lo, max(w_lo, h - ry - w_end_off) + 1))
+                if params.weight_mode == "uniform":
+                    weight = float(rng.uniform(-1.0, 1.0))
+                else:
+                    weight = 1.0 if rng.random() < 0.5 else -1.0
+                    if params.weight_mode == "sign_sqrt":
+                        weight /= math.sqrt(n)
+                if params.area_normalize:
+                    weight /= rw * rh
+                rects[r] = (rx, ry, rw, rh)
+                weights[r] = weight
+    # Every rectangle must stay inside the box.
+    assert np.all(rects[:, 0] + rects[:, 2] <= w) and np.all(rects[:, 1] + rects[:, 3] <= h)
+    return BankArrays(starts=starts, rects=rects, weights=weights, subregion=subregion)

@@ -1,0 +1,91 @@
+"""Checking and converting what users pass as frames and boxes."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+IntBox = tuple[int, int, int, int]
+
+
+def as_frame(frame: Any) -> np.ndarray:
+    """Validate a frame and return it as a uint8 array the core can read without copying.
+
+    Accepted: ``H x W`` gray, ``H x W x 1``, ``H x W x 3`` (BGR, as OpenCV reads) and
+    ``H x W x 4`` (BGRA; alpha ignored), any strides, read-only or not.
+
+    * uint8: used as is.
+    * other integer dtypes: accepted when every value is in 0..255 (the 8-bit scale),
+      otherwise ``ValueError`` (scale 16-bit images yourself, e.g. ``frame >> 8``).
+    * float16/32/64: read on the 0..255 scale (as ``frame.astype(float)`` of an 8-bit
+      image gives) and rounded; NaN, infinity or values outside [0, 255] are a ``ValueError``.
+    * bool, complex, object and other dtypes: ``TypeError``.
+    """
+    if not isinstance(frame, np.ndarray):
+        raise TypeError(f"frame must be a numpy array, got {type(frame).__name__}")
+    if frame.ndim not in (2, 3):
+        raise ValueError(f"frame must be H x W or H x W x C, got shape {frame.shape}")
+    if frame.ndim == 3 and frame.shape[2] not in (1, 3, 4):
+        raise ValueError(
+            f"frame must have 1, 3 (BGR) or 4 (BGRA) channels, got {frame.shape[2]} (shape {frame.shape})"
+        )
+    if frame.shape[0] == 0 or frame.shape[1] == 0:
+        raise ValueError(f"frame is empty (shape {frame.shape})")
+    kind = frame.dtype.kind
+    if frame.dtype == np.uint8:
+        return frame
+    if kind in "ui":
+        lo, hi = int(frame.min()), int(frame.max())
+        if lo < 0 or hi > 255:
+            raise ValueError(
+                f"{frame.dtype} frame has values in [{lo}, {hi}]; wmiltrack reads integer frames on "
+                "the 8-bit scale 0..255 (convert it first, e.g. (frame >> 8).astype(np.uint8) for 16-bit)"
+            )
+        return frame.astype(np.uint8)
+    if kind == "f":
+        lo, hi = float(np.min(frame)), float(np.max(frame))
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            raise ValueError("float frame contains NaN or infinity")
+        if lo < 0.0 or hi > 255.0:
+            raise ValueError(
+                f"float frame has values in [{lo:g}, {hi:g}]; wmiltrack reads float frames on the "
+                "0..255 scale (multiply a [0, 1] image by 255 first)"
+            )
+        return np.rint(frame).astype(np.uint8)
+    raise TypeError(f"frame dtype {frame.dtype} is not supported: pass uint8 (or 0..255 ints/floats)")
+
+
+def frame_size(frame: np.ndarray) -> tuple[int, int]:
+    """``(width, height)``."""
+    return int(frame.shape[1]), int(frame.shape[0])
+
+
+def clip_box(box: Any, frame_w: int, frame_h: int) -> IntBox:
+    """Round a user box ``(x, y, w, h)`` to whole pixels and clip it to the frame.
+
+    Raises ``TypeError`` for something that is not four real numbers and ``ValueError`` for
+    non-finite values, non-positive sizes or a box wholly outside the frame.
+    """
+    try:
+        values = [float(v) for v in box]
+    except (TypeError, ValueError):
+        raise TypeError(f"box must be four numbers (x, y, w, h), got {box!r}") from None
+    if len(values) != 4:
+        raise TypeError(f"box must be four numbers (x, y, w, h), got {len(values)}: {box!r}")
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError(f"box has NaN or infinite values: {tuple(values)}")
+    x, y, w, h = values
+    if w <= 0 or h <= 0:
+        raise ValueError(f"box must have positive width and height, got w={w:g}, h={h:g}")
+    x0, y0 = max(x, 0.0), max(y, 0.0)
+    x1, y1 = min(x + w, float(frame_w)), min(y + h, float(frame_h))
+    if x1 <= x0 or y1 <= y0:
+        raise ValueError(
+            f"box {tuple(values)} lies wholly outside the {frame_w}x{frame_h} frame"
+        )
+    xi, yi = int(round(x0)), int(round(y0))
+    xe, ye = int(round(x1)), int(round(y1))
+    xi, yi = min(xi, frame_w - 1), min(yi, frame_h - 1)
+    return xi, yi, max(xe - xi, 1), max(ye - yi, 1)

@@ -1,0 +1,300 @@
+"""Tracker parameters: one frozen object per variant, every constant of the spec overridable.
+
+The six variants share one engine; what distinguishes them is only the values below. The
+defaults follow ``ALGORITHMS.md`` (the project's spec) and, for rcwmil, the paper; the table
+in the README is generated from :data:`VARIANTS`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+FeatureKind = Literal["subregion", "random"]
+WeightMode = Literal["sign", "sign_sqrt", "uniform"]
+NegSampling = Literal["exact", "bernoulli"]
+ClassifierKind = Literal["gaussian", "mil"]
+FirstUpdate = Literal["direct", "blend"]
+SelectionKind = Literal["wmil", "milboost", "none"]
+InstanceWeights = Literal["exp", "exp_sq", "uniform"]
+GradientForm = Literal["paper", "code"]
+SubregionMode = Literal["grid", "random"]
+
+_CHOICES: dict[str, tuple[str, ...]] = {
+    "feature_kind": ("subregion", "random"),
+    "weight_mode": ("sign", "sign_sqrt", "uniform"),
+    "neg_sampling": ("exact", "bernoulli"),
+    "classifier": ("gaussian", "mil"),
+    "first_update": ("direct", "blend"),
+    "selection": ("wmil", "milboost", "none"),
+    "instance_weights": ("exp", "exp_sq", "uniform"),
+    "gradient": ("paper", "code"),
+    "subregion_mode": ("grid", "random"),
+}
+
+
+@dataclass(frozen=True)
+class Params:
+    """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
+
+    Attributes
+    ----------
+    variant : str
+        Name of the variant these settings started from.
+    feature_kind : {"subregion", "random"}
+        ``subregion``: rectangles drawn inside a grid of sub-regions of the box with size
+        limits (rcwmil, OSIL). ``random``: rectangles anywhere in the box (CT, FCT, MIL, WMIL).
+    num_features : int
+        M, the size of the feature pool.
+    num_selected : int
+        K, how many features the strong classifier uses (== M when ``selection="none"``).
+    rects_min, rects_max : int
+        Rectangles per feature, drawn uniformly in ``rects_min..rects_max`` (inclusive).
+    num_subregions : int
+        Sub-regions for ``subregion`` features: 4 = 2x2 grid (``subregion_mode="grid"``).
+    subregion_mode : {"grid", "random"}
+        ``grid``: quadrant ``i mod 4`` for feature i; ``random``: a W/2 x H/2 window at a
+        random place per feature (spec section 8 #3).
+    positive_prob : float
+        Probability of a +1 entry of the measurement matrix (0.78; -1 otherwise).
+    rect_min_size : int
+        Smallest rectangle side in pixels (w_min = h_min = 2).
+    beta_min, beta_max : float
+        Rectangle side limits as fractions of the sub-region side (0.2, 0.8).
+    rect_bounds : tuple of 4 int
+        For ``random`` features: ``(x_lo, x_hi_off, w_lo, w_end_off)``: a rectangle's x is
+        drawn in ``x_lo .. W - x_hi_off`` and its width in ``w_lo .. W - x - w_end_off``
+        (same for y and h), matching each reference implementation's ranges.
+    weight_mode : {"sign", "sign_sqrt", "uniform"}
+        Rectangle weights of ``random`` features: fair +-1, +-1/sqrt(#rects) (CT), U[-1, 1].
+    area_normalize : bool
+        Divide each rectangle's sum by its area (FCT eq. 8; rcwmil) or use raw sums.
+    pos_radius : float
+        alpha: positives are every offset with d < alpha (45 for 4).
+    neg_inner, neg_outer : float
+        zeta, beta: negatives come from the annulus zeta <= d < beta.
+    neg_count : int
+        Number of negatives (exact draw without replacement, or the Bernoulli maximum).
+    neg_sampling : {"exact", "bernoulli"}
+        ``exact``: exactly ``neg_count`` distinct offsets; ``bernoulli``: the references'
+        thinning with keep probability ``neg_count / (2 floor(beta) + 1)^2``, truncated.
+    init_pos_radius, init_neg_inner, init_neg_outer, init_neg_count : float or None
+        The first frame's bags when they differ from tracking (MIL, WMIL); ``None`` = same.
+    learning_rate : float
+        lambda in [0, 1): weight of the old model in the Gaussian update.
+    classifier : {"gaussian", "mil"}
+        ``gaussian``: std-based update of CT/FCT/WMIL (spec 1.1); ``mil``: MILTrack's
+        variance-based update (spec 1.2).
+    first_update : {"direct", "blend"}
+        ``direct``: the first frame sets mu and sigma from the samples; ``blend``: the
+        references' quirk of blending them into (0, 1).
+    sigma_floor : float
+        Lower bound of every sigma.
+    guard : float
+        The epsilon added to each likelihood before the log (1e-30 CT family, 1e-5 MIL).
+    selection : {"wmil", "milboost", "none"}
+        Weighted-MIL gradient selection, MILBoost's Noisy-OR likelihood selection, or all
+        features (CT, FCT).
+    instance_weights : {"exp", "exp_sq", "uniform"}
+        Positive-bag weights: exp(-d) normalised (paper), exp(-d^2) unnormalised (WMIL
+        reference code), or equal weights (OSIL).
+    gradient : {"paper", "code"}
+        WMIL selection gradient w s (1 - s) / sum(w s) (paper) or the reference code's
+        w s (1 - w s) / sum(w s).
+    coarse_radius, coarse_step : int
+        Search grid: offsets (i, j) * step with |offset| < radius.
+    fine_radius, fine_step : int
+        Second, finer search around the coarse winner (``fine_radius=0``: none).
+    lost_threshold : float
+        ``TrackResult.ok`` is False when the confidence falls below this.
+    min_box_size : int
+        Smallest box side accepted (after clipping to the frame).
+    """
+
+    variant: str = "rcwmil"
+    feature_kind: FeatureKind = "subregion"
+    num_features: int = 100
+    num_selected: int = 20
+    rects_min: int = 2
+    rects_max: int = 4
+    num_subregions: int = 4
+    subregion_mode: SubregionMode = "grid"
+    positive_prob: float = 0.78
+    rect_min_size: int = 2
+    beta_min: float = 0.2
+    beta_max: float = 0.8
+    rect_bounds: tuple[int, int, int, int] = (1, 6, 2, 3)
+    weight_mode: WeightMode = "sign"
+    area_normalize: bool = True
+    pos_radius: float = 4.0
+    neg_inner: float = 8.0
+    neg_outer: float = 22.0
+    neg_count: int = 50
+    neg_sampling: NegSampling = "exact"
+    init_pos_radius: float | None = None
+    init_neg_inner: float | None = None
+    init_neg_outer: float | None = None
+    init_neg_count: int | None = None
+    learning_rate: float = 0.9
+    classifier: ClassifierKind = "gaussian"
+    first_update: FirstUpdate = "direct"
+    sigma_floor: float = 1e-6
+    guard: float = 1e-30
+    selection: SelectionKind = "wmil"
+    instance_weights: InstanceWeights = "exp"
+    gradient: GradientForm = "paper"
+    coarse_radius: int = 25
+    coarse_step: int = 4
+    fine_radius: int = 10
+    fine_step: int = 1
+    lost_threshold: float = 0.5
+    min_box_size: int = 4
+    description: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        for name, choices in _CHOICES.items():
+            value = getattr(self, name)
+            if value not in choices:
+                raise ValueError(f"{name} must be one of {', '.join(choices)}; got {value!r}")
+
+        def need(ok: bool, message: str) -> None:
+            if not ok:
+                raise ValueError(message)
+
+        def is_int(v: Any) -> bool:
+            return isinstance(v, int) and not isinstance(v, bool)
+
+        for name in ("num_features", "num_selected", "rects_min", "rects_max", "num_subregions",
+                     "rect_min_size", "neg_count", "coarse_radius", "coarse_step",
+                     "fine_radius", "fine_step", "min_box_size"):
+            need(is_int(getattr(self, name)), f"{name} must be an int, got {getattr(self, name)!r}")
+        need(self.num_features >= 1, f"num_features must be >= 1, got {self.num_features}")
+        need(1 <= self.num_selected <= self.num_features,
+             f"num_selected (K) must be in 1..num_features ({self.num_features}), got {self.num_selected}")
+        if self.selection == "none":
+            need(self.num_selected == self.num_features,
+                 "selection='none' scores every feature: num_selected must equal num_features")
+        need(1 <= self.rects_min <= self.rects_max,
+             f"need 1 <= rects_min <= rects_max, got {self.rects_min}, {self.rects_max}")
+        need(self.num_subregions in (1, 4, 9, 16) if self.subregion_mode == "grid" else self.num_subregions >= 1,
+             f"num_subregions for a grid must be a square (1, 4, 9, 16), got {self.num_subregions}")
+        need(0.0 <= self.positive_prob <= 1.0, f"positive_prob must be in [0, 1], got {self.positive_prob}")
+        need(self.rect_min_size >= 1, f"rect_min_size must be >= 1, got {self.rect_min_size}")
+        need(0.0 < self.beta_min <= self.beta_max <= 1.0,
+             f"need 0 < beta_min <= beta_max <= 1, got {self.beta_min}, {self.beta_max}")
+        need(len(self.rect_bounds) == 4 and all(is_int(v) and v >= 0 for v in self.rect_bounds),
+             f"rect_bounds must be four ints >= 0, got {self.rect_bounds}")
+        need(self.rect_bounds[2] >= 1, "rect_bounds[2] (smallest rectangle side) must be >= 1")
+        for name in ("pos_radius", "neg_inner", "neg_outer", "learning_rate", "sigma_floor", "guard",
+                     "lost_threshold"):
+            v = getattr(self, name)
+            need(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
+                 f"{name} must be a finite number, got {v!r}")
+        need(self.pos_radius > 0, f"pos_radius must be > 0, got {self.pos_radius}")
+        need(0 <= self.neg_inner < self.neg_outer,
+             f"need 0 <= neg_inner < neg_outer, got {self.neg_inner}, {self.neg_outer}")
+        need(self.neg_count >= 0, f"neg_count must be >= 0, got {self.neg_count}")
+        if self.init_pos_radius is not None:
+            need(self.init_pos_radius > 0, "init_pos_radius must be > 0")
+        inner = self.neg_inner if self.init_neg_inner is None else self.init_neg_inner
+        outer = self.neg_outer if self.init_neg_outer is None else self.init_neg_outer
+        need(0 <= inner < outer, f"need 0 <= init_neg_inner < init_neg_outer, got {inner}, {outer}")
+        if self.init_neg_count is not None:
+            need(is_int(self.init_neg_count) and self.init_neg_count >= 0, "init_neg_count must be an int >= 0")
+        need(0.0 <= self.learning_rate < 1.0,
+             f"learning_rate (lambda) must be in [0, 1), got {self.learning_rate}")
+        need(self.sigma_floor > 0, f"sigma_floor must be > 0, got {self.sigma_floor}")
+        need(self.guard > 0, f"guard must be > 0, got {self.guard}")
+        need(self.coarse_radius >= 1 and self.coarse_step >= 1,
+             f"coarse_radius and coarse_step must be >= 1, got {self.coarse_radius}, {self.coarse_step}")
+        need(self.fine_radius >= 0 and self.fine_step >= 1,
+             f"fine_radius must be >= 0 and fine_step >= 1, got {self.fine_radius}, {self.fine_step}")
+        need(0.0 <= self.lost_threshold <= 1.0, f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
+        need(self.min_box_size >= 2, f"min_box_size must be >= 2, got {self.min_box_size}")
+
+    # -- derived values ---------------------------------------------------------------------
+    @property
+    def search_reach(self) -> int:
+        """Largest distance in pixels that one update can move the box."""
+        reach = self.coarse_radius - 1
+        if self.fine_radius > 0:
+            reach += self.fine_radius - 1
+        return reach
+
+    def replace(self, **changes: Any) -> Params:
+        """A copy with some fields changed (validated like the constructor)."""
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            raise TypeError(
+                f"unknown parameter(s) {', '.join(sorted(unknown))}; valid: "
+                + ", ".join(f.name for f in dataclasses.fields(self) if f.name != "description")
+            )
+        return dataclasses.replace(self, **changes)
+
+    @classmethod
+    def for_variant(cls, variant: str = "rcwmil", **overrides: Any) -> Params:
+        """The defaults of ``variant`` with ``overrides`` applied."""
+        if not isinstance(variant, str) or variant.lower() not in VARIANTS:
+            raise ValueError(f"unknown variant {variant!r}; choose one of {', '.join(VARIANTS)}")
+        return VARIANTS[variant.lower()].replace(**overrides)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Every field as a plain dict (JSON-friendly)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+
+VARIANTS: dict[str, Params] = {
+    "rcwmil": Params(
+        description="Sengar's robust compressive WMIL tracker: sub-region features (2x2 grid, "
+        "+1/-1 at 0.78/0.22), weighted-MIL selection of 20 of 100, coarse-to-fine search.",
+    ),
+    "ct": Params(
+        variant="ct", feature_kind="random", num_features=50, num_selected=50, rects_min=2,
+        rects_max=3, rect_bounds=(0, 4, 1, 2), weight_mode="sign_sqrt", area_normalize=False,
+        neg_inner=8.0, neg_outer=30.0, neg_count=50, neg_sampling="bernoulli",
+        learning_rate=0.85, selection="none", coarse_radius=20, coarse_step=1, fine_radius=0,
+        description="Compressive tracking (Zhang et al., ECCV 2012): 50 random-rectangle features "
+        "on raw sums, all scored; exhaustive search of radius 20.",
+    ),
+    "fct": Params(
+        variant="fct", feature_kind="random", num_features=100, num_selected=100, rects_min=2,
+        rects_max=4, rect_bounds=(1, 6, 2, 3), weight_mode="sign", area_normalize=True,
+        neg_inner=8.0, neg_outer=30.0, neg_count=50, neg_sampling="bernoulli",
+        learning_rate=0.85, selection="none", coarse_radius=25, coarse_step=4, fine_radius=10,
+        fine_step=1,
+        description="Fast compressive tracking (Zhang et al., TPAMI 2014): 100 area-normalised "
+        "features, all scored; coarse (25/4) then fine (10/1) search.",
+    ),
+    "mil": Params(
+        variant="mil", feature_kind="random", num_features=250, num_selected=50, rects_min=2,
+        rects_max=6, rect_bounds=(0, 3, 1, 2), weight_mode="uniform", area_normalize=False,
+        pos_radius=4.0, neg_inner=9.0, neg_outer=37.5, neg_count=65, neg_sampling="bernoulli",
+        init_pos_radius=3.0, init_neg_inner=4.5, init_neg_outer=50.0, init_neg_count=65,
+        learning_rate=0.85, classifier="mil", guard=1e-5, selection="milboost",
+        instance_weights="uniform", coarse_radius=25, coarse_step=1, fine_radius=0,
+        description="Babenko's MILTrack: online MILBoost with a Noisy-OR bag, 50 of 250 Haar "
+        "features, exhaustive search of radius 25.",
+    ),
+    "wmil": Params(
+        variant="wmil", feature_kind="random", num_features=150, num_selected=15, rects_min=2,
+        rects_max=3, rect_bounds=(0, 4, 1, 3), weight_mode="uniform", area_normalize=False,
+        neg_inner=8.0, neg_outer=37.5, neg_count=50, neg_sampling="bernoulli",
+        init_neg_inner=6.0, init_neg_outer=50.0, init_neg_count=50, learning_rate=0.85,
+        selection="wmil", instance_weights="exp", coarse_radius=25, coarse_step=1, fine_radius=0,
+        description="Weighted MIL (Zhang & Song, PR 2013): 15 of 150 features by the weighted "
+        "bag's gradient, exhaustive search of radius 25.",
+    ),
+    "osil": Params(
+        variant="osil", instance_weights="uniform", learning_rate=0.85, coarse_radius=20,
+        coarse_step=1, fine_radius=0,
+        description="Online sparse instance learning (Yan et al.) as the paper describes it: "
+        "sub-region features, MIL selection without instance weights, CT's exhaustive search.",
+    ),
+}
+
+
+def variants() -> dict[str, Params]:
+    """The built-in variants and their default parameters, in a new dict."""
+    return dict(VARIANTS)
