@@ -109,6 +109,13 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         default=None,
         help="cv2.setNumThreads(N) before running (default: OpenCV's own choice)",
     )
+    ap.add_argument(
+        "--missing",
+        choices=("miss", "hold"),
+        default="miss",
+        help="frames where a tracker gives no box (OpenCV: not found): 'miss' scores IoU 0, "
+        "'hold' uses its last box as the OTB toolkit does (default miss)",
+    )
     ap.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     args = ap.parse_args(argv)
     if args.repeats < 1:
@@ -163,7 +170,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"# {len(paths)} sequences, trackers {', '.join(trackers)}, repeats {args.repeats}, "
         f"seed {args.seed}\n# python {env['python']}, numpy {env['numpy']}, {env['opencv']} "
         f"({env['opencv_threads']} threads), wmiltrack {env['wmiltrack']}, "
-        f"{env['cpu_count']} CPUs\n"
+        f"{env['cpu_count']} CPUs; frames without a box scored as {args.missing}\n"
     )
     t0 = time.perf_counter()
     records = evaluate_sequences(
@@ -172,6 +179,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         seed=args.seed,
         repeats=args.repeats,
         progress=not args.no_progress,
+        missing=args.missing,
     )
     wall = time.perf_counter() - t0
     print(format_table(records, reference=args.reference, style=args.style))
@@ -188,6 +196,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "seed": args.seed,
                 "reference": args.reference,
                 "accuracy_from": "first run",
+                "missing": args.missing,
                 "fps": "median over runs of update-only FPS",
             },
             "summary": summarize(records, reference=args.reference),

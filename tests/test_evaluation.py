@@ -264,6 +264,7 @@ def test_compare_script_on_a_tiny_otb_folder(
     assert rc == 0
     text = capsys.readouterr().out
     assert "| Alpha | opencv:MIL | 5 |" in text and "| Beta | opencv:MIL | 5 |" in text
+    assert "| No box |" in text
     assert "**mean (2 seq)**" in text
     data = json.loads(out.read_text())
     assert data["args"]["sequences"] == ["Alpha", "Beta"]
@@ -274,3 +275,24 @@ def test_compare_script_on_a_tiny_otb_folder(
     assert compare.main([str(root), "--trackers", "opencv:Nope"]) == 2  # type: ignore[attr-defined]
     err = capsys.readouterr().err
     assert "available: Alpha, Beta" in err and "valid names" in err
+
+
+def test_missing_policy_reaches_the_metrics() -> None:
+    frames, gt = _moving(5)
+    traj = gt.copy()
+    traj[2:] = np.nan  # gives no box from frame 2 on
+
+    class Quits(Oracle):
+        name = "quits"
+
+        def __init__(self) -> None:
+            super().__init__(traj)
+
+    seq = FakeSeq("S", gt, frames)
+    miss = evaluate_sequences([Quits], [seq], progress=False)[0]
+    hold = evaluate_sequences([Quits], [seq], progress=False, missing="hold")[0]
+    assert miss.metrics.n_no_prediction == hold.metrics.n_no_prediction == 3
+    assert miss.metrics.success_50 == pytest.approx(2 / 5)
+    assert hold.metrics.success_50 > miss.metrics.success_50
+    row = next(ln for ln in format_table([miss]).splitlines() if ln.startswith("| S |"))
+    assert row.split("|")[8].strip() == "3"  # the No box column

@@ -215,3 +215,27 @@ def test_aggregate_per_sequence_and_pooled() -> None:
     assert json.loads(json.dumps(agg.to_dict()))["pooled"]["n_scored"] == 40
     with pytest.raises(ValueError):
         aggregate([])
+
+
+def test_missing_hold_is_otb_toolkit_behaviour() -> None:
+    gt = _track(6, (0, 0, 10, 10))
+    pred = _track(6, (0, 0, 10, 10))
+    pred[1] = [5, 0, 10, 10]
+    pred[2] = np.nan  # held: (5, 0, 10, 10) -> IoU 1/3
+    pred[3] = [1, 1, 0, 0]  # degenerate, held too
+    miss = ope_metrics(pred, gt)
+    hold = ope_metrics(pred, gt, missing="hold")
+    assert miss.ious[2] == 0.0 and math.isinf(miss.center_errors[2])
+    assert hold.ious[2] == pytest.approx(1 / 3) and hold.ious[3] == pytest.approx(1 / 3)
+    assert hold.center_errors[2] == pytest.approx(5.0)
+    assert miss.n_no_prediction == hold.n_no_prediction == 1  # NaN rows only
+    with pytest.raises(ValueError, match="missing"):
+        ope_metrics(pred, gt, missing="drop")  # type: ignore[arg-type]
+    lead = _track(3, (0, 0, 10, 10))
+    lead[0] = np.nan
+    from wmiltrack.metrics import hold_missing
+
+    assert (
+        np.isnan(hold_missing(lead)[0]).all()
+        and hold_missing(lead)[1:].tolist() == [[0, 0, 10, 10]] * 2
+    )

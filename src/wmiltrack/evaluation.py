@@ -368,6 +368,7 @@ def evaluate_sequences(
     progress: bool = True,
     params: Mapping[str, Mapping[str, Any]] | None = None,
     raise_errors: bool = False,
+    missing: Literal["miss", "hold"] = "miss",
 ) -> list[EvalRecord]:
     """Run every tracker on every sequence (one-pass) and score it.
 
@@ -390,6 +391,9 @@ def evaluate_sequences(
         Per-tracker-name extra parameters, e.g. ``{"opencv:KCF": {"detect_thresh": 0.3}}``.
     raise_errors:
         Re-raise tracker exceptions instead of recording them.
+    missing:
+        How frames where a tracker gave no box are scored (see
+        :func:`wmiltrack.metrics.ope_metrics`): ``"miss"`` or ``"hold"`` (OTB toolkit).
 
     Returns
     -------
@@ -436,7 +440,7 @@ def evaluate_sequences(
                 EvalRecord(
                     tracker=name,
                     sequence=seq.name,
-                    metrics=ope_metrics(first.boxes, gt),
+                    metrics=ope_metrics(first.boxes, gt, missing=missing),
                     run=first,
                     fps_runs=[r.fps for r in rs],
                     fps=_median([r.fps for r in rs]),
@@ -502,9 +506,9 @@ def summarize(
     Returns
     -------
     dict
-        ``{tracker: {"n_sequences", "auc", "success_50", "precision_20",
-        "norm_precision_20", "mean_center_error", "fps", "fps_ratio", "errors"}}``.  Accuracy
-        figures are means of the per-sequence figures; ``fps`` is all update frames divided by
+        ``{tracker: {"n_sequences", "auc", "success_50", "precision_20", "norm_precision_20",
+        "mean_center_error", "no_box", "fps", "fps_ratio", "errors"}}``.  Accuracy figures
+        are means of the per-sequence figures; ``fps`` is all update frames divided by
         all update time (the median run of each sequence), and ``fps_ratio`` is that over the
         reference's, on the sequences both ran (NaN if the reference was not run).
     """
@@ -533,6 +537,7 @@ def summarize(
             "mean_center_error": _nanmean(r.metrics.mean_center_error for r in recs),
             "fps": fps,
             "fps_ratio": ratio,
+            "no_box": sum(r.metrics.n_no_prediction for r in recs),
             "errors": sum(r.error is not None for r in recs),
         }
     return out
@@ -542,7 +547,18 @@ def _fmt(v: float, spec: str) -> str:
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
 
 
-_HEADERS = ("Sequence", "Tracker", "Frames", "AUC", "SR@0.5", "P@20", "CLE px", "FPS", "FPS ratio")
+_HEADERS = (
+    "Sequence",
+    "Tracker",
+    "Frames",
+    "AUC",
+    "SR@0.5",
+    "P@20",
+    "CLE px",
+    "No box",
+    "FPS",
+    "FPS ratio",
+)
 
 
 def format_table(
@@ -581,6 +597,7 @@ def format_table(
                 _fmt(m.success_50, ".3f"),
                 _fmt(m.precision_20, ".3f"),
                 _fmt(m.mean_center_error, ".1f"),
+                str(m.n_no_prediction),
                 _fmt(r.fps, ".1f"),
                 _fmt(ratios.get((r.tracker, r.sequence), float("nan")), ".2f"),
             )
@@ -598,6 +615,7 @@ def format_table(
                 _fmt(s["success_50"], ".3f"),
                 _fmt(s["precision_20"], ".3f"),
                 _fmt(s["mean_center_error"], ".1f"),
+                str(s["no_box"]),
                 _fmt(s["fps"], ".1f"),
                 _fmt(s["fps_ratio"], ".2f"),
             )
@@ -633,7 +651,8 @@ def format_table(
         (
             "AUC: mean success rate over IoU thresholds 0, 0.05, ..., 1 (IoU > t); "
             "SR@0.5: IoU > 0.5; P@20: centre error <= 20 px; "
-            "CLE: mean centre error (frames with a box)."
+            "CLE: mean centre error over frames with a box; No box: scored frames where the "
+            "tracker gave no box (scored as misses unless --missing hold)."
         ),
         (
             "Frames: scored frames (scored/total when some ground truth is absent). "

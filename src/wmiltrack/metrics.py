@@ -18,14 +18,16 @@ Figures reported by :func:`ope_metrics`
 
 Frames whose ground truth has a NaN or a non-positive width or height are left out of every
 figure and counted in ``n_missing``.  A predicted box containing NaN (tracker gave no box)
-counts as IoU 0 and infinite centre error, so it fails every threshold.
+counts as IoU 0 and infinite centre error, so it fails every threshold; with
+``missing="hold"`` it is replaced by the last box given before it instead, which is what the
+OTB toolkit's ``calcSeqErrRobust.m`` does with NaN or degenerate result rows.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -39,6 +41,7 @@ __all__ = [
     "aggregate",
     "as_boxes",
     "center_error",
+    "hold_missing",
     "iou",
     "normalized_center_error",
     "ope_metrics",
@@ -302,16 +305,50 @@ def _curve_le(values: FloatArray, thresholds: FloatArray) -> FloatArray:
     return np.asarray((values[None, :] <= thresholds[:, None]).mean(axis=1), dtype=np.float64)
 
 
-def ope_metrics(pred: npt.ArrayLike, gt: npt.ArrayLike) -> OPEResult:
+def hold_missing(pred: npt.ArrayLike) -> FloatArray:
+    """Replace each missing predicted box by the last box given before it.
+
+    A row is missing when it has a NaN or a non-positive width or height.  This is what the
+    OTB toolkit's ``calcSeqErrRobust.m`` does to a result file before scoring it.  Missing
+    rows before the first given box stay NaN.
+
+    Parameters
+    ----------
+    pred:
+        ``(n, 4)`` predicted boxes.
+
+    Returns
+    -------
+    numpy.ndarray
+        A new ``(n, 4)`` array.
+    """
+    p = as_boxes(pred, "pred")
+    given = valid_mask(p)
+    last = np.where(given, np.arange(len(p)), -1)
+    np.maximum.accumulate(last, out=last)
+    out = np.full_like(p, np.nan)
+    have = last >= 0
+    out[have] = p[last[have]]
+    return out
+
+
+def ope_metrics(
+    pred: npt.ArrayLike, gt: npt.ArrayLike, *, missing: Literal["miss", "hold"] = "miss"
+) -> OPEResult:
     """Score a trajectory against the ground truth as the OTB toolkit does.
 
     Parameters
     ----------
     pred:
         ``(n, 4)`` predicted boxes, one per frame including the first (initialisation) frame,
-        as OTB does.  Rows with NaN mean "no box" and fail every threshold.
+        as OTB does.  Rows with NaN mean "no box".
     gt:
         ``(n, 4)`` ground-truth boxes; rows failing :func:`valid_mask` are not scored.
+    missing:
+        ``"miss"`` (default): a frame without a predicted box has IoU 0 and infinite centre
+        error, failing every threshold.  ``"hold"``: such a frame gets the last box given
+        before it (:func:`hold_missing`), as the OTB toolkit's ``calcSeqErrRobust.m`` does;
+        ``n_no_prediction`` still counts the frames that had no box of their own.
 
     Returns
     -------
@@ -326,6 +363,8 @@ def ope_metrics(pred: npt.ArrayLike, gt: npt.ArrayLike) -> OPEResult:
     """
     p = as_boxes(pred, "pred")
     g = as_boxes(gt, "gt")
+    if missing not in ("miss", "hold"):
+        raise ValueError(f"missing must be 'miss' or 'hold', not {missing!r}")
     if p.shape[0] != g.shape[0]:
         raise ValueError(
             f"prediction has {p.shape[0]} boxes but the ground truth has {g.shape[0]} rows; "
@@ -333,10 +372,12 @@ def ope_metrics(pred: npt.ArrayLike, gt: npt.ArrayLike) -> OPEResult:
         )
     n = g.shape[0]
     valid = valid_mask(g)
+    no_pred = ~np.all(np.isfinite(p), axis=1)
+    if missing == "hold":
+        p = hold_missing(p)
     ov_all = iou(p, g)
     ce_all = center_error(p, g)
     nce_all = normalized_center_error(p, g)
-    no_pred = ~np.all(np.isfinite(p), axis=1)
 
     ov = ov_all[valid]
     ce = ce_all[valid]
