@@ -48,7 +48,7 @@ void bind_integral(py::module_& m) {
       .def(
           "table",
           [](const IntegralImage& self) {
-            CArray<std::int64_t> out({self.height() + 1, self.width() + 1});
+            CArray<double> out({self.height() + 1, self.width() + 1});
             std::copy(self.data(), self.data() + out.size(), out.mutable_data());
             return out;
           },

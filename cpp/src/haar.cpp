@@ -77,7 +77,7 @@ void project(const IntegralImage& ii, const FeatureBank& bank, const std::int32_
   const int n_out = compiled.size();
   const std::ptrdiff_t s = ii.stride();
   for (int n = 0; n < n_boxes; ++n) {
-    const std::int64_t* base = ii.data() + (ys[n] - ii.y0()) * s + (xs[n] - ii.x0());
+    const double* base = ii.data() + (ys[n] - ii.y0()) * s + (xs[n] - ii.x0());
     for (int k = 0; k < n_out; ++k) {
       out[static_cast<std::ptrdiff_t>(k) * n_boxes + n] = compiled.value(base, k);
     }

@@ -24,23 +24,25 @@ void IntegralImage::compute(const ImageView& image, Rect roi) {
   width_ = x_end - x_begin;
   height_ = y_end - y_begin;
   const std::ptrdiff_t s = stride();
-  data_.assign(static_cast<std::size_t>(s) * static_cast<std::size_t>(height_ + 1), 0);
+  data_.assign(static_cast<std::size_t>(s) * static_cast<std::size_t>(height_ + 1), 0.0);
+  std::vector<std::int64_t> column(static_cast<std::size_t>(width_) + 1, 0);  // exact running sums
 
   for (int r = 0; r < height_; ++r) {
     const std::uint8_t* src = image.data + (y0_ + r) * image.row_stride + x0_ * image.col_stride;
-    const std::int64_t* above = data_.data() + r * s;
-    std::int64_t* out = data_.data() + (r + 1) * s;
+    double* out = data_.data() + (r + 1) * s;
     std::int64_t row_sum = 0;
     if (image.channels == 1) {
       for (int c = 0; c < width_; ++c, src += image.col_stride) {
         row_sum += *src;
-        out[c + 1] = above[c + 1] + row_sum;
+        column[c + 1] += row_sum;
+        out[c + 1] = static_cast<double>(column[c + 1]);
       }
     } else {
       const std::ptrdiff_t cs = image.channel_stride;
       for (int c = 0; c < width_; ++c, src += image.col_stride) {
         row_sum += bgr_to_gray(src[0], src[cs], src[2 * cs]);
-        out[c + 1] = above[c + 1] + row_sum;
+        column[c + 1] += row_sum;
+        out[c + 1] = static_cast<double>(column[c + 1]);
       }
     }
   }

@@ -63,24 +63,40 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   const long r2 = static_cast<long>(radius) * radius;
   const Rect& e = bank.extent();
 
-  // Gather the candidates that fit in the frame, in row-major order.
+  // Gather the candidates that fit in the frame, in row-major order, as runs of
+  // consecutive grid columns within one grid row (equally spaced in the table).
+  struct Run {
+    int first;             // index of the run's first candidate
+    int count;             // candidates in the run
+    std::ptrdiff_t base;   // table offset of the first candidate's top-left corner
+  };
   std::vector<int> cand_dx, cand_dy;
-  std::vector<std::ptrdiff_t> base;
+  std::vector<Run> runs;
   for (int j = -n; j <= n; ++j) {
+    bool open = false;
     for (int i = -n; i <= n; ++i) {
       const long dx = static_cast<long>(i) * step, dy = static_cast<long>(j) * step;
-      if (dx * dx + dy * dy >= r2) continue;
       const int x = box.x + static_cast<int>(dx), y = box.y + static_cast<int>(dy);
-      if (x < 0 || y < 0 || x + box.w > frame_width || y + box.h > frame_height) continue;
+      const bool in = dx * dx + dy * dy < r2 && x >= 0 && y >= 0 && x + box.w <= frame_width &&
+                      y + box.h <= frame_height;
+      if (!in) {
+        open = false;
+        continue;
+      }
       if (!ii.covers(Rect{x + e.x, y + e.y, e.w, e.h})) {
         throw std::out_of_range("score_grid: a candidate inside the frame is outside the integral image");
       }
+      if (!open) {
+        runs.push_back(Run{static_cast<int>(cand_dx.size()), 0,
+                           (y - ii.y0()) * ii.stride() + (x - ii.x0())});
+        open = true;
+      }
+      ++runs.back().count;
       cand_dx.push_back(static_cast<int>(dx));
       cand_dy.push_back(static_cast<int>(dy));
-      base.push_back((y - ii.y0()) * ii.stride() + (x - ii.x0()));
     }
   }
-  const int c = static_cast<int>(base.size());
+  const int c = static_cast<int>(cand_dx.size());
   GridResult result;
   result.candidates = c;
   if (scores != nullptr) {
@@ -88,12 +104,32 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   }
   if (c == 0) return result;
 
-  // Feature values, one contiguous row per feature, then the summed log ratios.
+  // Feature values, one feature at a time over all candidates (rectangle by rectangle, run
+  // by run, so the inner loop walks the table with a fixed stride), then the log ratios.
   const CompiledFeatures compiled(bank, selected, n_selected, ii.stride());
   std::vector<double> values(static_cast<std::size_t>(c)), total(static_cast<std::size_t>(c), 0.0),
       scratch(2 * static_cast<std::size_t>(c));
+  const double* table = ii.data();
   for (int k = 0; k < compiled.size(); ++k) {
-    for (int q = 0; q < c; ++q) values[q] = compiled.value(ii.data() + base[q], k);
+    std::fill(values.begin(), values.end(), 0.0);
+    for (int r = compiled.first_rect(k); r < compiled.end_rect(k); ++r) {
+      const CompiledFeatures::Corners& q = compiled.corners(r);
+      for (const Run& run : runs) {
+        const double* tl = table + run.base + q.tl;
+        const double* tr = table + run.base + q.tr;
+        const double* bl = table + run.base + q.bl;
+        const double* br = table + run.base + q.br;
+        double* v = values.data() + run.first;
+        if (step == 1) {
+          for (int t = 0; t < run.count; ++t) v[t] += q.weight * ((br[t] - tr[t]) - (bl[t] - tl[t]));
+        } else {
+          for (int t = 0; t < run.count; ++t) {
+            const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(t) * step;
+            v[t] += q.weight * ((br[o] - tr[o]) - (bl[o] - tl[o]));
+          }
+        }
+      }
+    }
     weak.log_ratio(k, values.data(), c, total.data(), true, scratch.data());
   }
 

@@ -67,12 +67,12 @@ void test_integral(std::mt19937& rng) {
       const int x = dx(rng), y = dy(rng);
       const int w = std::uniform_int_distribution<int>(0, 45 - x)(rng);
       const int h = std::uniform_int_distribution<int>(0, 33 - y)(rng);
-      CHECK(ii.sum(Rect{x, y, w, h}) == naive_sum(f, x, y, w, h));
+      CHECK(ii.sum(Rect{x, y, w, h}) == static_cast<double>(naive_sum(f, x, y, w, h)));
     }
     // A region hanging off the frame is clipped to it.
     ii.compute(f.view(), Rect{-10, -10, 200, 200});
     CHECK(ii.x0() == 0 && ii.y0() == 0 && ii.width() == 53 && ii.height() == 37);
-    CHECK(ii.sum(Rect{0, 0, 53, 37}) == naive_sum(f, 0, 0, 53, 37));
+    CHECK(ii.sum(Rect{0, 0, 53, 37}) == static_cast<double>(naive_sum(f, 0, 0, 53, 37)));
   }
   bool threw = false;
   try {

@@ -42,20 +42,25 @@ class CompiledFeatures {
   int size() const { return static_cast<int>(starts_.size()) - 1; }
 
   // Value of feature k for the box whose top-left table entry is `base`.
-  double value(const std::int64_t* base, int k) const {
+  double value(const double* base, int k) const {
     double v = 0.0;
     for (int r = starts_[k]; r < starts_[k + 1]; ++r) {
       const Corners& c = corners_[r];
-      v += c.weight * static_cast<double>(base[c.br] - base[c.tr] - base[c.bl] + base[c.tl]);
+      v += c.weight * ((base[c.br] - base[c.tr]) - (base[c.bl] - base[c.tl]));
     }
     return v;
   }
 
- private:
+  // Table offsets of one rectangle's four corners, relative to the box's top-left entry.
   struct Corners {
     std::ptrdiff_t tl, tr, bl, br;
     double weight;
   };
+  int first_rect(int k) const { return starts_[k]; }
+  int end_rect(int k) const { return starts_[k + 1]; }
+  const Corners& corners(int r) const { return corners_[r]; }
+
+ private:
   std::vector<std::int32_t> starts_;
   std::vector<Corners> corners_;
 };

@@ -3,6 +3,10 @@
 // The tracker only ever looks at the target's neighbourhood (search grid plus sampling
 // annulus), so the integral image is built over that rectangle alone, converting BGR(A)
 // to luma on the fly with the same fixed-point weights as cv::COLOR_BGR2GRAY.
+//
+// Sums are accumulated in 64-bit integers and stored as doubles: every value is an integer
+// below 255 * rows * cols, exact in a double for any frame under 3.5e13 pixels, and doubles
+// let the scoring loops vectorise (SSE2 has no int64 -> double conversion).
 #pragma once
 
 #include <cstddef>
@@ -43,7 +47,7 @@ class IntegralImage {
   int height() const { return height_; }
   // Elements between consecutive rows of the (height + 1) x (width + 1) table.
   std::ptrdiff_t stride() const { return static_cast<std::ptrdiff_t>(width_) + 1; }
-  const std::int64_t* data() const { return data_.data(); }
+  const double* data() const { return data_.data(); }
 
   // True when the frame rectangle lies inside the region the table covers.
   bool covers(const Rect& r) const {
@@ -52,9 +56,9 @@ class IntegralImage {
   }
 
   // Exact pixel sum over a frame rectangle; the caller guarantees covers(r).
-  std::int64_t sum(const Rect& r) const {
-    const std::int64_t* top = data_.data() + (r.y - y0_) * stride() + (r.x - x0_);
-    const std::int64_t* bottom = top + r.h * stride();
+  double sum(const Rect& r) const {
+    const double* top = data_.data() + (r.y - y0_) * stride() + (r.x - x0_);
+    const double* bottom = top + r.h * stride();
     return bottom[r.w] - bottom[0] - top[r.w] + top[0];
   }
 
@@ -63,7 +67,7 @@ class IntegralImage {
   int y0_ = 0;
   int width_ = 0;
   int height_ = 0;
-  std::vector<std::int64_t> data_;
+  std::vector<double> data_;
 };
 
 // Luma of one BGR pixel, bit-exact with OpenCV's 8-bit BGR2GRAY (weights 0.114/0.587/0.299
