@@ -70,13 +70,13 @@ class IntegralImage {
   std::vector<double> data_;
 };
 
-// Luma of one BGR pixel, bit-exact with OpenCV's 8-bit BGR2GRAY (weights 0.114/0.587/0.299
-// in 14-bit fixed point, rounded).
+// Luma of one BGR pixel, bit-exact with OpenCV's 8-bit BGR2GRAY: ITU-R 601 weights
+// 0.114/0.587/0.299 in 15-bit fixed point (summing to 2^15), rounded.
 inline std::uint8_t bgr_to_gray(std::uint8_t b, std::uint8_t g, std::uint8_t r) {
-  constexpr int kB = 1868;
-  constexpr int kG = 9617;
-  constexpr int kR = 4899;
-  return static_cast<std::uint8_t>((b * kB + g * kG + r * kR + (1 << 13)) >> 14);
+  constexpr int kB = 3735;
+  constexpr int kG = 19235;
+  constexpr int kR = 9798;
+  return static_cast<std::uint8_t>((b * kB + g * kG + r * kR + (1 << 14)) >> 15);
 }
 
 }  // namespace wmiltrack

@@ -1,0 +1,187 @@
+"""The C++ kernels against plain numpy references on random data."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from wmiltrack import _core
+
+
+def gray_of(frame: np.ndarray) -> np.ndarray:
+    if frame.ndim == 2:
+        return frame.astype(np.int64)
+    if frame.shape[2] == 1:
+        return frame[:, :, 0].astype(np.int64)
+    return cv2.cvtColor(np.ascontiguousarray(frame[:, :, :3]), cv2.COLOR_BGR2GRAY).astype(np.int64)
+
+
+def integral_ref(gray: np.ndarray) -> np.ndarray:
+    out = np.zeros((gray.shape[0] + 1, gray.shape[1] + 1), dtype=np.int64)
+    out[1:, 1:] = gray.cumsum(0).cumsum(1)
+    return out
+
+
+@pytest.mark.parametrize("channels", [None, 1, 3, 4])
+def test_integral_image_matches_numpy_and_opencv_luma(channels: int | None) -> None:
+    rng = np.random.default_rng(channels or 0)
+    shape = (47, 61) if channels is None else (47, 61, channels)
+    frame = rng.integers(0, 256, size=shape, dtype=np.uint8)
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 61, 47))
+    np.testing.assert_array_equal(ii.table(), integral_ref(gray_of(frame)))
+
+
+def test_integral_image_over_a_region_is_clipped_and_exact() -> None:
+    rng = np.random.default_rng(1)
+    frame = rng.integers(0, 256, size=(80, 90, 3), dtype=np.uint8)
+    ii = _core.IntegralImage()
+    ii.compute(frame, (-5, 10, 40, 200))  # hangs off the left and bottom edges
+    assert (ii.x0, ii.y0, ii.width, ii.height) == (0, 10, 35, 70)
+    gray = gray_of(frame)
+    np.testing.assert_array_equal(ii.table(), integral_ref(gray[10:80, 0:35]))
+    for _ in range(50):
+        x, y = int(rng.integers(0, 30)), int(rng.integers(10, 75))
+        w, h = int(rng.integers(0, 35 - x + 1)), int(rng.integers(0, 80 - y + 1))
+        assert ii.rect_sum(x, y, w, h) == gray[y:y + h, x:x + w].sum()
+    with pytest.raises(IndexError):
+        ii.rect_sum(30, 10, 10, 5)  # past the region's right edge
+
+
+def test_integral_image_reads_strided_views_without_copying() -> None:
+    rng = np.random.default_rng(2)
+    big = rng.integers(0, 256, size=(60, 80, 3), dtype=np.uint8)
+    view = big[::2, 1::3, :]  # non-contiguous
+    ii = _core.IntegralImage()
+    ii.compute(view, (0, 0, view.shape[1], view.shape[0]))
+    np.testing.assert_array_equal(ii.table(), integral_ref(gray_of(np.ascontiguousarray(view))))
+
+
+def random_bank(rng: np.random.Generator, m: int, box: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    counts = rng.integers(1, 5, size=m)
+    starts = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    rects = []
+    for _ in range(int(starts[-1])):
+        w, h = rng.integers(1, box // 2 + 1, size=2)
+        x, y = rng.integers(0, box - w + 1), rng.integers(0, box - h + 1)
+        rects.append((x, y, w, h))
+    weights = rng.normal(size=len(rects))
+    return starts, np.array(rects, dtype=np.int32), weights
+
+
+def project_ref(gray: np.ndarray, starts: np.ndarray, rects: np.ndarray, weights: np.ndarray,
+                xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    out = np.zeros((starts.size - 1, xs.size))
+    for f in range(starts.size - 1):
+        for r in range(starts[f], starts[f + 1]):
+            x, y, w, h = rects[r]
+            for n in range(xs.size):
+                out[f, n] += weights[r] * gray[ys[n] + y:ys[n] + y + h, xs[n] + x:xs[n] + x + w].sum()
+    return out
+
+
+def test_projection_matches_numpy() -> None:
+    rng = np.random.default_rng(3)
+    frame = rng.integers(0, 256, size=(70, 90, 3), dtype=np.uint8)
+    starts, rects, weights = random_bank(rng, 12, 16)
+    bank = _core.FeatureBank(starts, rects, weights)
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 90, 70))
+    xs = rng.integers(0, 90 - 16, size=25).astype(np.int32)
+    ys = rng.integers(0, 70 - 16, size=25).astype(np.int32)
+    ref = project_ref(gray_of(frame), starts, rects, weights, xs, ys)
+    np.testing.assert_allclose(_core.project(ii, bank, xs, ys), ref, rtol=1e-12, atol=1e-9)
+    sub = np.array([7, 0, 7], dtype=np.int32)
+    np.testing.assert_allclose(_core.project(ii, bank, xs, ys, sub), ref[sub], rtol=1e-12, atol=1e-9)
+
+
+def test_projection_refuses_boxes_outside_the_integral_image() -> None:
+    frame = np.zeros((40, 40), dtype=np.uint8)
+    bank = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 10, 10]], np.int32), np.ones(1))
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 20, 20))
+    with pytest.raises(IndexError):
+        _core.project(ii, bank, np.array([15], np.int32), np.array([0], np.int32))
+    with pytest.raises(IndexError):
+        _core.project(ii, bank, np.array([0], np.int32), np.array([0], np.int32), np.array([3], np.int32))
+
+
+def log_ratio_ref(v: np.ndarray, mu1: np.ndarray, s1: np.ndarray, mu0: np.ndarray, s0: np.ndarray,
+                  guard: float) -> np.ndarray:
+    eps = 1e-30
+    p1 = np.exp(-((v - mu1[:, None]) ** 2) / (2 * s1[:, None] ** 2 + eps)) / (s1[:, None] + eps)
+    p0 = np.exp(-((v - mu0[:, None]) ** 2) / (2 * s0[:, None] ** 2 + eps)) / (s0[:, None] + eps)
+    return np.log(p1 + guard) - np.log(p0 + guard)
+
+
+@pytest.mark.parametrize("guard", [1e-30, 1e-5])
+def test_log_ratio_matches_the_guarded_reference_formula(guard: float) -> None:
+    rng = np.random.default_rng(4)
+    k, n = 9, 200
+    mu1, mu0 = rng.normal(0, 50, k), rng.normal(0, 50, k)
+    s1, s0 = rng.uniform(0.5, 40, k), rng.uniform(0.5, 40, k)
+    v = rng.normal(0, 120, (k, n))  # includes values far in the tails, where the guard saturates
+    ref = log_ratio_ref(v, mu1, s1, mu0, s0, guard)
+    np.testing.assert_allclose(_core.log_ratio(v, mu1, s1, mu0, s0, guard), ref, rtol=1e-9, atol=1e-9)
+
+
+def test_score_grid_matches_brute_force_first_maximum_in_row_major_order() -> None:
+    rng = np.random.default_rng(5)
+    frame = rng.integers(0, 256, size=(120, 150), dtype=np.uint8)
+    starts, rects, weights = random_bank(rng, 6, 20)
+    bank = _core.FeatureBank(starts, rects, weights)
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 150, 120))
+    sel = np.array([4, 1, 2], dtype=np.int32)
+    mu1, mu0 = rng.normal(0, 300, 3), rng.normal(0, 300, 3)
+    s1, s0 = rng.uniform(100, 400, 3), rng.uniform(100, 400, 3)
+    gray = gray_of(frame)
+    for box, radius, step in [((60, 50, 20, 20), 25, 4), ((60, 50, 20, 20), 10, 1), ((2, 95, 20, 20), 10, 1)]:
+        dx, dy, best, n, scores = _core.score_grid(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, radius,
+                                                   step, (150, 120), True)
+        half = -(-radius // step) - 1
+        ref = np.full((2 * half + 1, 2 * half + 1), -np.inf)
+        for j in range(-half, half + 1):
+            for i in range(-half, half + 1):
+                ox, oy = i * step, j * step
+                x, y = box[0] + ox, box[1] + oy
+                if ox * ox + oy * oy >= radius * radius or x < 0 or y < 0 or x + 20 > 150 or y + 20 > 120:
+                    continue
+                v = project_ref(gray, starts, rects, weights, np.array([x]), np.array([y]))[sel]
+                ref[j + half, i + half] = log_ratio_ref(v, mu1, s1, mu0, s0, 1e-30).sum()
+        np.testing.assert_allclose(scores, ref, rtol=1e-9, atol=1e-9)
+        assert n == np.isfinite(ref).sum()
+        flat = int(np.argmax(ref))  # numpy's argmax keeps the first maximum, row-major
+        assert (dy, dx) == ((flat // ref.shape[1] - half) * step, (flat % ref.shape[1] - half) * step)
+        assert best == pytest.approx(ref.max(), rel=1e-9)
+
+
+def test_score_grid_candidate_counts_follow_the_spec() -> None:
+    frame = np.full((400, 400), 100, dtype=np.uint8)
+    bank = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 4, 4]], np.int32), np.ones(1))
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 400, 400))
+    one = np.ones(1)
+    counts = {}
+    for radius, step in [(25, 4), (10, 1), (25, 1), (20, 1), (4, 1)]:
+        counts[(radius, step)] = _core.score_grid(ii, bank, np.array([0], np.int32), one, one, one, one,
+                                                  1e-30, (180, 180, 20, 20), radius, step, (400, 400))[3]
+    # spec section 0 and 3: D(25) has 1941 offsets, D(20) 1245, D(10) 305, D(4) 45; the coarse grid 121
+    assert counts == {(25, 4): 121, (10, 1): 305, (25, 1): 1941, (20, 1): 1245, (4, 1): 45}
+
+
+def test_kernels_reject_bad_arguments_with_python_errors() -> None:
+    ii = _core.IntegralImage()
+    with pytest.raises(TypeError):
+        ii.compute(np.zeros((10, 10), dtype=np.float32), (0, 0, 10, 10))
+    with pytest.raises(ValueError):
+        ii.compute(np.zeros((10, 10, 2), dtype=np.uint8), (0, 0, 10, 10))
+    with pytest.raises(ValueError):
+        ii.compute(np.zeros((10, 10), dtype=np.uint8), (20, 20, 5, 5))
+    with pytest.raises(ValueError):
+        _core.FeatureBank(np.array([0, 2], np.int32), np.array([[0, 0, 1, 1]], np.int32), np.ones(1))
+    with pytest.raises(ValueError):
+        _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 0, 1]], np.int32), np.ones(1))
+    with pytest.raises(ValueError):
+        _core.log_ratio(np.zeros((2, 3)), np.zeros(2), np.zeros(2), np.zeros(2), np.ones(2), 1e-30)
