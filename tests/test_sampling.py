@@ -53,9 +53,10 @@ def test_samples_are_clipped_to_the_image() -> None:
         assert np.all(pts[:, 0] + 30 <= 100) and np.all(pts[:, 1] + 40 <= 100)
     assert len(pos) == 15  # the quarter disc dx, dy >= 0, d < 4: rows of 4, 4, 4, 3
     # a frame hardly larger than the box: fewer than 50 negatives fit, all are taken
-    tight = s.negatives((5, 5, 30, 40), 45, 55, rng)
-    expected = [(dx, dy) for dx in range(-5, 11) for dy in range(-5, 11) if 64 <= dx * dx + dy * dy < 484]
-    assert len(tight) == len(expected) < 50
+    tight = s.negatives((2, 2, 30, 40), 40, 50, rng)
+    expected = {(dx, dy) for dx in range(-2, 9) for dy in range(-2, 9) if 64 <= dx * dx + dy * dy < 484}
+    assert len(expected) == 29
+    assert {(int(x) - 2, int(y) - 2) for x, y in tight} == expected
 
 
 def test_bernoulli_thinning_keeps_a_random_count_below_the_maximum() -> None:
