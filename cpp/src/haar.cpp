@@ -28,6 +28,9 @@ FeatureBank::FeatureBank(std::vector<std::int32_t> starts, std::vector<Rect> rec
     if (r.x < 0 || r.y < 0 || r.w <= 0 || r.h <= 0) {
       throw std::invalid_argument("feature bank: rectangles need x, y >= 0 and w, h > 0");
     }
+    if (r.x > std::numeric_limits<int>::max() - r.w || r.y > std::numeric_limits<int>::max() - r.h) {
+      throw std::invalid_argument("feature bank: a rectangle's far edge overflows an int");
+    }
     x0 = std::min(x0, r.x);
     y0 = std::min(y0, r.y);
     x1 = std::max(x1, r.x + r.w);
@@ -61,8 +64,13 @@ CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* 
 void check_boxes_covered(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* xs,
                          const std::int32_t* ys, int n_boxes) {
   const Rect& e = bank.extent();
+  constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
   for (int n = 0; n < n_boxes; ++n) {
-    if (!ii.covers(Rect{xs[n] + e.x, ys[n] + e.y, e.w, e.h})) {
+    // In 64 bits: a corner near INT_MAX plus the extent's offset must not wrap around.
+    const std::int64_t x = static_cast<std::int64_t>(xs[n]) + e.x;
+    const std::int64_t y = static_cast<std::int64_t>(ys[n]) + e.y;
+    if (x > kIntMax || y > kIntMax ||
+        !ii.covers(Rect{static_cast<int>(x), static_cast<int>(y), e.w, e.h})) {
       throw std::out_of_range("box at (" + std::to_string(xs[n]) + ", " + std::to_string(ys[n]) +
                               ") reaches outside the integral image's region");
     }

@@ -14,8 +14,11 @@ void IntegralImage::compute(const ImageView& image, Rect roi) {
   }
   const int x_begin = std::max(roi.x, 0);
   const int y_begin = std::max(roi.y, 0);
-  const int x_end = std::min(roi.x + roi.w, image.cols);
-  const int y_end = std::min(roi.y + roi.h, image.rows);
+  // 64-bit far edges: roi.x + roi.w must not overflow for any pair of ints.
+  const int x_end = static_cast<int>(
+      std::min<std::int64_t>(static_cast<std::int64_t>(roi.x) + roi.w, image.cols));
+  const int y_end = static_cast<int>(
+      std::min<std::int64_t>(static_cast<std::int64_t>(roi.y) + roi.h, image.rows));
   if (x_end <= x_begin || y_end <= y_begin) {
     throw std::invalid_argument("integral image: the region does not meet the frame");
   }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace wmiltrack {
 
@@ -55,6 +56,10 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
                       int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
                       int step, int frame_width, int frame_height, double* scores) {
   if (radius < 1 || step < 1) throw std::invalid_argument("score_grid: radius and step must be >= 1");
+  if (radius > kMaxSearchRadius) {
+    throw std::invalid_argument("score_grid: radius must be <= " + std::to_string(kMaxSearchRadius));
+  }
+  if (box.w <= 0 || box.h <= 0) throw std::invalid_argument("score_grid: box must have positive size");
   if (weak.size() != n_selected) {
     throw std::invalid_argument("score_grid: one weak classifier per selected feature is needed");
   }
@@ -76,14 +81,19 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
     bool open = false;
     for (int i = -n; i <= n; ++i) {
       const long dx = static_cast<long>(i) * step, dy = static_cast<long>(j) * step;
-      const int x = box.x + static_cast<int>(dx), y = box.y + static_cast<int>(dy);
+      // 64-bit positions: box.x + dx and x + box.w must not wrap around near INT_MAX.
+      const std::int64_t x = static_cast<std::int64_t>(box.x) + dx;
+      const std::int64_t y = static_cast<std::int64_t>(box.y) + dy;
       const bool in = dx * dx + dy * dy < r2 && x >= 0 && y >= 0 && x + box.w <= frame_width &&
                       y + box.h <= frame_height;
       if (!in) {
         open = false;
         continue;
       }
-      if (!ii.covers(Rect{x + e.x, y + e.y, e.w, e.h})) {
+      // Inside the frame, x and y fit in an int; the extent's corner may not.
+      const std::int64_t ex = x + e.x, ey = y + e.y;
+      if (ex > std::numeric_limits<int>::max() || ey > std::numeric_limits<int>::max() ||
+          !ii.covers(Rect{static_cast<int>(ex), static_cast<int>(ey), e.w, e.h})) {
         throw std::out_of_range("score_grid: a candidate inside the frame is outside the integral image");
       }
       if (!open) {

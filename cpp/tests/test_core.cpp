@@ -2,6 +2,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -150,12 +151,75 @@ void test_projection_and_scoring(std::mt19937& rng) {
   const GridResult none = score_grid(ii, bank, sel.data(), 2, weak, Rect{0, 0, 200, 8}, 10, 1, 160, 120, nullptr);
   CHECK(none.candidates == 0 && none.dx == 0 && none.dy == 0);
 }
+
+// Coordinates near INT_MAX must be refused, not wrap around into out-of-bounds reads
+// (x + w used to overflow in covers(), compute(), check_boxes_covered() and score_grid()).
+void test_overflow_guards(std::mt19937& rng) {
+  constexpr int kMax = std::numeric_limits<int>::max();
+  const Frame f = random_frame(20, 30, 1, rng);
+  IntegralImage ii;
+  ii.compute(f.view(), Rect{0, 0, 30, 20});
+  CHECK(!ii.covers(Rect{5, 0, kMax, 1}));
+  CHECK(!ii.covers(Rect{0, 5, 1, kMax}));
+  CHECK(!ii.covers(Rect{kMax, kMax, 1, 1}));
+  CHECK(ii.covers(Rect{0, 0, 30, 20}));
+  const auto throws_invalid = [&](Rect roi) {
+    try {
+      IntegralImage t;
+      t.compute(f.view(), roi);
+    } catch (const std::invalid_argument&) {
+      return true;
+    }
+    return false;
+  };
+  CHECK(throws_invalid(Rect{kMax - 5, 0, 100, 10}));
+  CHECK(throws_invalid(Rect{0, kMax - 5, 10, 100}));
+  // A huge ROI starting inside the frame is clipped, not overflowed.
+  ii.compute(f.view(), Rect{3, 2, kMax, kMax});
+  CHECK(ii.x0() == 3 && ii.y0() == 2 && ii.width() == 27 && ii.height() == 18);
+
+  FeatureBank bank({0, 1}, {Rect{2, 2, 3, 3}}, {1.0});
+  ii.compute(f.view(), Rect{0, 0, 30, 20});
+  std::vector<std::int32_t> xs{kMax - 1}, ys{0};
+  double out = 0.0;
+  bool threw = false;
+  try {
+    project(ii, bank, nullptr, 0, xs.data(), ys.data(), 1, &out);
+  } catch (const std::out_of_range&) {
+    threw = true;
+  }
+  CHECK(threw);
+  threw = false;
+  try {
+    FeatureBank bad({0, 1}, {Rect{kMax - 1, 0, 5, 5}}, {1.0});
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+
+  const std::int32_t sel[] = {0};
+  const double mu1[] = {10.0}, s1[] = {5.0}, mu0[] = {0.0}, s0[] = {5.0};
+  const WeakGaussians weak(mu1, s1, mu0, s0, 1, 1e-30);
+  const GridResult far = score_grid(ii, bank, sel, 1, weak, Rect{kMax - 3, kMax - 3, 10, 10}, 8, 1, 30, 20, nullptr);
+  CHECK(far.candidates == 0 && far.dx == 0 && far.dy == 0);
+  const GridResult wide = score_grid(ii, bank, sel, 1, weak, Rect{2, 2, kMax, 5}, 8, 1, 30, 20, nullptr);
+  CHECK(wide.candidates == 0);
+  threw = false;
+  try {
+    score_grid(ii, bank, sel, 1, weak, Rect{2, 2, 5, 5}, kMaxSearchRadius + 1, 1, 30, 20, nullptr);
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+  CHECK(grid_half_size(kMax, kMax) == 0);
+}
 }  // namespace
 
 int main() {
   std::mt19937 rng(1234);
   test_integral(rng);
   test_projection_and_scoring(rng);
+  test_overflow_guards(rng);
   if (failures == 0) {
     std::printf("test_core: all checks passed\n");
     return EXIT_SUCCESS;

@@ -49,10 +49,12 @@ class IntegralImage {
   std::ptrdiff_t stride() const { return static_cast<std::ptrdiff_t>(width_) + 1; }
   const double* data() const { return data_.data(); }
 
-  // True when the frame rectangle lies inside the region the table covers.
+  // True when the frame rectangle lies inside the region the table covers. The far edges
+  // are computed in 64 bits: x + w of two large ints must not wrap around and pass.
   bool covers(const Rect& r) const {
-    return r.x >= x0_ && r.y >= y0_ && r.w >= 0 && r.h >= 0 && r.x + r.w <= x0_ + width_ &&
-           r.y + r.h <= y0_ + height_;
+    return r.x >= x0_ && r.y >= y0_ && r.w >= 0 && r.h >= 0 &&
+           static_cast<std::int64_t>(r.x) + r.w <= static_cast<std::int64_t>(x0_) + width_ &&
+           static_cast<std::int64_t>(r.y) + r.h <= static_cast<std::int64_t>(y0_) + height_;
   }
 
   // Exact pixel sum over a frame rectangle; the caller guarantees covers(r).

@@ -31,7 +31,12 @@ class WeakGaussians {
 };
 
 // Largest i with (i * step)^2 < radius^2: the grid spans offsets -n*step .. n*step.
-inline int grid_half_size(int radius, int step) { return (radius + step - 1) / step - 1; }
+inline int grid_half_size(int radius, int step) {
+  return static_cast<int>((static_cast<std::int64_t>(radius) + step - 1) / step - 1);
+}
+
+// Largest search radius score_grid accepts (the grid is walked in full: (2r/step)^2 cells).
+constexpr int kMaxSearchRadius = 4096;
 
 struct GridResult {
   int dx = 0;
