@@ -117,10 +117,28 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         "'hold' uses its last box as the OTB toolkit does (default miss)",
     )
     ap.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    ap.add_argument("--summary-only", action="store_true",
+                    help="print only the per-tracker means, not the per-sequence rows")
     args = ap.parse_args(argv)
     if args.repeats < 1:
         ap.error("--repeats must be at least 1")
     return args
+
+
+def format_summary(summary: dict[str, dict[str, Any]], n_sequences: int, reference: str) -> str:
+    """One markdown row per tracker: means over the sequences, sorted by success AUC."""
+    lines = [
+        f"Mean over {n_sequences} sequences (FPS ratio: to {reference} in the same run)",
+        "",
+        "| Tracker | AUC | SR@0.5 | P@20 | CLE px | FPS | FPS ratio |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, s in sorted(summary.items(), key=lambda kv: -kv[1]["auc"]):
+        lines.append(
+            f"| {name} | {s['auc']:.3f} | {s['success_50']:.3f} | {s['precision_20']:.3f} | "
+            f"{s['mean_center_error']:.1f} | {s['fps']:.0f} | {s['fps_ratio']:.1f} |"
+        )
+    return "\n".join(lines)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -182,7 +200,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         missing=args.missing,
     )
     wall = time.perf_counter() - t0
-    print(format_table(records, reference=args.reference, style=args.style))
+    if not args.summary_only:
+        print(format_table(records, reference=args.reference, style=args.style))
+        print()
+    print(format_summary(summarize(records, reference=args.reference), len(paths), args.reference))
     print(f"\n(wall time {wall:.1f} s)")
 
     if args.json is not None:
