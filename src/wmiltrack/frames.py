@@ -20,7 +20,9 @@ def as_frame(frame: Any) -> np.ndarray:
     * other integer dtypes: accepted when every value is in 0..255 (the 8-bit scale),
       otherwise ``ValueError`` (scale 16-bit images yourself, e.g. ``frame >> 8``).
     * float16/32/64: read on the 0..255 scale (as ``frame.astype(float)`` of an 8-bit
-      image gives) and rounded; NaN, infinity or values outside [0, 255] are a ``ValueError``.
+      image gives) and rounded; NaN, infinity or values outside [0, 255] are a ``ValueError``,
+      and so is a frame whose values all lie in (0, 1]: that is ambiguous (most likely a
+      [0, 1] image, which would silently read as black), so scale it first.
     * bool, complex, object and other dtypes: ``TypeError``.
     """
     if not isinstance(frame, np.ndarray):
@@ -53,6 +55,11 @@ def as_frame(frame: Any) -> np.ndarray:
                 f"float frame has values in [{lo:g}, {hi:g}]; wmiltrack reads float frames on the "
                 "0..255 scale (multiply a [0, 1] image by 255 first)"
             )
+        if 0.0 < hi <= 1.0:
+            raise ValueError(
+                f"float frame has values in [{lo:g}, {hi:g}]: ambiguous, a [0, 1] image would read "
+                "as black on wmiltrack's 0..255 float scale; pass (frame * 255) or a uint8 frame"
+            )
         return np.rint(frame).astype(np.uint8)
     raise TypeError(f"frame dtype {frame.dtype} is not supported: pass uint8 (or 0..255 ints/floats)")
 
@@ -69,7 +76,12 @@ def clip_box(box: Any, frame_w: int, frame_h: int) -> IntBox:
     non-finite values, non-positive sizes or a box wholly outside the frame.
     """
     try:
-        values = [float(v) for v in box]
+        if isinstance(box, (str, bytes)):  # "1234" would otherwise read as (1, 2, 3, 4)
+            raise TypeError
+        items = list(box)
+        if any(isinstance(v, (str, bytes, np.str_, np.bytes_)) for v in items):
+            raise TypeError
+        values = [float(v) for v in items]
     except (TypeError, ValueError):
         raise TypeError(f"box must be four numbers (x, y, w, h), got {box!r}") from None
     if len(values) != 4:

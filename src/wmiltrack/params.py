@@ -35,6 +35,14 @@ _CHOICES: dict[str, tuple[str, ...]] = {
 }
 
 
+MAX_POS_RADIUS = 100
+"""Largest positive-bag radius (``pos_radius``, ``init_pos_radius``): ~31 000 positives."""
+MAX_NEG_RADIUS = 500
+"""Largest outer negative radius (``neg_outer``, ``init_neg_outer``)."""
+MAX_SEARCH_RADIUS = 1000
+"""Largest search radius (``coarse_radius``, ``fine_radius``)."""
+
+
 @dataclass(frozen=True)
 class Params:
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
@@ -187,6 +195,11 @@ class Params:
         need(len(self.rect_bounds) == 4 and all(is_int(v) and v >= 0 for v in self.rect_bounds),
              f"rect_bounds must be four ints >= 0, got {self.rect_bounds}")
         need(self.rect_bounds[2] >= 1, "rect_bounds[2] (smallest rectangle side) must be >= 1")
+        # A rectangle starts at most rect_bounds[1] pixels before the box's far edge and is at
+        # least rect_bounds[2] wide: it only stays inside the box if the latter fits.
+        need(self.rect_bounds[2] <= self.rect_bounds[1],
+             f"rect_bounds[2] (smallest rectangle side, {self.rect_bounds[2]}) must be <= "
+             f"rect_bounds[1] (room left after a rectangle's start, {self.rect_bounds[1]})")
         for name in ("pos_radius", "neg_inner", "neg_outer", "learning_rate", "sigma_floor", "guard",
                      "lost_threshold"):
             v = getattr(self, name)
@@ -196,8 +209,19 @@ class Params:
         need(0 <= self.neg_inner < self.neg_outer,
              f"need 0 <= neg_inner < neg_outer, got {self.neg_inner}, {self.neg_outer}")
         need(self.neg_count >= 0, f"neg_count must be >= 0, got {self.neg_count}")
+        for name in ("init_pos_radius", "init_neg_inner", "init_neg_outer"):
+            v = getattr(self, name)
+            need(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)),
+                 f"{name} must be None or a finite number, got {v!r}")
         if self.init_pos_radius is not None:
             need(self.init_pos_radius > 0, "init_pos_radius must be > 0")
+        # Upper limits keep the enumerated offsets (and the memory they take) bounded.
+        for name in ("pos_radius", "init_pos_radius"):
+            v = getattr(self, name)
+            need(v is None or v <= MAX_POS_RADIUS, f"{name} must be <= {MAX_POS_RADIUS}, got {v}")
+        for name in ("neg_outer", "init_neg_outer"):
+            v = getattr(self, name)
+            need(v is None or v <= MAX_NEG_RADIUS, f"{name} must be <= {MAX_NEG_RADIUS}, got {v}")
         inner = self.neg_inner if self.init_neg_inner is None else self.init_neg_inner
         outer = self.neg_outer if self.init_neg_outer is None else self.init_neg_outer
         need(0 <= inner < outer, f"need 0 <= init_neg_inner < init_neg_outer, got {inner}, {outer}")
@@ -209,6 +233,9 @@ class Params:
         need(self.guard > 0, f"guard must be > 0, got {self.guard}")
         need(self.coarse_radius >= 1 and self.coarse_step >= 1,
              f"coarse_radius and coarse_step must be >= 1, got {self.coarse_radius}, {self.coarse_step}")
+        need(self.coarse_radius <= MAX_SEARCH_RADIUS and self.fine_radius <= MAX_SEARCH_RADIUS,
+             f"coarse_radius and fine_radius must be <= {MAX_SEARCH_RADIUS}, got "
+             f"{self.coarse_radius}, {self.fine_radius}")
         need(self.fine_radius >= 0 and self.fine_step >= 1,
              f"fine_radius must be >= 0 and fine_step >= 1, got {self.fine_radius}, {self.fine_step}")
         need(0.0 <= self.lost_threshold <= 1.0, f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
