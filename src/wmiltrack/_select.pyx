@@ -45,6 +45,25 @@ cdef void _normalised(const double* logv, const double* w, double* out, Py_ssize
         out[j] /= total
 
 
+cdef void _take(Py_ssize_t best, Py_ssize_t step, const double[:, ::1] h_pos,
+                const double[:, ::1] h_neg, double[::1] H_pos, double[::1] H_neg,
+                unsigned char[::1] used, int[::1] sel) noexcept nogil:
+    """Add feature ``best`` to the strong classifier (the first unused one if ``best < 0``,
+    i.e. when every candidate scored NaN)."""
+    cdef Py_ssize_t m, j
+    if best < 0:
+        for m in range(used.shape[0]):
+            if not used[m]:
+                best = m
+                break
+    used[best] = 1
+    sel[step] = <int>best
+    for j in range(H_pos.shape[0]):
+        H_pos[j] += h_pos[best, j]
+    for j in range(H_neg.shape[0]):
+        H_neg[j] += h_neg[best, j]
+
+
 def wmil_select(const double[:, ::1] h_pos, const double[:, ::1] h_neg,
                 const double[::1] w_pos, int k, bint code_gradient=False):
     """Greedy WMIL selection by the functional-gradient inner product (see selection.py)."""
@@ -106,17 +125,7 @@ def wmil_select(const double[:, ::1] h_pos, const double[:, ::1] h_neg,
                 if best < 0 or score > best_score:
                     best = m
                     best_score = score
-            if best < 0:  # every score NaN: fall back to the first unused feature
-                for m in range(M):
-                    if not used[m]:
-                        best = m
-                        break
-            used[best] = 1
-            sel[step] = <int>best
-            for j in range(P):
-                H_pos[j] += h_pos[best, j]
-            for j in range(N):
-                H_neg[j] += h_neg[best, j]
+            _take(best, step, h_pos, h_neg, H_pos, H_neg, used, sel)
     return selected
 
 
@@ -192,15 +201,5 @@ def milboost_select(const double[:, ::1] h_pos, const double[:, ::1] h_neg, int 
                 if best < 0 or nll < best_nll:
                     best = m
                     best_nll = nll
-            if best < 0:
-                for m in range(M):
-                    if not used[m]:
-                        best = m
-                        break
-            used[best] = 1
-            sel[step] = <int>best
-            for j in range(P):
-                H_pos[j] += h_pos[best, j]
-            for j in range(N):
-                H_neg[j] += h_neg[best, j]
+            _take(best, step, h_pos, h_neg, H_pos, H_neg, used, sel)
     return selected
