@@ -35,6 +35,7 @@ from typing import Any, Literal, Protocol, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
+from .frames import clip_box
 from .result import Box, TrackResult
 
 __all__ = [
@@ -196,28 +197,11 @@ def _frame(frame: npt.ArrayLike) -> Frame:
 
 
 def _int_box(box: BoxLike, shape: tuple[int, ...]) -> tuple[int, int, int, int]:
-    """Round a float ``x, y, w, h`` box to integer pixels inside the frame."""
-    try:
-        vals = [float(v) for v in box]
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"box must be 4 numbers x, y, w, h; got {box!r}") from exc
-    if len(vals) != 4:
-        raise ValueError(f"box must be 4 numbers x, y, w, h; got {len(vals)} values")
-    if not all(math.isfinite(v) for v in vals):
-        raise ValueError(f"box has a NaN or infinite value: {vals}")
-    x, y, w, h = vals
-    if w <= 0 or h <= 0:
-        raise ValueError(f"box width and height must be positive; got w={w}, h={h}")
-    height, width = int(shape[0]), int(shape[1])
-    x0 = max(0, round(x))
-    y0 = max(0, round(y))
-    x1 = min(width, round(x + w))
-    y1 = min(height, round(y + h))
-    if x1 - x0 < 2 or y1 - y0 < 2:
-        raise ValueError(
-            f"box {tuple(vals)} leaves less than 2x2 pixels inside the {width}x{height} frame"
-        )
-    return x0, y0, x1 - x0, y1 - y0
+    """Round and clip a box as :class:`wmiltrack.Tracker` does; OpenCV needs >= 2x2 pixels."""
+    x, y, w, h = clip_box(box, int(shape[1]), int(shape[0]))
+    if w < 2 or h < 2:
+        raise ValueError(f"box {box!r} leaves less than 2x2 pixels inside the {shape[1]}x{shape[0]} frame")
+    return x, y, w, h
 
 
 class OpenCVTracker:
