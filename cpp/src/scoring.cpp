@@ -38,6 +38,7 @@ WeakGaussians::WeakGaussians(const double* mu1, const double* sigma1, const doub
 
 void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool accumulate,
                               double* scratch) const {
+  if (n <= 0) return;  // Eigen's minCoeff() of an empty array reads past its end
   ConstArrayMap v(x, n);
   ArrayMap l1(scratch, n), l0(scratch + n, n);
   l1 = lb1_[k] - (v - mu1_[k]).square() * a1_[k];

@@ -212,6 +212,11 @@ void test_overflow_guards(std::mt19937& rng) {
   }
   CHECK(threw);
   CHECK(grid_half_size(kMax, kMax) == 0);
+  // No samples (a box as large as the frame has no negatives): nothing is read or written.
+  const double* no_values = nullptr;
+  weak.log_ratio(0, no_values, 0, nullptr, false, nullptr);
+  std::vector<double> none_out;
+  weak.log_ratio(0, none_out.data(), 0, none_out.data(), true, none_out.data());
 }
 }  // namespace
 

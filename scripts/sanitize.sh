@@ -1,0 +1,135 @@
+#!/usr/bin/env bash
+# Memory-safety checks of the C++ core (and of the compiled modules in a real tracking run).
+#
+#   scripts/sanitize.sh [asan] [valgrind] [python]      (no argument: all three)
+#
+#   asan      build the C++ tests with -DWMILTRACK_SANITIZE=ON (AddressSanitizer + UBSan, Eigen
+#             asserts on) out of tree in build/sanitize and run them; any report fails.
+#   valgrind  build the same tests without sanitizers (and without -march=native: valgrind
+#             does not decode AVX-512) in build/memcheck, run them under valgrind memcheck.
+#   python    build the extension modules (_core and the Cython _select) with ASan + UBSan in
+#             build/sanitize-py, copy them next to a copy of the Python sources, and run a short
+#             tracking run of every variant (plus the awkward geometries and frame layouts of
+#             tests/test_reliability.py) with libasan preloaded into the interpreter
+#             (LD_PRELOAD, ASAN_OPTIONS=detect_leaks=0: CPython's own allocations are not
+#             leaks). The run imports the sanitized modules, never the installed ones.
+#
+# Needs: cmake, a C++17 compiler with -fsanitize (gcc or clang), the Python that will run the
+# tracker on PATH (numpy, pybind11, Cython and opencv as for the package), and Eigen: taken
+# from cmeel-eigen in that Python's site-packages, pip-installed there when missing.
+# valgrind only for the `valgrind` step. Set JOBS to change build parallelism (default 2).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$(pwd)
+PY=${PYTHON:-python}
+JOBS=${JOBS:-2}
+STEPS=("$@")
+[ ${#STEPS[@]} -eq 0 ] && STEPS=(asan valgrind python)
+
+log() { printf '== sanitize: %s\n' "$*"; }
+
+# Configure and build quietly; on failure show the log. Usage: build DIR TARGETS -- CMAKE_ARGS
+build() {
+  local dir=$1; shift
+  local targets=()
+  while [ "$1" != "--" ]; do targets+=("$1"); shift; done
+  shift
+  mkdir -p "$dir"
+  if ! { cmake -S . -B "$dir" -DPython_EXECUTABLE="$(command -v "$PY")" "$@" &&
+         cmake --build "$dir" --target "${targets[@]}" -j "$JOBS"; } >"$dir/build.log" 2>&1; then
+    tail -n 60 "$dir/build.log" >&2
+    echo "build in $dir failed (full log: $dir/build.log)" >&2
+    return 1
+  fi
+}
+
+ensure_eigen() {
+  local purelib
+  purelib=$("$PY" -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
+  if ! ls "$purelib"/cmeel.prefix/share/eigen3/cmake/Eigen3Config.cmake >/dev/null 2>&1; then
+    log "Eigen (cmeel-eigen) not in $purelib: installing it"
+    "$PY" -m pip install --quiet cmeel-eigen
+  fi
+}
+
+# Sanitizer runtime options: stop at the first report with a non-zero exit code.
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+SAN_CXX="-O1 -g -fno-omit-frame-pointer"
+
+run_asan() {
+  log "C++ tests under AddressSanitizer + UndefinedBehaviorSanitizer (build/sanitize)"
+  build build/sanitize test_core -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
+    -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=ON -DWMILTRACK_BUILD_PYTHON=OFF
+  ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1" \
+    build/sanitize/test_core
+  log "asan: clean"
+}
+
+run_valgrind() {
+  command -v valgrind >/dev/null || { echo "valgrind not installed (apt-get install -y valgrind)" >&2; return 1; }
+  log "C++ tests under valgrind memcheck (build/memcheck)"
+  build build/memcheck test_core -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
+    -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=OFF -DWMILTRACK_NATIVE=OFF -DWMILTRACK_BUILD_PYTHON=OFF
+  valgrind --tool=memcheck --error-exitcode=99 --leak-check=full --show-leak-kinds=definite,indirect \
+    --errors-for-leak-kinds=definite,indirect --track-origins=yes -q build/memcheck/test_core
+  log "valgrind: clean"
+}
+
+run_python() {
+  log "tracking run of the sanitized extension modules (build/sanitize-py)"
+  local pybind_dir libasan site
+  pybind_dir=$("$PY" -c "import pybind11; print(pybind11.get_cmake_dir())")
+  build build/sanitize-py _core _select -- -Dpybind11_DIR="$pybind_dir" \
+    -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
+    -DCMAKE_C_FLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer" \
+    -DSKBUILD_PROJECT_NAME=wmiltrack -DSKBUILD_PROJECT_VERSION=0.0.0 \
+    -DWMILTRACK_BUILD_PYTHON=ON -DWMILTRACK_SANITIZE=ON
+  site=build/sanitize-py/site
+  rm -rf "$site" && mkdir -p "$site/wmiltrack"
+  cp src/wmiltrack/*.py "$site/wmiltrack/"
+  cp build/sanitize-py/_core*.so build/sanitize-py/_select*.so "$site/wmiltrack/"
+  libasan=$(${CXX:-c++} -print-file-name=libasan.so)
+  [ -f "$libasan" ] || { echo "libasan.so not found ($libasan)" >&2; return 1; }
+  # detect_leaks=0: the interpreter's own allocations are not ours to report.
+  LD_PRELOAD="$libasan" ASAN_OPTIONS="detect_leaks=0:halt_on_error=1:abort_on_error=0" \
+    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests" "$PY" - <<'PYEOF'
+import os, sys, time
+# Import the sanitized copy, never the installed package (an editable install's finder
+# would otherwise win over sys.path).
+sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__module__.lower()]
+sys.path.insert(0, os.environ["WMILTRACK_SANITIZED_SITE"])
+sys.path.insert(1, os.environ["WMILTRACK_TESTS"])
+import wmiltrack, wmiltrack._core, wmiltrack._select
+for mod in (wmiltrack._core, wmiltrack._select):
+    assert mod.__file__.startswith(os.environ["WMILTRACK_SANITIZED_SITE"]), mod.__file__
+import wmiltrack.synthetic
+t0 = time.perf_counter()
+seq = wmiltrack.synthetic.make_preset("all", seed=0, n_frames=40)
+frames, gt = seq.load(), seq.groundtruth
+n_frames = 0
+for v in sorted(wmiltrack.variants()):
+    t = wmiltrack.Tracker(v, seed=0)
+    t.init(frames[0], tuple(gt[0]))
+    for f in frames[1:]:
+        t.update(f)
+        n_frames += 1
+import test_reliability as rel
+results = rel.run_cases_in_process()
+bad = [r for r in results if r["verdict"]]
+for r in bad:
+    print("FAILED", r["name"], r["verdict"])
+print(f"sanitized run: {n_frames} tracked frames (6 variants), {len(results)} reliability cases, "
+      f"{len(bad)} failed, {time.perf_counter() - t0:.1f} s")
+sys.exit(1 if bad else 0)
+PYEOF
+  log "python: clean"
+}
+
+for step in "${STEPS[@]}"; do
+  case "$step" in
+    asan) ensure_eigen; run_asan ;;
+    valgrind) ensure_eigen; run_valgrind ;;
+    python) ensure_eigen; run_python ;;
+    *) echo "unknown step $step (asan, valgrind, python)" >&2; exit 2 ;;
+  esac
+done
