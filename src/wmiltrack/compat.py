@@ -68,7 +68,8 @@ class TrackerCompat:
         elif isinstance(params, Mapping):
             self._tracker = Tracker(name, seed=seed, **dict(params))
         else:
-            raise TypeError(f"params must be a wmiltrack.Params, a mapping or None, got {type(params).__name__}")
+            raise TypeError("params must be a wmiltrack.Params, a mapping or None, "
+                            f"got {type(params).__name__}")
         self.last_result: TrackResult | None = None
 
     @classmethod

@@ -1,0 +1,13 @@
+"""Type stubs of the Cython selection kernels (``wmiltrack._select``)."""
+
+import numpy as np
+import numpy.typing as npt
+
+def wmil_select(h_pos: npt.NDArray[np.float64], h_neg: npt.NDArray[np.float64],
+                w_pos: npt.NDArray[np.float64], k: int,
+                code_gradient: bool = False) -> npt.NDArray[np.int32]:
+    """Greedy WMIL selection by the functional-gradient inner product (see selection.py)."""
+
+def milboost_select(h_pos: npt.NDArray[np.float64], h_neg: npt.NDArray[np.float64], k: int,
+                    guard: float = 1e-5) -> npt.NDArray[np.int32]:
+    """Greedy MILBoost selection: Noisy-OR positive bag, each negative its own bag."""
