@@ -136,6 +136,7 @@ class Tracker:
         self._box = b
         self._compute_integral(img, b, self._first.reach)
         self._learn(self._first)
+        self._search_origins: list[IntBox] = []
         self._score = 1.0
         self._initialized = True
 
@@ -179,6 +180,32 @@ class Tracker:
                 out.append(self.update(frame).box)
         return np.array(out, dtype=np.float64).reshape(-1, 4)
 
+    def samples(self) -> dict[str, Any]:
+        """What the last ``init``/``update`` looked at (read-only copies, for drawing).
+
+        Returns
+        -------
+        dict
+            ``"positive"``, ``"negative"``: top-left corners ``(n, 2)`` of the bags learnt
+            from; ``"search"``: one ``(origin_box, radius, step)`` per search stage of the
+            last ``update`` (coarse, then fine; empty after ``init``); ``"box"``: the box.
+        """
+        self._require_init()
+        pos, neg = self._bags
+        return {
+            "positive": pos.copy(),
+            "negative": neg.copy(),
+            "search": [
+                (origin, r, s)
+                for origin, (r, s) in zip(
+                    self._search_origins,
+                    [(self._params.coarse_radius, self._params.coarse_step),
+                     (self._params.fine_radius, self._params.fine_step)],
+                )
+            ],
+            "box": self._box,
+        }
+
     def __repr__(self) -> str:
         state = f"box={self._box}" if self._initialized else "not initialised"
         return f"Tracker({self._params.variant!r}, seed={self._seed}, {state})"
@@ -203,7 +230,9 @@ class Tracker:
         stages = [(p.coarse_radius, p.coarse_step)]
         if p.fine_radius > 0:
             stages.append((p.fine_radius, p.fine_step))
+        self._search_origins = []
         for radius, step in stages:
+            self._search_origins.append(self._box)
             dx, dy, score, n = _core.score_grid(self._ii, self._bank, sel, *weak, p.guard, self._box,
                                                 radius, step, self._frame_wh)
             if n > 0:
@@ -218,6 +247,7 @@ class Tracker:
         fw, fh = self._frame_wh
         pos, dist = sampler.positives(self._box, fw, fh)
         neg = sampler.negatives(self._box, fw, fh, self._rng)
+        self._bags = (pos, neg)
         v_pos = _core.project(self._ii, self._bank, pos[:, 0], pos[:, 1])
         v_neg = _core.project(self._ii, self._bank, neg[:, 0], neg[:, 1])
         pool = self._pool
