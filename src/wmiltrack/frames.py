@@ -36,6 +36,8 @@ def as_frame(frame: Any) -> np.ndarray:
     if frame.shape[0] == 0 or frame.shape[1] == 0:
         raise ValueError(f"frame is empty (shape {frame.shape})")
     kind = frame.dtype.kind
+    lo: float  # value range, for the messages below (int for integer frames)
+    hi: float
     if frame.dtype == np.uint8:
         return frame
     if kind in "ui":
