@@ -47,13 +47,15 @@ class BagSampler:
         self.reach = math.ceil(max(pos_r, outer))
 
     @staticmethod
-    def _inside(offsets: np.ndarray, box: tuple[int, int, int, int], frame_w: int, frame_h: int) -> np.ndarray:
+    def _inside(offsets: np.ndarray, box: tuple[int, int, int, int], frame_w: int,
+                frame_h: int) -> np.ndarray:
         x, y, w, h = box
         xs = x + offsets[:, 0]
         ys = y + offsets[:, 1]
         return (xs >= 0) & (ys >= 0) & (xs + w <= frame_w) & (ys + h <= frame_h)
 
-    def positives(self, box: tuple[int, int, int, int], frame_w: int, frame_h: int) -> tuple[np.ndarray, np.ndarray]:
+    def positives(self, box: tuple[int, int, int, int], frame_w: int,
+                  frame_h: int) -> tuple[np.ndarray, np.ndarray]:
         """Top-left corners ``(n, 2)`` of the positive bag inside the frame, and their distances."""
         keep = self._inside(self.pos_offsets, box, frame_w, frame_h)
         corners = self.pos_offsets[keep] + np.array(box[:2], dtype=np.int32)
@@ -69,7 +71,8 @@ class BagSampler:
                 candidates = candidates[np.sort(pick)]
         else:
             candidates = candidates[rng.random(candidates.shape[0]) < self.keep_prob][: self.neg_count]
-        return candidates + np.array(box[:2], dtype=np.int32)
+        out: np.ndarray = candidates + np.array(box[:2], dtype=np.int32)
+        return out
 
 
 def instance_weights(distances: np.ndarray, mode: str) -> np.ndarray:
@@ -77,8 +80,10 @@ def instance_weights(distances: np.ndarray, mode: str) -> np.ndarray:
     if distances.size == 0:
         return np.zeros(0)
     if mode == "exp":
-        w = np.exp(-distances)
-        return w / w.sum()
+        w: np.ndarray = np.exp(-distances)
+        normalised: np.ndarray = w / w.sum()
+        return normalised
     if mode == "exp_sq":
-        return np.exp(-(distances**2))
+        sq: np.ndarray = np.exp(-(distances**2))
+        return sq
     return np.full(distances.shape, 1.0 / distances.size)
