@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import wmiltrack
-from wmiltrack import synthetic, tracker as tracker_mod
+from wmiltrack import synthetic
+from wmiltrack import tracker as tracker_mod
 from wmiltrack.metrics import ope_metrics
 from wmiltrack.params import Params
 

@@ -65,7 +65,8 @@ def _subregions(params: Params, w: int, h: int, rng: np.random.Generator) -> lis
         side = math.isqrt(params.num_subregions)
         xs = [w * i // side for i in range(side + 1)]
         ys = [h * i // side for i in range(side + 1)]
-        cells = [(xs[i], ys[j], xs[i + 1] - xs[i], ys[j + 1] - ys[j]) for j in range(side) for i in range(side)]
+        cells = [(xs[i], ys[j], xs[i + 1] - xs[i], ys[j + 1] - ys[j])
+                 for j in range(side) for i in range(side)]
         return [cells[f % len(cells)] for f in range(m)]
     sw, sh = max(w // 2, 1), max(h // 2, 1)
     return [(int(rng.integers(0, w - sw + 1)), int(rng.integers(0, h - sh + 1)), sw, sh) for _ in range(m)]

@@ -186,7 +186,8 @@ class Params:
                  "selection='none' scores every feature: num_selected must equal num_features")
         need(1 <= self.rects_min <= self.rects_max,
              f"need 1 <= rects_min <= rects_max, got {self.rects_min}, {self.rects_max}")
-        need(self.num_subregions in (1, 4, 9, 16) if self.subregion_mode == "grid" else self.num_subregions >= 1,
+        need(self.num_subregions in (1, 4, 9, 16) if self.subregion_mode == "grid"
+             else self.num_subregions >= 1,
              f"num_subregions for a grid must be a square (1, 4, 9, 16), got {self.num_subregions}")
         need(0.0 <= self.positive_prob <= 1.0, f"positive_prob must be in [0, 1], got {self.positive_prob}")
         need(self.rect_min_size >= 1, f"rect_min_size must be >= 1, got {self.rect_min_size}")
@@ -226,7 +227,8 @@ class Params:
         outer = self.neg_outer if self.init_neg_outer is None else self.init_neg_outer
         need(0 <= inner < outer, f"need 0 <= init_neg_inner < init_neg_outer, got {inner}, {outer}")
         if self.init_neg_count is not None:
-            need(is_int(self.init_neg_count) and self.init_neg_count >= 0, "init_neg_count must be an int >= 0")
+            need(is_int(self.init_neg_count) and self.init_neg_count >= 0,
+                 "init_neg_count must be an int >= 0")
         need(0.0 <= self.learning_rate < 1.0,
              f"learning_rate (lambda) must be in [0, 1), got {self.learning_rate}")
         need(self.sigma_floor > 0, f"sigma_floor must be > 0, got {self.sigma_floor}")
@@ -238,7 +240,8 @@ class Params:
              f"{self.coarse_radius}, {self.fine_radius}")
         need(self.fine_radius >= 0 and self.fine_step >= 1,
              f"fine_radius must be >= 0 and fine_step >= 1, got {self.fine_radius}, {self.fine_step}")
-        need(0.0 <= self.lost_threshold <= 1.0, f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
+        need(0.0 <= self.lost_threshold <= 1.0,
+             f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
         need(self.min_box_size >= 2, f"min_box_size must be >= 2, got {self.min_box_size}")
 
     # -- derived values ---------------------------------------------------------------------

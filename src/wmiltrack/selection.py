@@ -95,7 +95,8 @@ def milboost_nll(H_pos: np.ndarray, H_neg: np.ndarray, guard: float = 1e-5) -> f
     return float(pos + neg)
 
 
-def milboost_select_reference(h_pos: np.ndarray, h_neg: np.ndarray, k: int, *, guard: float = 1e-5) -> np.ndarray:
+def milboost_select_reference(h_pos: np.ndarray, h_neg: np.ndarray, k: int, *,
+                              guard: float = 1e-5) -> np.ndarray:
     """Plain numpy version of :func:`milboost_select`: evaluates the NLL for every candidate."""
     H_pos = np.zeros(h_pos.shape[1])
     H_neg = np.zeros(h_neg.shape[1])
