@@ -111,11 +111,12 @@ def _write_video_frame(writer: Any, path: Path, frame: Any, box: Sequence[float]
 
     if writer is None:
         h, w = frame.shape[:2]
-        fourcc = cv2.VideoWriter_fourcc(*("mp4v" if str(path).lower().endswith(".mp4") else "MJPG"))
+        fourcc = cv2.VideoWriter.fourcc(*("mp4v" if str(path).lower().endswith(".mp4") else "MJPG"))
         writer = cv2.VideoWriter(str(path), fourcc, float(fps or 25.0), (w, h))
         if not writer.isOpened():
             raise SystemExit(f"wmiltrack: cannot write video {path}")
-    img = frame if frame.ndim == 3 and frame.shape[2] == 3 else cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_GRAY2BGR)
+    img = (frame if frame.ndim == 3 and frame.shape[2] == 3
+           else cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_GRAY2BGR))
     writer.write(draw_result(img, box, index=index, score=score))
     return writer
 
@@ -199,7 +200,8 @@ def variant_table() -> str:
             how = "exactly" if p.neg_sampling == "exact" else "Bernoulli, max"
             return f"{p.neg_inner:g} <= d < {p.neg_outer:g}, {how} {p.neg_count}"
         if key == "selection":
-            return {"wmil": "WMIL gradient", "milboost": "MILBoost (Noisy-OR)", "none": "all features"}[p.selection]
+            return {"wmil": "WMIL gradient", "milboost": "MILBoost (Noisy-OR)",
+                    "none": "all features"}[p.selection]
         if key == "instance_weights":
             return "-" if p.selection != "wmil" else {"exp": "exp(-d)/sum", "exp_sq": "exp(-d^2)",
                                                       "uniform": "equal"}[p.instance_weights]
