@@ -247,6 +247,7 @@ SUBCOMMANDS: list[tuple[str | None, str]] = [
     (None, "add_track"),
     (None, "add_demo"),
     (None, "add_variants"),
+    (".eval_cli", "add_eval"),
     (".inspect_cli", "add_inspect"),
 ]
 

@@ -1,0 +1,238 @@
+// Microbenchmarks of wmiltrack's C++ core: integral image, Haar feature projection and
+// candidate scoring. Plain std::chrono; each case is run `reps` times after one warm-up call
+// and reports the minimum and median wall time of one call and a throughput from the minimum.
+//
+//   bench_core [--quick] [--reps N]
+//
+// The feature bank mimics the tracker's: every feature sums 2..4 random rectangles inside
+// the target box with weights +-1/sqrt(n) (compressive-tracking style).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "wmiltrack/haar.hpp"
+#include "wmiltrack/integral.hpp"
+#include "wmiltrack/scoring.hpp"
+
+using namespace wmiltrack;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+volatile double g_sink = 0.0;  // keeps results alive so the work is not optimised away
+
+struct Timing {
+  double min_s;
+  double median_s;
+};
+
+template <class F>
+Timing time_it(int reps, F&& f) {
+  f();  // warm-up: first-touch of buffers, caches
+  std::vector<double> t(static_cast<std::size_t>(reps));
+  for (int i = 0; i < reps; ++i) {
+    const auto t0 = Clock::now();
+    f();
+    const auto t1 = Clock::now();
+    t[static_cast<std::size_t>(i)] = std::chrono::duration<double>(t1 - t0).count();
+  }
+  std::sort(t.begin(), t.end());
+  const std::size_t n = t.size();
+  const double med = n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+  return {t.front(), med};
+}
+
+// Repetitions so that one case takes roughly `budget` seconds (at least 5, at most `cap`).
+template <class F>
+int calibrate(F&& f, double budget, int cap) {
+  const auto t0 = Clock::now();
+  f();
+  const double one = std::chrono::duration<double>(Clock::now() - t0).count();
+  const int n = one > 0 ? static_cast<int>(budget / one) : cap;
+  return std::max(5, std::min(cap, n));
+}
+
+std::string si(double v) {
+  const char* units[] = {"", "k", "M", "G", "T"};
+  int u = 0;
+  while (std::fabs(v) >= 1000.0 && u < 4) {
+    v /= 1000.0;
+    ++u;
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f %s", v, units[u]);
+  return buf;
+}
+
+void row(const char* bench, const std::string& cfg, int reps, Timing t, double work,
+         const char* unit) {
+  std::printf("| %-10s | %-32s | %6d | %10.2f | %10.2f | %12s%s/s |\n", bench, cfg.c_str(), reps,
+              t.min_s * 1e6, t.median_s * 1e6, si(work / t.min_s).c_str(), unit);
+}
+
+struct Image {
+  int rows, cols;
+  std::vector<std::uint8_t> bgr;
+  ImageView view() const {
+    ImageView v;
+    v.data = bgr.data();
+    v.rows = rows;
+    v.cols = cols;
+    v.channels = 3;
+    v.channel_stride = 1;
+    v.col_stride = 3;
+    v.row_stride = static_cast<std::ptrdiff_t>(cols) * 3;
+    return v;
+  }
+};
+
+Image random_image(int rows, int cols, std::mt19937& rng) {
+  Image im{rows, cols, std::vector<std::uint8_t>(static_cast<std::size_t>(rows) * cols * 3)};
+  std::uniform_int_distribution<int> d(0, 255);
+  for (auto& p : im.bgr) p = static_cast<std::uint8_t>(d(rng));
+  return im;
+}
+
+FeatureBank random_bank(int m, int w, int h, std::mt19937& rng) {
+  std::vector<std::int32_t> starts{0};
+  std::vector<Rect> rects;
+  std::vector<double> weights;
+  std::uniform_int_distribution<int> nrect(2, 4);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int f = 0; f < m; ++f) {
+    const int n = nrect(rng);
+    for (int r = 0; r < n; ++r) {
+      Rect q;
+      q.x = static_cast<int>(u(rng) * (w - 3));
+      q.y = static_cast<int>(u(rng) * (h - 3));
+      q.w = 1 + static_cast<int>(u(rng) * (w - q.x - 2));
+      q.h = 1 + static_cast<int>(u(rng) * (h - q.y - 2));
+      rects.push_back(q);
+      weights.push_back((u(rng) < 0.5 ? -1.0 : 1.0) / std::sqrt(static_cast<double>(n)));
+    }
+    starts.push_back(static_cast<std::int32_t>(rects.size()));
+  }
+  return FeatureBank(std::move(starts), std::move(rects), std::move(weights));
+}
+
+void bench_integral(int reps_cap, double budget, std::mt19937& rng) {
+  const Image img = random_image(720, 1280, rng);
+  const int sizes[][2] = {{64, 64}, {128, 128}, {256, 256}, {320, 240}, {640, 480}, {1280, 720}};
+  IntegralImage ii;
+  for (const auto& s : sizes) {
+    Rect roi{(1280 - s[0]) / 2, (720 - s[1]) / 2, s[0], s[1]};
+    auto f = [&] {
+      ii.compute(img.view(), roi);
+      g_sink = g_sink + ii.data()[ii.stride() * ii.height() + ii.width()];
+    };
+    const int reps = calibrate(f, budget, reps_cap);
+    const Timing t = time_it(reps, f);
+    row("integral", "ROI " + std::to_string(s[0]) + "x" + std::to_string(s[1]) + " BGR", reps, t,
+        static_cast<double>(s[0]) * s[1], "px");
+  }
+}
+
+void bench_project(int reps_cap, double budget, std::mt19937& rng) {
+  const int box = 48;
+  const Image img = random_image(480, 640, rng);
+  IntegralImage ii;
+  ii.compute(img.view(), Rect{0, 0, 640, 480});
+  const int ms[] = {50, 100, 250};
+  const int ns[] = {100, 1000, 2000};
+  std::uniform_int_distribution<int> px(0, 640 - box - 1), py(0, 480 - box - 1);
+  for (int m : ms) {
+    const FeatureBank bank = random_bank(m, box, box, rng);
+    for (int n : ns) {
+      std::vector<std::int32_t> xs(static_cast<std::size_t>(n)), ys(static_cast<std::size_t>(n));
+      for (int i = 0; i < n; ++i) {
+        xs[static_cast<std::size_t>(i)] = px(rng);
+        ys[static_cast<std::size_t>(i)] = py(rng);
+      }
+      std::vector<double> out(static_cast<std::size_t>(m) * n);
+      auto f = [&] {
+        project(ii, bank, nullptr, m, xs.data(), ys.data(), n, out.data());
+        g_sink = g_sink + out[0];
+      };
+      const int reps = calibrate(f, budget, reps_cap);
+      const Timing t = time_it(reps, f);
+      row("project", std::to_string(m) + " features x " + std::to_string(n) + " boxes", reps, t,
+          static_cast<double>(m) * n, "val");
+    }
+  }
+}
+
+void bench_score(int reps_cap, double budget, std::mt19937& rng) {
+  const Image img = random_image(480, 640, rng);
+  IntegralImage ii;
+  ii.compute(img.view(), Rect{0, 0, 640, 480});
+  struct Cfg {
+    const char* name;
+    int radius, step;
+  };
+  const Cfg cfgs[] = {{"coarse 25/4", 25, 4}, {"fine 10/1", 10, 1}, {"exhaustive 25/1", 25, 1}};
+  const int boxes[] = {32, 64, 128};
+  const int k = 50;  // selected features (rcwmil scores K of M; 50 is the upper end)
+  std::normal_distribution<double> nd(0.0, 1.0);
+  for (int bs : boxes) {
+    const FeatureBank bank = random_bank(150, bs, bs, rng);
+    std::vector<std::int32_t> sel(static_cast<std::size_t>(k));
+    for (int i = 0; i < k; ++i) sel[static_cast<std::size_t>(i)] = i;
+    std::vector<double> mu1(k), s1(k), mu0(k), s0(k);
+    for (int i = 0; i < k; ++i) {
+      mu1[i] = 100 * nd(rng);
+      mu0[i] = 100 * nd(rng);
+      s1[i] = 20 + std::fabs(20 * nd(rng));
+      s0[i] = 20 + std::fabs(20 * nd(rng));
+    }
+    const WeakGaussians weak(mu1.data(), s1.data(), mu0.data(), s0.data(), k, 1e-30);
+    const Rect box{320 - bs / 2, 240 - bs / 2, bs, bs};
+    for (const Cfg& c : cfgs) {
+      GridResult res;
+      auto f = [&] {
+        res = score_grid(ii, bank, sel.data(), k, weak, box, c.radius, c.step, 640, 480, nullptr);
+        g_sink = g_sink + res.score;
+      };
+      const int reps = calibrate(f, budget, reps_cap);
+      const Timing t = time_it(reps, f);
+      row("score", std::string(c.name) + ", box " + std::to_string(bs) + ", K=" +
+                       std::to_string(k), reps, t,
+          static_cast<double>(res.candidates), "cand");
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  bool quick = false;
+  int reps_cap = 200;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) {
+      quick = true;
+    } else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
+      reps_cap = std::max(5, std::atoi(argv[++i]));
+    } else {
+      std::fprintf(stderr, "usage: %s [--quick] [--reps N]\n", argv[0]);
+      return 2;
+    }
+  }
+  const double budget = quick ? 0.05 : 0.4;  // seconds per case, roughly
+  if (quick) reps_cap = std::min(reps_cap, 20);
+  std::mt19937 rng(12345);
+  std::printf("| Benchmark  | Configuration                    | Reps   | Min us     | Median us  | Throughput (min)   |\n");
+  std::printf("|------------|----------------------------------|--------|------------|------------|--------------------|\n");
+  bench_integral(reps_cap, budget, rng);
+  bench_project(reps_cap, budget, rng);
+  bench_score(reps_cap, budget, rng);
+  std::printf("\nintegral: pixels of the ROI converted to luma and summed per second; project: "
+              "feature values per second; score: candidate boxes scored per second (each "
+              "evaluates K=50 features and their Gaussian log-ratios).\n");
+  return g_sink == 12345.678 ? 1 : 0;
+}

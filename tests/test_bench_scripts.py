@@ -1,0 +1,115 @@
+"""Smoke tests of the benchmark scripts: verify_eval.py, fps_compare.py, the C++ benchmarks."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from wmiltrack.cli import main
+from wmiltrack.synthetic import make_sequence
+
+REPO = Path(__file__).resolve().parent.parent
+BENCH = REPO / "benchmarks"
+
+
+def _tiny_dataset(root: Path) -> Path:
+    seq = make_sequence(20, size=(96, 128), target_size=(24, 20), seed=7, occlusion=False)
+    d = root / "data" / "SynC" / "img"
+    d.mkdir(parents=True)
+    for i, f in enumerate(seq.load()):
+        assert cv2.imwrite(str(d / f"{i + 1:04d}.jpg"), f)
+    gt = np.asarray(seq.groundtruth)
+    gt[4] = np.nan
+    rows = ["NaN,NaN,NaN,NaN" if np.isnan(r).any() else ",".join(map(repr, r.tolist())) for r in gt]
+    (d.parent / "groundtruth_rect.txt").write_text("\n".join(rows) + "\n")
+    return root / "data"
+
+
+def _run(args: list[str], timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, WMILTRACK_NO_PROGRESS="1")
+    return subprocess.run(
+        [sys.executable, *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        check=False,
+        env=env,
+        cwd=REPO,
+    )
+
+
+def test_verify_eval_agrees_and_catches_a_difference(tmp_path: Path) -> None:
+    data = _tiny_dataset(tmp_path)
+    out = tmp_path / "out"
+    assert (
+        main(
+            [
+                "eval",
+                str(data),
+                "--trackers",
+                "rcwmil,ct",
+                "--out",
+                str(out),
+                "--repeats",
+                "2",
+                "--no-plots",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
+    r = _run([str(BENCH / "verify_eval.py"), str(out)])
+    assert r.returncode == 0, r.stderr
+    assert "4 box files" in r.stdout and "OK" in r.stdout
+    # tamper with one figure: the check must notice
+    path = out / "eval_ope.json"
+    doc = json.loads(path.read_text())
+    doc["results"]["ct"]["SynC"]["runs"][1]["auc"] += 1e-3
+    path.write_text(json.dumps(doc))
+    r = _run([str(BENCH / "verify_eval.py"), str(out)])
+    assert r.returncode == 1 and "FAIL" in r.stdout
+
+
+def test_fps_compare_tiny() -> None:
+    r = _run(
+        [
+            str(BENCH / "fps_compare.py"),
+            "--sizes",
+            "128x96",
+            "--boxes",
+            "24",
+            "--frames",
+            "8",
+            "--repeats",
+            "1",
+            "--trackers",
+            "rcwmil,ct,opencv:MIL",
+        ]
+    )
+    assert r.returncode == 0, r.stderr
+    assert "| rcwmil |" in r.stdout and "128x96/24" in r.stdout
+    assert "Ratio to OpenCV TrackerMIL" in r.stdout
+    assert "| opencv:MIL | 1.0 |" in r.stdout
+
+
+def test_cpp_bench_binary_if_built() -> None:
+    exe = REPO / "build" / "bench" / "benchmarks" / "cpp" / "bench_core"
+    if not exe.is_file():
+        pytest.skip("C++ benchmarks not built (benchmarks/cpp/run.sh builds them, ~30 s)")
+    r = subprocess.run(
+        [str(exe), "--quick", "--reps", "5"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert r.returncode == 0, r.stderr
+    for word in ("integral", "project", "score", "exhaustive 25/1", "Mval/s"):
+        assert word in r.stdout
