@@ -30,6 +30,8 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 try:
     import wmiltrack  # noqa: F401
 except ImportError:  # running from a checkout that was not installed
@@ -117,6 +119,9 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
         "'hold' uses its last box as the OTB toolkit does (default miss)",
     )
     ap.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
+    ap.add_argument("--seeds", default=None,
+                    help="comma-separated seeds (e.g. 0,1,2,3): every tracker runs once per seed and "
+                    "the summary gives mean ± std over seeds (overrides --seed)")
     ap.add_argument("--summary-only", action="store_true",
                     help="print only the per-tracker means, not the per-sequence rows")
     args = ap.parse_args(argv)
@@ -125,18 +130,37 @@ def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
     return args
 
 
-def format_summary(summary: dict[str, dict[str, Any]], n_sequences: int, reference: str) -> str:
-    """One markdown row per tracker: means over the sequences, sorted by success AUC."""
+def format_summary(
+    summaries: Sequence[dict[str, dict[str, Any]]], n_sequences: int, reference: str,
+    seeds: Sequence[int] = (0,),
+) -> str:
+    """One markdown row per tracker, sorted by success AUC: means over the sequences, and
+    with several seeds the mean (+- standard deviation) over seeds; FPS is the median over
+    seeds."""
+
+    def stat(name: str, key: str, fmt: str) -> str:
+        vals = np.array([s[name][key] for s in summaries], dtype=float)
+        text = format(float(np.mean(vals)), fmt)
+        if len(vals) > 1:
+            text += " ± " + format(float(np.std(vals)), fmt)
+        return text
+
+    names = list(summaries[0])
+    mean_auc = {n: float(np.mean([s[n]["auc"] for s in summaries])) for n in names}
+    seed_note = f", {len(seeds)} seeds ({', '.join(map(str, seeds))})" if len(seeds) > 1 else ""
     lines = [
-        f"Mean over {n_sequences} sequences (FPS ratio: to {reference} in the same run)",
+        f"Mean over {n_sequences} sequences{seed_note}; FPS ratio: to {reference} in the same run",
         "",
         "| Tracker | AUC | SR@0.5 | P@20 | CLE px | FPS | FPS ratio |",
         "|---|---|---|---|---|---|---|",
     ]
-    for name, s in sorted(summary.items(), key=lambda kv: -kv[1]["auc"]):
+    for name in sorted(names, key=lambda n: -mean_auc[n]):
+        fps = float(np.median([s[name]["fps"] for s in summaries]))
+        ratio = float(np.median([s[name]["fps_ratio"] for s in summaries]))
         lines.append(
-            f"| {name} | {s['auc']:.3f} | {s['success_50']:.3f} | {s['precision_20']:.3f} | "
-            f"{s['mean_center_error']:.1f} | {s['fps']:.0f} | {s['fps_ratio']:.1f} |"
+            f"| {name} | {stat(name, 'auc', '.3f')} | {stat(name, 'success_50', '.3f')} | "
+            f"{stat(name, 'precision_20', '.3f')} | {stat(name, 'mean_center_error', '.1f')} | "
+            f"{fps:.0f} | {ratio:.1f} |"
         )
     return "\n".join(lines)
 
@@ -190,20 +214,28 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"({env['opencv_threads']} threads), wmiltrack {env['wmiltrack']}, "
         f"{env['cpu_count']} CPUs; frames without a box scored as {args.missing}\n"
     )
+    seeds = [int(v) for v in args.seeds.split(",")] if args.seeds else [args.seed]
     t0 = time.perf_counter()
-    records = evaluate_sequences(
-        trackers,
-        LazySequences(paths),
-        seed=args.seed,
-        repeats=args.repeats,
-        progress=not args.no_progress,
-        missing=args.missing,
-    )
+    per_seed = []
+    for seed in seeds:
+        records = evaluate_sequences(
+            trackers,
+            LazySequences(paths),
+            seed=seed,
+            repeats=args.repeats,
+            progress=not args.no_progress,
+            missing=args.missing,
+        )
+        per_seed.append((seed, records))
     wall = time.perf_counter() - t0
+    records = per_seed[0][1]
     if not args.summary_only:
+        if len(seeds) > 1:
+            print(f"Per sequence, seed {seeds[0]}:\n")
         print(format_table(records, reference=args.reference, style=args.style))
         print()
-    print(format_summary(summarize(records, reference=args.reference), len(paths), args.reference))
+    summaries = [summarize(recs, reference=args.reference) for _, recs in per_seed]
+    print(format_summary(summaries, len(paths), args.reference, seeds))
     print(f"\n(wall time {wall:.1f} s)")
 
     if args.json is not None:
@@ -215,12 +247,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                 "sequences": [p.name for p in paths],
                 "repeats": args.repeats,
                 "seed": args.seed,
+                "seeds": seeds,
                 "reference": args.reference,
                 "accuracy_from": "first run",
                 "missing": args.missing,
                 "fps": "median over runs of update-only FPS",
             },
-            "summary": summarize(records, reference=args.reference),
+            "seeds": seeds,
+            "summary": summaries[0],
+            "summary_per_seed": dict(zip(map(str, seeds), summaries)),
             "records": [r.to_dict() for r in records],
         }
         args.json.parent.mkdir(parents=True, exist_ok=True)
