@@ -21,9 +21,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import os
-import platform
 import sys
 import time
 from collections.abc import Iterator, Sequence
@@ -39,7 +36,7 @@ except ImportError:  # running from a checkout that was not installed
 
 from wmiltrack.datasets import Sequence as OTBSequence
 from wmiltrack.datasets import list_otb_sequences, load_otb_sequence
-from wmiltrack.evaluation import evaluate_sequences, format_table, summarize
+from wmiltrack.evaluation import environment, evaluate_sequences, format_table, json_safe, summarize
 from wmiltrack.peers import TrackerUnavailable, make_tracker
 
 DEFAULT_TRACKERS = "rcwmil,opencv:MIL"
@@ -61,26 +58,6 @@ class LazySequences:
 
 def _split(text: str | None) -> list[str]:
     return [t.strip() for t in (text or "").split(",") if t.strip()]
-
-
-def environment() -> dict[str, Any]:
-    """Versions and machine facts that the timings depend on."""
-    import cv2
-    import numpy as np
-
-    from wmiltrack.peers import _installed_opencv
-
-    dist, ver = _installed_opencv()
-    return {
-        "date": time.strftime("%Y-%m-%d %H:%M:%S"),
-        "python": platform.python_version(),
-        "platform": platform.platform(),
-        "cpu_count": os.cpu_count(),
-        "numpy": np.__version__,
-        "opencv": f"{dist} {ver}",
-        "opencv_threads": cv2.getNumThreads(),
-        "wmiltrack": getattr(sys.modules.get("wmiltrack"), "__version__", "?"),
-    }
 
 
 def parse_args(argv: Sequence[str] | None = None) -> argparse.Namespace:
@@ -210,9 +187,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     env = environment()
     print(
         f"# {len(paths)} sequences, trackers {', '.join(trackers)}, repeats {args.repeats}, "
-        f"seed {args.seed}\n# python {env['python']}, numpy {env['numpy']}, {env['opencv']} "
+        f"seed {args.seed}\n# python {env['python']}, numpy {env['numpy']}, {env['opencv_wheel']} "
         f"({env['opencv_threads']} threads), wmiltrack {env['wmiltrack']}, "
-        f"{env['cpu_count']} CPUs; frames without a box scored as {args.missing}\n"
+        f"{env['cpu']}, {env['cpu_count']} CPUs; frames without a box scored as {args.missing}\n"
     )
     seeds = [int(v) for v in args.seeds.split(",")] if args.seeds else [args.seed]
     t0 = time.perf_counter()
@@ -259,24 +236,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             "records": [r.to_dict() for r in records],
         }
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(_clean(out), indent=1, allow_nan=False))
+        args.json.write_text(json.dumps(json_safe(out), indent=1, allow_nan=False))
         print(f"wrote {args.json}")
     return 1 if any(r.error is not None for r in records) else 0
-
-
-def _clean(obj: Any) -> Any:
-    """NaN -> None, infinities -> strings, recursively (strict JSON)."""
-    if isinstance(obj, float):
-        if math.isnan(obj):
-            return None
-        if obj in (float("inf"), float("-inf")):
-            return str(obj)
-        return obj
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    return obj
 
 
 if __name__ == "__main__":

@@ -115,16 +115,6 @@ def _fmt(v: float, spec: str = ".0f") -> str:
     return "-" if v is None or math.isnan(v) else format(v, spec)
 
 
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.lower().startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "?"
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the comparison; return the exit status."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
@@ -161,6 +151,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
     import cv2
 
+    from wmiltrack.evaluation import cpu_model
     from wmiltrack.synthetic import make_sequence
 
     n_frames = args.frames or (30 if args.quick else 60)
@@ -197,7 +188,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             + ", contrib)"
         )
     print(
-        f"# {_cpu()}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy "
+        f"# {cpu_model()}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy "
         f"{np.__version__}, OpenCV {opencv_ver}; {n_frames} frames per run, median of "
         f"{repeats} runs, update-only FPS"
     )
@@ -278,7 +269,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"\n(wall time {time.perf_counter() - t_start:.0f} s)")
     if args.json is not None:
         doc = {
-            "cpu": _cpu(),
+            "cpu": cpu_model(),
             "cores": os.cpu_count(),
             "python": platform.python_version(),
             "numpy": np.__version__,

@@ -51,7 +51,6 @@ import argparse
 import json
 import math
 import os
-import platform
 import re
 import sys
 import time
@@ -65,6 +64,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from .evaluation import environment, json_safe
 from .metrics import (
     PRECISION_THRESHOLDS,
     SUCCESS_THRESHOLDS,
@@ -658,6 +658,13 @@ def format_ope_table(scored: Mapping[str, Any], repeats: int, timed: bool) -> st
             "updates / all update time). Init ms: time of init(). With -j > 1 the processes "
             "share the cores, so speed is best measured with -j 1."
         )
+    notes += _run_notes(results, repeats, "(!) tracker errors (remaining frames scored as misses):")
+    return "\n".join(_markdown(headers, rows, bold) + notes) + "\n"
+
+
+def _run_notes(results: Mapping[str, Any], repeats: int, error_title: str) -> list[str]:
+    """Table notes shared by the OPE and VOT tables: repeats, then any tracker errors."""
+    notes = []
     if repeats > 1:
         notes.append(f"{repeats} repeats with different seeds: mean ± standard deviation.")
     errs = [
@@ -668,9 +675,9 @@ def format_ope_table(scored: Mapping[str, Any], repeats: int, timed: bool) -> st
         if r.get("error")
     ]
     if errs:
-        notes.append("(!) tracker errors (remaining frames scored as misses):")
+        notes.append(error_title)
         notes += [f"  {t} on {sq}: {e}" for t, sq, e in errs]
-    return "\n".join(_markdown(headers, rows, bold) + notes) + "\n"
+    return notes
 
 
 def format_vot_table(
@@ -754,82 +761,11 @@ def format_vot_table(
             "update-only, frames decoded before timing."
         ),
     ]
-    if repeats > 1:
-        notes.append(f"{repeats} repeats with different seeds: mean ± standard deviation.")
-    errs = [
-        (t, sq, r["error"])
-        for t, tr in results.items()
-        for sq, v in tr.items()
-        for r in v["runs"]
-        if r.get("error")
-    ]
-    if errs:
-        notes.append("(!) tracker errors:")
-        notes += [f"  {t} on {sq}: {e}" for t, sq, e in errs]
+    notes += _run_notes(results, repeats, "(!) tracker errors:")
     return "\n".join(_markdown(headers, rows, bold) + notes) + "\n"
 
 
 # ----------------------------------------------------------------------------- I/O
-def _clean(obj: Any) -> Any:
-    """NaN -> None, infinities -> strings, numpy scalars -> Python, recursively."""
-    if isinstance(obj, (float, np.floating)):
-        f = float(obj)
-        if math.isnan(f):
-            return None
-        if math.isinf(f):
-            return "inf" if f > 0 else "-inf"
-        return f
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    return obj
-
-
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.lower().startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "?"
-
-
-def environment() -> dict[str, Any]:
-    """Machine and versions the timings depend on.
-
-    Returns
-    -------
-    dict
-        Date, Python, numpy, OpenCV (and its thread count), matplotlib, CPU model and count.
-    """
-    import cv2
-
-    try:
-        import matplotlib
-
-        mpl = matplotlib.__version__
-    except ImportError:
-        mpl = None
-    from . import __version__
-
-    return {
-        "date": time.strftime("%Y-%m-%d %H:%M:%S"),
-        "python": platform.python_version(),
-        "platform": platform.platform(),
-        "cpu": _cpu_model(),
-        "cpu_count": os.cpu_count(),
-        "numpy": np.__version__,
-        "opencv": cv2.__version__,
-        "opencv_threads": cv2.getNumThreads(),
-        "matplotlib": mpl,
-        "wmiltrack": __version__,
-    }
-
-
 def _box_path(root: Path, tracker: str, seq: str, repeat: int) -> Path:
     suffix = "" if repeat == 0 else f".r{repeat}"
     return root / safe_name(tracker) / f"{seq}{suffix}.txt"
@@ -1121,7 +1057,7 @@ def run_eval(
         "results": scored["results"],
         "files": files,
     }
-    json_path.write_text(json.dumps(_clean(doc), indent=1, allow_nan=False), encoding="utf-8")
+    json_path.write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False), encoding="utf-8")
     return doc
 
 

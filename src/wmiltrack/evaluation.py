@@ -25,11 +25,14 @@ from __future__ import annotations
 import gc
 import math
 import operator
+import os
+import platform
 import time
 import traceback
 import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Literal, Protocol
 
 import numpy as np
@@ -42,9 +45,12 @@ __all__ = [
     "EvalRecord",
     "RunResult",
     "SequenceLike",
+    "cpu_model",
+    "environment",
     "evaluate_sequences",
     "format_table",
     "fps_ratio",
+    "json_safe",
     "run_sequence",
     "summarize",
 ]
@@ -668,3 +674,70 @@ def format_table(
             f"  {r.tracker} on {r.sequence}, frame {r.run.error_frame}: {r.error}" for r in errs
         ]
     return "\n".join(lines + notes)
+
+
+# ----------------------------------------------------------------------------- reporting
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo``; ``platform.processor()`` elsewhere)."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.lower().startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "?"
+
+
+def environment() -> dict[str, Any]:
+    """Machine and versions that timings depend on, for benchmark reports.
+
+    Returns
+    -------
+    dict
+        Date, Python, platform, CPU model and count, numpy, the installed OpenCV wheel and
+        version with its thread count, matplotlib (None if absent) and wmiltrack.
+    """
+    import cv2
+
+    from . import __version__
+    from .peers import _installed_opencv
+
+    try:
+        import matplotlib
+
+        mpl: str | None = matplotlib.__version__
+    except ImportError:
+        mpl = None
+    dist, ver = _installed_opencv()
+    return {
+        "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "cpu": cpu_model(),
+        "cpu_count": os.cpu_count(),
+        "numpy": np.__version__,
+        "opencv": cv2.__version__,
+        "opencv_wheel": f"{dist} {ver}",
+        "opencv_threads": cv2.getNumThreads(),
+        "matplotlib": mpl,
+        "wmiltrack": __version__,
+    }
+
+
+def json_safe(obj: Any) -> Any:
+    """A copy fit for strict JSON: NaN -> None, infinities -> "inf"/"-inf", numpy scalars ->
+    Python numbers, tuples -> lists, dict keys -> str (recursively)."""
+    if isinstance(obj, (float, np.floating)):
+        f = float(obj)
+        if math.isnan(f):
+            return None
+        if math.isinf(f):
+            return "inf" if f > 0 else "-inf"
+        return f
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_safe(v) for v in obj]
+    return obj
