@@ -90,3 +90,16 @@ def test_selection_rejects_bad_k() -> None:
         wmil_select(h_pos, h_neg, w, 13)
     with pytest.raises(ValueError):
         milboost_select(h_pos, h_neg, 99)
+
+
+@pytest.mark.parametrize("w, expected", [([0.8, 0.1, 0.1], 1), ([0.2, 0.4, 0.4], 2)])
+def test_wmil_gradient_stays_exact_when_the_bags_are_confidently_classified(w, expected) -> None:
+    """After feature 0, H = +50 on every positive and -50 on every negative, so every
+    gradient entry is ~e^-50. In double precision 1 - sigma(50) rounds to 0; the true
+    positive-bag gradient w_j sigma(H)(1 - sigma(H)) / sum(w sigma) ~ w_j e^-50 must still be
+    compared with the negative one (~ e^-50 / 2): feature 1 helps positive instance 0
+    (gain w_0 e^-50), feature 2 pushes negative 0 further down (gain e^-50 / 2)."""
+    h_pos = np.array([[50.0, 50, 50], [1, 0, 0], [0, 0, 0]])
+    h_neg = np.array([[-50.0, -50], [0, 0], [-1, 0]])
+    picks = wmil_select(h_pos, h_neg, np.array(w), 2)
+    assert picks[0] == 0 and picks[1] == expected

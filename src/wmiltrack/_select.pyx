@@ -100,7 +100,7 @@ def wmil_select(const double[:, ::1] h_pos, const double[:, ::1] h_neg,
                         tmp[j] = _log_sigmoid(H_pos[j])
                     _normalised(&tmp[0], &w_pos[0], &g_pos[0], P)
                     for j in range(P):
-                        g_pos[j] = g_pos[j] * (1.0 - _sigmoid(H_pos[j]))
+                        g_pos[j] = g_pos[j] * _sigmoid(-H_pos[j])  # 1 - sigma(H), exact for large H
             # Negative bag: d ln(sum_j (1 - sigma_j)) / dH_j = -sigma_j (1 - sigma_j) / sum(1 - sigma).
             if N > 0:
                 for j in range(N):
