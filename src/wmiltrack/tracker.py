@@ -100,10 +100,12 @@ class Tracker:
 
     @property
     def variant(self) -> str:
+        """Name of the variant the parameters started from (``"rcwmil"``, ``"ct"``, ...)."""
         return self._params.variant
 
     @property
     def initialized(self) -> bool:
+        """Whether ``init`` has been called, so that ``update`` may be."""
         return self._initialized
 
     @property
