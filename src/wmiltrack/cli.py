@@ -122,6 +122,7 @@ def _write_video_frame(writer: Any, path: Path, frame: Any, box: Sequence[float]
 
 
 def add_track(sub: Subparsers) -> None:
+    """Add the ``track`` subcommand to ``sub``."""
     p = sub.add_parser("track", help="track an object through a video, image folder or OTB sequence",
                        description="Track one object. INPUT is a video file, a folder of images, or an "
                        "OTB sequence folder (img/ + groundtruth_rect.txt: the first box comes from its "
@@ -158,6 +159,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def add_demo(sub: Subparsers) -> None:
+    """Add the ``demo`` subcommand to ``sub``."""
     p = sub.add_parser("demo", help="run the tracker on a built-in generated sequence",
                        description="Track the target of a generated sequence (moving textured target, "
                        "partial occlusion, illumination change, cluttered background) and print the "
@@ -234,6 +236,7 @@ def _cmd_variants(args: argparse.Namespace) -> int:
 
 
 def add_variants(sub: Subparsers) -> None:
+    """Add the ``variants`` subcommand to ``sub``."""
     p = sub.add_parser("variants", help="list the tracker variants and their default parameters",
                        description="Print the variants' defaults as a markdown table, or every "
                        "parameter of one variant.")
@@ -253,6 +256,7 @@ SUBCOMMANDS: list[tuple[str | None, str]] = [
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``wmiltrack`` argument parser with every registered subcommand."""
     from . import __version__
 
     parser = argparse.ArgumentParser(
@@ -272,6 +276,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line on ``argv`` (default: ``sys.argv[1:]``); returns the exit status.
+
+    Errors a user can fix (bad input, missing files, unavailable trackers) are printed as
+    one ``wmiltrack: error: ...`` line with exit status 1, not as a traceback.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     if not hasattr(args, "func"):

@@ -33,6 +33,7 @@ class BankArrays:
 
     @property
     def size(self) -> int:
+        """Number of features M."""
         return int(self.starts.size - 1)
 
 
