@@ -384,6 +384,40 @@ def _seq_summary(per_run: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> d
     return d
 
 
+def _collect(
+    seqs: Mapping[str, Sequence[RunOutcome]],
+    figures: Callable[[RunOutcome, str], dict[str, Any]],
+    seq_mean: Callable[[list[dict[str, Any]]], dict[str, Any]],
+) -> tuple[dict[str, Any], dict[int, list[dict[str, Any]]], dict[str, float]]:
+    """One tracker's runs: per-run figures (``figures``) with speed, per-sequence means
+    (``seq_mean`` plus an error count), the runs of each repeat, and the overall speed
+    (``fps``: all timed updates over all their time; ``init_time``: mean)."""
+    results: dict[str, Any] = {}
+    per_repeat: dict[int, list[dict[str, Any]]] = {}
+    updates = 0
+    seconds = 0.0
+    init_times: list[float] = []
+    for seq_name, seq_runs in seqs.items():
+        per_run: list[dict[str, Any]] = []
+        for run in seq_runs:
+            fig = figures(run, seq_name)
+            fig.update(_speed(run))
+            per_run.append(fig)
+            per_repeat.setdefault(run.repeat, []).append(fig)
+            if run.n_updates and run.fps > 0:
+                updates += run.n_updates
+                seconds += run.n_updates / run.fps
+            init_times.append(run.init_time)
+        mean = seq_mean(per_run)
+        mean["errors"] = sum(r["error"] is not None for r in per_run)
+        results[seq_name] = {"runs": per_run, "mean": mean}
+    speed = {
+        "fps": updates / seconds if seconds > 0 else math.nan,
+        "init_time": _stats(init_times)[0],
+    }
+    return results, per_repeat, speed
+
+
 def score_ope(
     runs: Sequence[RunOutcome],
     gts: Mapping[str, FloatArray],
@@ -415,31 +449,21 @@ def score_ope(
     grouped = _group(runs)
     results: dict[str, Any] = {}
     summary: dict[str, Any] = {}
+
+    def figures(run: RunOutcome, seq_name: str) -> dict[str, Any]:
+        return ope_metrics(run.boxes, gts[seq_name], missing=missing).to_dict()
+
+    def seq_mean(per_run: list[dict[str, Any]]) -> dict[str, Any]:
+        mean = _seq_summary(per_run, OPE_SCALARS + SPEED_SCALARS)
+        for key in ("success_curve", "precision_curve", "norm_precision_curve"):
+            mean[key] = _mean_curve([r[key] for r in per_run])
+        for key in ("n_frames", "n_scored", "n_missing"):
+            mean[key] = per_run[0][key]
+        mean["n_no_prediction"] = _stats(r["n_no_prediction"] for r in per_run)[0]
+        return mean
+
     for tracker, seqs in grouped.items():
-        results[tracker] = {}
-        per_repeat: dict[int, list[dict[str, Any]]] = {}
-        updates = 0
-        seconds = 0.0
-        init_times: list[float] = []
-        for seq_name, seq_runs in seqs.items():
-            per_run: list[dict[str, Any]] = []
-            for run in seq_runs:
-                m = ope_metrics(run.boxes, gts[seq_name], missing=missing).to_dict()
-                m.update(_speed(run))
-                per_run.append(m)
-                per_repeat.setdefault(run.repeat, []).append(m)
-                if run.n_updates and run.fps > 0:
-                    updates += run.n_updates
-                    seconds += run.n_updates / run.fps
-                init_times.append(run.init_time)
-            mean = _seq_summary(per_run, OPE_SCALARS + SPEED_SCALARS)
-            for key in ("success_curve", "precision_curve", "norm_precision_curve"):
-                mean[key] = _mean_curve([r[key] for r in per_run])
-            for key in ("n_frames", "n_scored", "n_missing"):
-                mean[key] = per_run[0][key]
-            mean["n_no_prediction"] = _stats(r["n_no_prediction"] for r in per_run)[0]
-            mean["errors"] = sum(r["error"] is not None for r in per_run)
-            results[tracker][seq_name] = {"runs": per_run, "mean": mean}
+        results[tracker], per_repeat, speed = _collect(seqs, figures, seq_mean)
         overall: dict[str, list[float]] = {k: [] for k in OPE_SCALARS}
         for recs in per_repeat.values():
             for k in OPE_SCALARS:
@@ -452,8 +476,7 @@ def score_ope(
         allruns = [r for seq_res in results[tracker].values() for r in seq_res["runs"]]
         for key in ("success_curve", "precision_curve", "norm_precision_curve"):
             s[key] = _mean_curve([r[key] for r in allruns])
-        s["fps"] = updates / seconds if seconds > 0 else math.nan
-        s["init_time"] = _stats(init_times)[0]
+        s.update(speed)
         s["n_frames"] = sum(v["mean"]["n_frames"] for v in results[tracker].values())
         s["n_missing"] = sum(v["mean"]["n_missing"] for v in results[tracker].values())
         s["errors"] = sum(v["mean"]["errors"] for v in results[tracker].values())
@@ -480,37 +503,25 @@ def score_vot(runs: Sequence[RunOutcome]) -> dict[str, Any]:
     grouped = _group(runs)
     results: dict[str, Any] = {}
     summary: dict[str, Any] = {}
+
+    def figures(run: RunOutcome, seq_name: str) -> dict[str, Any]:
+        if run.vot is not None:
+            return dict(run.vot)
+        return {
+            "accuracy": None,
+            "failures": None,
+            "robustness": None,
+            "failures_per_100": None,
+            "n_frames": int(run.boxes.shape[0]),
+        }
+
+    def seq_mean(per_run: list[dict[str, Any]]) -> dict[str, Any]:
+        mean = _seq_summary(per_run, VOT_SCALARS + SPEED_SCALARS)
+        mean["n_frames"] = per_run[0]["n_frames"]
+        return mean
+
     for tracker, seqs in grouped.items():
-        results[tracker] = {}
-        per_repeat: dict[int, list[dict[str, Any]]] = {}
-        updates = 0
-        seconds = 0.0
-        init_times: list[float] = []
-        for seq_name, seq_runs in seqs.items():
-            per_run: list[dict[str, Any]] = []
-            for run in seq_runs:
-                v = (
-                    dict(run.vot)
-                    if run.vot is not None
-                    else {
-                        "accuracy": None,
-                        "failures": None,
-                        "robustness": None,
-                        "failures_per_100": None,
-                        "n_frames": int(run.boxes.shape[0]),
-                    }
-                )
-                v.update(_speed(run))
-                per_run.append(v)
-                per_repeat.setdefault(run.repeat, []).append(v)
-                if run.n_updates and run.fps > 0:
-                    updates += run.n_updates
-                    seconds += run.n_updates / run.fps
-                init_times.append(run.init_time)
-            mean = _seq_summary(per_run, VOT_SCALARS + SPEED_SCALARS)
-            mean["n_frames"] = per_run[0]["n_frames"]
-            mean["errors"] = sum(r["error"] is not None for r in per_run)
-            results[tracker][seq_name] = {"runs": per_run, "mean": mean}
+        results[tracker], per_repeat, speed = _collect(seqs, figures, seq_mean)
         acc: list[float] = []
         fails: list[float] = []
         fps_seq: list[float] = []
@@ -531,8 +542,7 @@ def score_vot(runs: Sequence[RunOutcome]) -> dict[str, Any]:
         s["failures"], s["failures_std"] = _stats(fails)
         s["failures_per_sequence"], s["failures_per_sequence_std"] = _stats(fps_seq)
         s["robustness"], s["robustness_std"] = _stats(rob)
-        s["fps"] = updates / seconds if seconds > 0 else math.nan
-        s["init_time"] = _stats(init_times)[0]
+        s.update(speed)
         s["n_frames"] = sum(v["mean"]["n_frames"] for v in results[tracker].values())
         s["errors"] = sum(v["mean"]["errors"] for v in results[tracker].values())
         summary[tracker] = s
