@@ -4,7 +4,7 @@ Usage::
 
     python benchmarks/fps_compare.py                 # 3 frame sizes x 3 box sizes, ~2-4 min
     python benchmarks/fps_compare.py --quick         # 2 x 2, fewer frames, < 1 min
-    python benchmarks/fps_compare.py --cv-python /work/venv-contrib/bin/python
+    python benchmarks/fps_compare.py --cv-python PATH/TO/contrib-venv/bin/python
 
 For each frame size (320x240, 640x480, 1280x720) and target size (32, 64, 128 px) a synthetic
 sequence is generated (``wmiltrack.synthetic.make_sequence``) and decoded into memory; then
