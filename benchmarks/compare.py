@@ -34,10 +34,10 @@ try:
 except ImportError:  # running from a checkout that was not installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from wmiltrack.datasets import Sequence as OTBSequence
-from wmiltrack.datasets import list_otb_sequences, load_otb_sequence
-from wmiltrack.evaluation import environment, evaluate_sequences, format_table, json_safe, summarize
-from wmiltrack.peers import TrackerUnavailable, make_tracker
+from wmiltrack.data.sequences import Sequence as OTBSequence
+from wmiltrack.data.sequences import list_otb_sequences, load_otb_sequence
+from wmiltrack.eval.peers import TrackerUnavailable, make_tracker
+from wmiltrack.eval.runner import environment, evaluate_sequences, format_table, json_safe, summarize
 
 DEFAULT_TRACKERS = "rcwmil,opencv:MIL"
 

@@ -7,7 +7,7 @@ Usage::
     python benchmarks/fps_compare.py --cv-python PATH/TO/contrib-venv/bin/python
 
 For each frame size (320x240, 640x480, 1280x720) and target size (32, 64, 128 px) a synthetic
-sequence is generated (``wmiltrack.synthetic.make_sequence``) and decoded into memory; then
+sequence is generated (``wmiltrack.data.synthetic.make_sequence``) and decoded into memory; then
 every tracker runs over the same frames ``--repeats`` times (trackers interleaved within each
 round), timing ``update`` alone.  The table gives the median update-only FPS over the runs,
 and a second table divides it by OpenCV's TrackerMIL's on the same frames.  Trackers the
@@ -105,7 +105,7 @@ def _cv_available_in(python: str) -> list[str]:
 
 # --------------------------------------------------------------------- main
 def _time_variant(name: str, frames: Sequence[Frame], box: Sequence[float]) -> float:
-    from wmiltrack.evaluation import run_sequence
+    from wmiltrack.eval.runner import run_sequence
 
     run = run_sequence(name, frames, box, seed=0, raise_errors=True)
     return run.fps
@@ -151,8 +151,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
     import cv2
 
-    from wmiltrack.evaluation import cpu_model
-    from wmiltrack.synthetic import make_sequence
+    from wmiltrack.data.synthetic import make_sequence
+    from wmiltrack.eval.runner import cpu_model
 
     n_frames = args.frames or (30 if args.quick else 60)
     repeats = args.repeats or (2 if args.quick else 3)

@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 import wmiltrack
-from wmiltrack.synthetic import make_sequence
+from wmiltrack.data.synthetic import make_sequence
 
 Seq = tuple[list[np.ndarray], tuple[float, ...]]
 

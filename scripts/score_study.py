@@ -29,9 +29,9 @@ import numpy as np
 
 import wmiltrack
 from wmiltrack import _core
-from wmiltrack.datasets import list_otb_sequences, load_otb_sequence
-from wmiltrack.metrics import iou
-from wmiltrack.synthetic import make_sequence
+from wmiltrack.data.sequences import list_otb_sequences, load_otb_sequence
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.eval.metrics import iou
 
 
 def roc_auc(pos: np.ndarray, neg: np.ndarray) -> float:

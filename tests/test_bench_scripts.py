@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from wmiltrack.cli import main
-from wmiltrack.synthetic import make_sequence
+from wmiltrack.data.synthetic import make_sequence
 
 REPO = Path(__file__).resolve().parent.parent
 BENCH = REPO / "benchmarks"

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wmiltrack.classifier import GaussianPool
-from wmiltrack.params import Params
+from wmiltrack.engine.classifier import GaussianPool
+from wmiltrack.engine.params import Params
 
 
 def stats(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -10,8 +10,9 @@ import cv2
 import numpy as np
 import pytest
 
-from wmiltrack import cli, synthetic
-from wmiltrack.datasets import read_boxes
+from wmiltrack import cli
+from wmiltrack.data import synthetic
+from wmiltrack.data.boxes import read_boxes
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:

@@ -10,8 +10,8 @@ import pytest
 
 import wmiltrack
 from wmiltrack.compat import TrackerCompat, TrackerCT, TrackerRCWMIL
-from wmiltrack.metrics import iou
-from wmiltrack.synthetic import make_sequence
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.eval.metrics import iou
 
 
 @pytest.fixture(scope="module")

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from wmiltrack.cli import main
-from wmiltrack.eval_cli import RunOutcome, safe_name, score_ope, score_vot
-from wmiltrack.plots import INSTALL_HINT, ranked, require_matplotlib
-from wmiltrack.synthetic import make_sequence
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.eval.pipeline import RunOutcome, safe_name, score_ope, score_vot
+from wmiltrack.eval.plots import INSTALL_HINT, ranked, require_matplotlib
 
 N = 24
 

@@ -1,4 +1,4 @@
-"""Tests of wmiltrack.evaluation (running, timing, scoring and tables)."""
+"""Tests of wmiltrack.eval.runner (running, timing, scoring and tables)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from wmiltrack.evaluation import (
+from wmiltrack.engine.result import TrackResult
+from wmiltrack.eval.runner import (
     EvalRecord,
     evaluate_sequences,
     format_table,
@@ -17,7 +18,6 @@ from wmiltrack.evaluation import (
     run_sequence,
     summarize,
 )
-from wmiltrack.result import TrackResult
 
 
 def _moving(n: int = 6, seed: int = 0, x0: int = 40) -> tuple[list[np.ndarray], np.ndarray]:

@@ -15,9 +15,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-from wmiltrack.datasets import load_otb_sequence  # noqa: E402
+from wmiltrack.data.sequences import load_otb_sequence  # noqa: E402
+from wmiltrack.eval.metrics import ope_metrics  # noqa: E402
 from wmiltrack.integrations.got10k import GOT10kTracker, local_otb_experiment  # noqa: E402
-from wmiltrack.metrics import ope_metrics  # noqa: E402
 
 SEQUENCES = ("Crossing", "Couple")
 

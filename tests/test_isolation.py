@@ -19,7 +19,7 @@ import pytest
 
 import wmiltrack
 from wmiltrack import _core, _select
-from wmiltrack.synthetic import make_sequence
+from wmiltrack.data.synthetic import make_sequence
 
 VARIANTS = sorted(wmiltrack.variants())
 

@@ -1,4 +1,4 @@
-"""Tests of wmiltrack.metrics against hand-computed cases."""
+"""Tests of wmiltrack.eval.metrics against hand-computed cases."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from wmiltrack.metrics import (
+from wmiltrack.eval.metrics import (
     NORM_PRECISION_THRESHOLDS,
     PRECISION_THRESHOLDS,
     SUCCESS_THRESHOLDS,
@@ -233,7 +233,7 @@ def test_missing_hold_is_otb_toolkit_behaviour() -> None:
         ope_metrics(pred, gt, missing="drop")  # type: ignore[arg-type]
     lead = _track(3, (0, 0, 10, 10))
     lead[0] = np.nan
-    from wmiltrack.metrics import hold_missing
+    from wmiltrack.eval.metrics import hold_missing
 
     assert (
         np.isnan(hold_missing(lead)[0]).all()

@@ -1,4 +1,4 @@
-"""Tests of wmiltrack.peers (OpenCV trackers behind wmiltrack's interface)."""
+"""Tests of wmiltrack.eval.peers (OpenCV trackers behind wmiltrack's interface)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import pytest
 
 cv2 = pytest.importorskip("cv2")
 
-from wmiltrack.peers import (
+from wmiltrack.engine.result import TrackResult
+from wmiltrack.eval.peers import (
     OPENCV_TRACKERS,
     OpenCVTracker,
     TrackerLike,
@@ -18,7 +19,6 @@ from wmiltrack.peers import (
     make_tracker,
     parse_opencv_name,
 )
-from wmiltrack.result import TrackResult
 
 
 def _frames(n: int = 4) -> tuple[list[np.ndarray], list[tuple[int, int, int, int]]]:
@@ -81,7 +81,7 @@ def test_contrib_tracker_absent_raises_with_swap_hint(
 ) -> None:
     _hide_contrib(monkeypatch, name)
     monkeypatch.setattr(
-        "wmiltrack.peers._installed_opencv", lambda: ("opencv-python-headless", "5.0.0.93")
+        "wmiltrack.eval.peers.installed_opencv", lambda: ("opencv-python-headless", "5.0.0.93")
     )
     assert name not in available_opencv_trackers()
     with pytest.raises(TrackerUnavailable) as info:
@@ -97,9 +97,9 @@ def test_contrib_tracker_absent_raises_with_swap_hint(
 
 def test_swap_hint_uses_installed_version(monkeypatch: pytest.MonkeyPatch) -> None:
     _hide_contrib(monkeypatch, "CSRT")
-    from wmiltrack.peers import _installed_opencv
+    from wmiltrack.eval.peers import installed_opencv
 
-    dist, ver = _installed_opencv()
+    dist, ver = installed_opencv()
     with pytest.raises(TrackerUnavailable) as info:
         OpenCVTracker("CSRT")
     if "contrib" not in dist:

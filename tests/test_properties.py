@@ -21,8 +21,8 @@ from hypothesis.extra import numpy as hnp
 
 import wmiltrack
 from wmiltrack import _core
-from wmiltrack.features import min_box_size
-from wmiltrack.params import Params
+from wmiltrack.engine.features import min_box_size
+from wmiltrack.engine.params import Params
 
 INT_MAX = 2**31 - 1
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])

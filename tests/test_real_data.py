@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import wmiltrack
-from wmiltrack.datasets import load_otb_sequence
-from wmiltrack.metrics import ope_metrics
+from wmiltrack.data.sequences import load_otb_sequence
+from wmiltrack.eval.metrics import ope_metrics
 
 # sequence: (bar on success AUC, AUC measured when the bar was set)
 BARS = {

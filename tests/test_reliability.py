@@ -30,9 +30,9 @@ import numpy as np
 import pytest
 
 import wmiltrack
-from wmiltrack.features import min_box_size
-from wmiltrack.params import Params
-from wmiltrack.tracker import NotInitializedError
+from wmiltrack.engine.features import min_box_size
+from wmiltrack.engine.params import Params
+from wmiltrack.engine.tracker import NotInitializedError
 
 VARIANTS: list[str] = sorted(wmiltrack.variants())
 HERE = Path(__file__).resolve().parent

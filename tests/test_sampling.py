@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from wmiltrack.params import Params
-from wmiltrack.sampling import BagSampler, annulus_offsets, disc_offsets, instance_weights
+from wmiltrack.engine.params import Params
+from wmiltrack.engine.sampling import BagSampler, annulus_offsets, disc_offsets, instance_weights
 
 
 def test_disc_and_annulus_sizes_follow_the_spec() -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wmiltrack.selection import (
+from wmiltrack.engine.selection import (
     milboost_nll,
     milboost_select,
     milboost_select_reference,

@@ -9,8 +9,8 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from wmiltrack.result import TrackResult
-from wmiltrack.supervised import run_supervised
+from wmiltrack.engine.result import TrackResult
+from wmiltrack.eval.vot_style import run_supervised
 
 BOX = (10.0, 10.0, 20.0, 20.0)
 FAR = (200.0, 200.0, 20.0, 20.0)

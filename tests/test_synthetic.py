@@ -1,4 +1,4 @@
-"""Tests for wmiltrack.synthetic."""
+"""Tests for wmiltrack.data.synthetic."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import time
 import numpy as np
 import pytest
 
-from wmiltrack.datasets import Sequence
-from wmiltrack.synthetic import PRESETS, make_preset, make_sequence
+from wmiltrack.data.sequences import Sequence
+from wmiltrack.data.synthetic import PRESETS, make_preset, make_sequence
 
 _ELAPSED: list[float] = []
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import wmiltrack
-from wmiltrack import synthetic
-from wmiltrack.metrics import ope_metrics
-from wmiltrack.tracker import NotInitializedError
+from wmiltrack.data import synthetic
+from wmiltrack.engine.tracker import NotInitializedError
+from wmiltrack.eval.metrics import ope_metrics
 
 
 @pytest.fixture(scope="module")

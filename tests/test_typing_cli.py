@@ -12,8 +12,8 @@ import pytest
 
 import wmiltrack
 from wmiltrack.cli import build_parser, main
-from wmiltrack.sampling import disc_offsets
-from wmiltrack.synthetic import make_sequence
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.sampling import disc_offsets
 from wmiltrack.visualize import draw_samples, grid_offsets
 
 

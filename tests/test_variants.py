@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import wmiltrack
-from wmiltrack import synthetic
-from wmiltrack import tracker as tracker_mod
-from wmiltrack.metrics import ope_metrics
-from wmiltrack.params import Params
+from wmiltrack.data import synthetic
+from wmiltrack.engine import tracker as tracker_mod
+from wmiltrack.engine.params import Params
+from wmiltrack.eval.metrics import ope_metrics
 
 FRAME = np.random.default_rng(0).integers(0, 256, size=(300, 400, 3), dtype=np.uint8)
 BOX = (180, 130, 40, 48)

@@ -17,7 +17,7 @@ import trax  # noqa: E402
 from trax.client import Client  # noqa: E402
 
 import wmiltrack  # noqa: E402
-from wmiltrack.datasets import load_otb_sequence  # noqa: E402
+from wmiltrack.data.sequences import load_otb_sequence  # noqa: E402
 from wmiltrack.vot import region_to_box  # noqa: E402
 
 

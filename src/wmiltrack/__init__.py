@@ -1,6 +1,6 @@
 """wmiltrack: fast single-object visual tracking by online weighted multiple-instance learning.
 
-The public names are loaded on first use, so that ``import wmiltrack.metrics`` and the
+The public names are loaded on first use, so that ``import wmiltrack.eval.metrics`` and the
 command line start quickly and work even before the compiled core is needed.
 """
 
@@ -15,16 +15,16 @@ try:
 except PackageNotFoundError:  # running from a source tree that was never installed
     __version__ = "0+unknown"
 
-from .result import TrackResult
+from .engine.result import TrackResult
 
 if TYPE_CHECKING:
-    from .params import Params, variants
-    from .tracker import Tracker
+    from .engine.params import Params, variants
+    from .engine.tracker import Tracker
 
 _LAZY = {
-    "Tracker": "tracker",
-    "Params": "params",
-    "variants": "params",
+    "Tracker": "engine.tracker",
+    "Params": "engine.params",
+    "variants": "engine.params",
 }
 
 __all__ = ["Params", "TrackResult", "Tracker", "__version__", "variants"]

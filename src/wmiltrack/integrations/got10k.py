@@ -41,7 +41,7 @@ except ImportError as exc:  # pragma: no cover - depends on the environment
         "six shapely wget (see the README, section 'Ecosystem')"
     ) from exc
 
-from ..tracker import Tracker
+from ..engine.tracker import Tracker
 
 __all__ = ["GOT10kTracker", "local_otb_experiment", "main"]
 

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
+from .. import _core
 from .classifier import GaussianPool
 from .features import BankArrays, check_box_size, make_bank
 from .frames import IntBox, as_frame, clip_box, frame_size

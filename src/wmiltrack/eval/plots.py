@@ -128,7 +128,7 @@ def plot_success(
     Parameters
     ----------
     curves:
-        ``{tracker: 21 success rates}`` at :data:`wmiltrack.metrics.SUCCESS_THRESHOLDS`.
+        ``{tracker: 21 success rates}`` at :data:`wmiltrack.eval.metrics.SUCCESS_THRESHOLDS`.
     aucs:
         ``{tracker: AUC}``: legend values and order (best first).
     path:
@@ -170,7 +170,7 @@ def plot_precision(
     Parameters
     ----------
     curves:
-        ``{tracker: 51 precisions}`` at :data:`wmiltrack.metrics.PRECISION_THRESHOLDS`.
+        ``{tracker: 51 precisions}`` at :data:`wmiltrack.eval.metrics.PRECISION_THRESHOLDS`.
     precisions:
         ``{tracker: precision at 20 px}``: legend values and order (best first).
     path:

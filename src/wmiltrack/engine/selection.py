@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _select
+from .. import _select
 
 
 def _c(a: np.ndarray) -> np.ndarray:

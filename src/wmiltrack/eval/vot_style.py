@@ -9,7 +9,7 @@ truth is present.  The frames in between are *not tracked*.
 Definitions used here
 ---------------------
 overlap
-    IoU of the reported box with the ground truth (:func:`wmiltrack.metrics.iou`); a box with
+    IoU of the reported box with the ground truth (:func:`wmiltrack.eval.metrics.iou`); a box with
     NaN (no output) has overlap 0 and therefore fails.
 accuracy
     Mean overlap over the tracked frames with ground truth, leaving out (as the VOT toolkit
@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from ..engine.result import TrackerLike
 from .metrics import as_boxes, iou, valid_mask
-from .peers import TrackerLike
 
 __all__ = ["SupervisedResult", "run_supervised"]
 

@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
 
 Box = tuple[float, float, float, float]
+Frame = npt.NDArray[np.uint8]
 
 
 @dataclass(frozen=True, slots=True)
@@ -30,3 +35,16 @@ class TrackResult:
         """Unpack as OpenCV does: ``ok, box = tracker.update(frame)``."""
         yield self.ok
         yield self.box
+
+
+@runtime_checkable
+class TrackerLike(Protocol):
+    """What the evaluation code needs of a tracker (``wmiltrack.Tracker`` and the peers)."""
+
+    def init(self, frame: Frame, box: Box) -> object:
+        """Start tracking the target in ``box`` (``x, y, w, h``) of ``frame``."""
+        ...
+
+    def update(self, frame: Frame) -> TrackResult:
+        """Locate the target in the next frame."""
+        ...

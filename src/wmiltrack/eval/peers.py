@@ -30,18 +30,18 @@ import math
 from collections.abc import Sequence
 from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
-from typing import Any, Literal, Protocol, runtime_checkable
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 
-from .frames import clip_box
-from .result import Box, TrackResult
+from ..engine.frames import clip_box
+from ..engine.result import Box, Frame, TrackerLike, TrackResult
 
 __all__ = [
     "OPENCV_TRACKERS",
     "OpenCVTracker",
-    "TrackerLike",
+    "installed_opencv",
     "TrackerUnavailable",
     "available_opencv_trackers",
     "make_tracker",
@@ -66,21 +66,7 @@ _CONTRIB_ONLY = frozenset(OPENCV_TRACKERS) - {"MIL"}
 
 _PREFIX = "opencv:"
 
-Frame = npt.NDArray[np.uint8]
 BoxLike = Sequence[float] | npt.NDArray[Any]
-
-
-@runtime_checkable
-class TrackerLike(Protocol):
-    """What the evaluation code needs of a tracker (``wmiltrack.Tracker`` and the peers)."""
-
-    def init(self, frame: Frame, box: Box) -> object:
-        """Start tracking the target in ``box`` (``x, y, w, h``) of ``frame``."""
-        ...
-
-    def update(self, frame: Frame) -> TrackResult:
-        """Locate the target in the next frame."""
-        ...
 
 
 class TrackerUnavailable(RuntimeError):
@@ -100,7 +86,7 @@ def _lookup(cv2: Any, dotted: str) -> Any:
     return obj
 
 
-def _installed_opencv() -> tuple[str, str]:
+def installed_opencv() -> tuple[str, str]:
     """Return the distribution that provides ``cv2`` and its version."""
     for dist in (
         "opencv-python-headless",
@@ -116,7 +102,7 @@ def _installed_opencv() -> tuple[str, str]:
 
 
 def _swap_hint(name: str) -> str:
-    dist, ver = _installed_opencv()
+    dist, ver = installed_opencv()
     if "contrib" in dist:
         return (
             f"OpenCV tracker {name!r} is not in the installed cv2 ({dist} {ver}), although "
@@ -363,7 +349,7 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     s = spec.strip()
     if s.lower().startswith(_PREFIX):
         return OpenCVTracker(s[len(_PREFIX) :], seed=seed, **params)
-    from .tracker import Tracker  # the compiled core is loaded only now
+    from ..engine.tracker import Tracker  # the compiled core is loaded only now
 
     tracker: TrackerLike = Tracker(s, seed=seed, **params)
     return tracker

@@ -13,12 +13,12 @@ Protocols
 ---------
 ``ope`` (one-pass evaluation, OTB)
     Each tracker starts from the first ground-truth box and runs to the end.  Scores from
-    :func:`wmiltrack.metrics.ope_metrics`: success curve (IoU > t, t = 0, 0.05, ..., 1), its
+    :func:`wmiltrack.eval.metrics.ope_metrics`: success curve (IoU > t, t = 0, 0.05, ..., 1), its
     AUC (mean of the 21 points), success rate at 0.5, precision at 20 px (error <= t),
     normalised precision at 0.2, mean centre error.  Frames whose ground truth is missing
     (NaN or non-positive size) are left out of every figure and counted ("GT missing").
 ``vot`` (supervised, VOT2015)
-    :func:`wmiltrack.supervised.run_supervised`: failure when the overlap drops to 0,
+    :func:`wmiltrack.eval.vot_style.run_supervised`: failure when the overlap drops to 0,
     re-initialisation 5 frames later, accuracy without the 10 frames after each
     (re)initialisation; failures per sequence and robustness ``exp(-100 F / N)``.
 
@@ -47,7 +47,6 @@ layout (``DIR/<tracker>/<seq>.txt``), e.g. ``--results OUT/boxes``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -64,19 +63,18 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from .evaluation import environment, json_safe
+from ..engine.result import TrackerLike, TrackResult
 from .metrics import (
     PRECISION_THRESHOLDS,
     SUCCESS_THRESHOLDS,
     ope_metrics,
     valid_mask,
 )
-from .peers import TrackerLike, TrackerUnavailable
-from .result import TrackResult
+from .peers import TrackerUnavailable
+from .runner import environment, json_safe
 
 __all__ = [
     "RunOutcome",
-    "add_eval",
     "run_eval",
     "safe_name",
     "score_ope",
@@ -144,7 +142,7 @@ class RunOutcome:
     error:
         ``"<Exception>: <message>"`` if the tracker raised, else ``None``.
     vot:
-        :meth:`wmiltrack.supervised.SupervisedResult.to_dict` for the VOT protocol.
+        :meth:`wmiltrack.eval.vot_style.SupervisedResult.to_dict` for the VOT protocol.
     """
 
     tracker: str
@@ -211,7 +209,7 @@ def _run_ope(
 ) -> RunOutcome:
     import warnings
 
-    from .evaluation import run_sequence
+    from .runner import run_sequence
 
     start = _first_valid(gt)
     with warnings.catch_warnings():
@@ -248,7 +246,7 @@ def _run_vot(
     import gc
 
     from .peers import make_tracker
-    from .supervised import run_supervised
+    from .vot_style import run_supervised
 
     init_times: list[float] = []
     update_times: list[float] = []
@@ -290,7 +288,7 @@ def _worker_init(cv_threads: int | None) -> None:
 
 def _run_task(task: _Task) -> _SeqOutcome:
     """Run every tracker and repeat on one sequence (in a worker process or in-process)."""
-    from .datasets import load_otb_sequence
+    from ..data.sequences import load_otb_sequence
 
     seq = load_otb_sequence(task.path)
     if seq.groundtruth is None:  # pragma: no cover - the OTB loader always reads it
@@ -309,7 +307,7 @@ def _run_task(task: _Task) -> _SeqOutcome:
 
 
 def _execute(tasks: Sequence[_Task], jobs: int, show_progress: bool) -> list[_SeqOutcome]:
-    from .progress import progress
+    from ..progress import progress
 
     enabled = None if show_progress else False
     if jobs <= 1 or len(tasks) <= 1:
@@ -782,7 +780,7 @@ def _box_path(root: Path, tracker: str, seq: str, repeat: int) -> Path:
 
 
 def _write_boxes(root: Path, runs: Iterable[RunOutcome]) -> None:
-    from .datasets import write_boxes
+    from ..data.boxes import write_boxes
 
     for r in runs:
         write_boxes(_box_path(root, r.tracker, r.sequence, r.repeat), r.boxes)
@@ -792,7 +790,7 @@ def _read_results(
     results_dir: Path, gts: Mapping[str, FloatArray], notes: list[str]
 ) -> list[RunOutcome]:
     """Box files ``results_dir/<tracker>/<seq>[.r<k>].txt`` as runs (untimed)."""
-    from .datasets import read_boxes
+    from ..data.boxes import read_boxes
 
     if not results_dir.is_dir():
         raise FileNotFoundError(f"results folder not found: {results_dir}")
@@ -833,7 +831,7 @@ def _read_results(
 
 
 def _sequence_paths(dataset: Path, names: Sequence[str] | None) -> list[Path]:
-    from .datasets import GT_FILE, list_otb_sequences
+    from ..data.sequences import GT_FILE, list_otb_sequences
 
     if (dataset / "img").is_dir() and (dataset / GT_FILE).is_file():
         paths = [dataset]
@@ -856,7 +854,7 @@ def _sequence_paths(dataset: Path, names: Sequence[str] | None) -> list[Path]:
 
 
 def _ground_truths(paths: Sequence[Path]) -> dict[str, FloatArray]:
-    from .datasets import load_otb_sequence
+    from ..data.sequences import load_otb_sequence
 
     out: dict[str, FloatArray] = {}
     for p in paths:
@@ -1069,106 +1067,3 @@ def run_eval(
     }
     json_path.write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False), encoding="utf-8")
     return doc
-
-
-# ----------------------------------------------------------------------------- CLI
-def _split(text: str | None) -> list[str]:
-    return [t.strip() for t in (text or "").split(",") if t.strip()]
-
-
-def _cmd_eval(args: argparse.Namespace) -> int:
-    trackers = _split(args.trackers)
-    if args.results is None and not trackers:
-        raise ValueError("give --trackers (or --results DIR to score existing box files)")
-    doc = run_eval(
-        args.dataset,
-        args.out,
-        trackers=trackers,
-        results=args.results,
-        protocol=args.protocol,
-        sequences=_split(args.sequences) or None,
-        jobs=args.jobs,
-        repeats=args.repeats,
-        seed=args.seed,
-        skip=args.skip,
-        burnin=args.burnin,
-        missing=args.missing,
-        plots=not args.no_plots,
-        cv_threads=args.cv_threads,
-        show_progress=not args.no_progress,
-    )
-    print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
-    print(f"(wall time {doc['wall_time']:.1f} s)")
-    for key, path in doc["files"].items():
-        print(f"wrote {key}: {path}")
-    errors = sum(s.get("errors", 0) for s in doc["summary"].values())
-    return 1 if errors else 0
-
-
-def add_eval(sub: Subparsers) -> None:
-    """Add the ``eval`` subcommand.
-
-    Parameters
-    ----------
-    sub:
-        The subparsers object of the ``wmiltrack`` parser.
-    """
-    p = sub.add_parser(
-        "eval",
-        help="benchmark trackers on an OTB-layout dataset (OPE or VOT protocol)",
-        description="Run trackers on every sequence of an OTB-layout dataset (or score box "
-        "files of other trackers with --results) and write a markdown table, a JSON file with "
-        "every figure, success/precision plots and per-sequence box files to --out.",
-        epilog="Speed: update-only FPS on pre-decoded frames. Parallel workers (-j) share the "
-        "cores: for honest speed figures use -j 1.",
-    )
-    p.add_argument("dataset", type=Path, help="folder of OTB sequence folders, or one of them")
-    p.add_argument(
-        "--trackers",
-        default="rcwmil",
-        help="comma-separated names: rcwmil, ct, fct, mil, wmil, osil, opencv:NAME "
-        "(default rcwmil)",
-    )
-    p.add_argument(
-        "--results",
-        type=Path,
-        default=None,
-        metavar="DIR",
-        help="score box files DIR/<tracker>/<seq>.txt instead of running trackers",
-    )
-    p.add_argument("--out", type=Path, required=True, help="output folder")
-    p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes (default 1)")
-    p.add_argument(
-        "--repeats",
-        type=int,
-        default=1,
-        help="runs per tracker and sequence with seeds seed, seed+1, ... (default 1)",
-    )
-    p.add_argument(
-        "--protocol",
-        choices=("ope", "vot"),
-        default="ope",
-        help="ope: OTB one-pass (default); vot: VOT2015 supervised with resets",
-    )
-    p.add_argument("--sequences", default=None, help="comma-separated names (default all)")
-    p.add_argument("--seed", type=int, default=0, help="first tracker seed (default 0)")
-    p.add_argument("--skip", type=int, default=5, help="VOT: frames to re-init (default 5)")
-    p.add_argument(
-        "--burnin",
-        type=int,
-        default=10,
-        help="VOT: frames left out of accuracy after each init (default 10)",
-    )
-    p.add_argument(
-        "--missing",
-        choices=("miss", "hold"),
-        default="miss",
-        help="OPE: frames without a predicted box score as misses (default) or get "
-        "the last box (OTB toolkit)",
-    )
-    p.add_argument(
-        "--cv-threads", type=int, default=None, help="cv2.setNumThreads(N) in every worker"
-    )
-    p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_cmd_eval)

@@ -3,7 +3,7 @@
 A textured target moves on a smooth random path over a cluttered textured background.
 Optional nuisances: a bar sliding over part of the target (occlusion), a global brightness
 ramp plus a moving shadow band (illumination), and moving distractor patches (clutter).
-Every frame gets Gaussian noise. The result is a :class:`wmiltrack.datasets.Sequence` backed
+Every frame gets Gaussian noise. The result is a :class:`wmiltrack.data.sequences.Sequence` backed
 by in-memory BGR ``uint8`` frames whose ground truth is the exact ``(x, y, w, h)`` of the
 rendered target (sub-pixel positions are rendered with bilinear interpolation).
 
@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from .datasets import Sequence
+from .sequences import Sequence
 
 __all__ = ["PRESETS", "make_preset", "make_sequence"]
 
@@ -290,7 +290,7 @@ def make_sequence(
 
     Returns
     -------
-    wmiltrack.datasets.Sequence
+    wmiltrack.data.sequences.Sequence
         In-memory BGR ``uint8`` frames, ``groundtruth`` of shape ``(n_frames, 4)`` (float
         ``x, y, w, h``; the box always lies inside the frame), ``fps`` 30 and ``meta`` with
         per-frame arrays ``"occlusion"`` (fraction of the target box covered), ``"gain"``
@@ -441,7 +441,7 @@ def make_preset(preset: str, /, seed: int = 0, n_frames: int = 150, **overrides:
 
     Returns
     -------
-    wmiltrack.datasets.Sequence
+    wmiltrack.data.sequences.Sequence
         Named ``"synthetic-<preset>-s<seed>"`` unless ``name`` is given in ``overrides``.
 
     Raises

@@ -38,8 +38,9 @@ from typing import Any, Literal, Protocol
 import numpy as np
 import numpy.typing as npt
 
+from ..engine.result import TrackerLike
 from .metrics import OPEResult, ope_metrics
-from .peers import TrackerLike, make_tracker
+from .peers import make_tracker
 
 __all__ = [
     "EvalRecord",
@@ -62,7 +63,7 @@ TrackerSpec = str | Callable[[], TrackerLike]
 
 
 class SequenceLike(Protocol):
-    """What :func:`evaluate_sequences` needs of a sequence (``wmiltrack.datasets.Sequence``)."""
+    """What :func:`evaluate_sequences` needs of a sequence (``wmiltrack.data.sequences.Sequence``)."""
 
     @property
     def name(self) -> str:
@@ -196,7 +197,7 @@ def run_sequence(
     Parameters
     ----------
     spec:
-        A tracker name for :func:`wmiltrack.peers.make_tracker` (``"rcwmil"``,
+        A tracker name for :func:`wmiltrack.eval.peers.make_tracker` (``"rcwmil"``,
         ``"opencv:MIL"``...) or a callable returning a new tracker.
     frames:
         The decoded frames (decode before calling: decoding is not timed).
@@ -356,13 +357,9 @@ def _median(values: Sequence[float]) -> float:
 
 
 def _progress(it: Iterable[Any], total: int | None, desc: str, enabled: bool) -> Iterable[Any]:
-    if not enabled:
-        return it
-    try:
-        from .progress import progress
-    except ImportError:  # progress bars are a nicety
-        return it
-    return progress(it, total=total, desc=desc)
+    from ..progress import progress
+
+    return progress(it, total=total, desc=desc, enabled=None if enabled else False)
 
 
 def evaluate_sequences(
@@ -399,7 +396,7 @@ def evaluate_sequences(
         Re-raise tracker exceptions instead of recording them.
     missing:
         How frames where a tracker gave no box are scored (see
-        :func:`wmiltrack.metrics.ope_metrics`): ``"miss"`` or ``"hold"`` (OTB toolkit).
+        :func:`wmiltrack.eval.metrics.ope_metrics`): ``"miss"`` or ``"hold"`` (OTB toolkit).
 
     Returns
     -------
@@ -699,8 +696,8 @@ def environment() -> dict[str, Any]:
     """
     import cv2
 
-    from . import __version__
-    from .peers import _installed_opencv
+    from .. import __version__
+    from .peers import installed_opencv
 
     try:
         import matplotlib
@@ -708,7 +705,7 @@ def environment() -> dict[str, Any]:
         mpl: str | None = matplotlib.__version__
     except ImportError:
         mpl = None
-    dist, ver = _installed_opencv()
+    dist, ver = installed_opencv()
     return {
         "date": time.strftime("%Y-%m-%d %H:%M:%S"),
         "python": platform.python_version(),

@@ -6,14 +6,15 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from .options import add_tracker_options, parse_box, parse_overrides
+
 
 def _cmd_inspect(args: argparse.Namespace) -> int:
     import cv2
 
-    from .cli import _parse_overrides
-    from .datasets import open_input
-    from .tracker import Tracker
-    from .visualize import draw_samples
+    from ..data.sequences import open_input
+    from ..engine.tracker import Tracker
+    from ..visualize import draw_samples
 
     seq = open_input(args.input)
     if args.box is not None:
@@ -24,7 +25,7 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
         raise SystemExit(f"wmiltrack: {args.input} has no ground truth; give the first box with --box")
     if args.frame < 1:
         raise SystemExit("wmiltrack: --frame must be >= 1 (the frame after the first)")
-    t = Tracker(args.tracker, seed=args.seed, **_parse_overrides(args.set))
+    t = Tracker(args.tracker, seed=args.seed, **parse_overrides(args.set))
     frame = None
     for i, frame in enumerate(seq):
         if i == 0:
@@ -52,8 +53,6 @@ def add_inspect(sub: Any) -> None:
     sub : argparse subparsers action
         What ``ArgumentParser.add_subparsers`` returned.
     """
-    from .cli import _add_tracker_options, _parse_box
-
     p = sub.add_parser(
         "inspect", help="draw the positive/negative bags and the search grid of one frame as a PNG",
         description="Track INPUT up to --frame and draw, on a crop around the target, the positive "
@@ -62,7 +61,7 @@ def add_inspect(sub: Any) -> None:
     p.add_argument("input", type=Path, help="video file, image folder or OTB sequence folder")
     p.add_argument("-o", "--output", type=Path, default=Path("samples.png"), help="PNG to write")
     p.add_argument("--frame", type=int, default=1, help="frame index to draw (default 1)")
-    p.add_argument("--box", type=_parse_box, help="first box as x,y,w,h (default: ground truth)")
+    p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (default: ground truth)")
     p.add_argument("--scale", type=int, default=3, help="enlargement of the crop (default 3)")
-    _add_tracker_options(p)
+    add_tracker_options(p)
     p.set_defaults(func=_cmd_inspect)

@@ -1,0 +1,5 @@
+"""The ``wmiltrack`` command line (entry point :func:`main`); one module per subcommand."""
+
+from .main import build_parser, main
+
+__all__ = ["build_parser", "main"]

@@ -1,0 +1,112 @@
+"""``wmiltrack eval``: run and score trackers on a dataset (see :mod:`wmiltrack.eval`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .options import Subparsers
+
+
+def _split(text: str | None) -> list[str]:
+    return [t.strip() for t in (text or "").split(",") if t.strip()]
+
+
+def _cmd_eval(args: argparse.Namespace) -> int:
+    trackers = _split(args.trackers)
+    if args.results is None and not trackers:
+        raise ValueError("give --trackers (or --results DIR to score existing box files)")
+    from ..eval.pipeline import run_eval
+
+    doc = run_eval(
+        args.dataset,
+        args.out,
+        trackers=trackers,
+        results=args.results,
+        protocol=args.protocol,
+        sequences=_split(args.sequences) or None,
+        jobs=args.jobs,
+        repeats=args.repeats,
+        seed=args.seed,
+        skip=args.skip,
+        burnin=args.burnin,
+        missing=args.missing,
+        plots=not args.no_plots,
+        cv_threads=args.cv_threads,
+        show_progress=not args.no_progress,
+    )
+    print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
+    print(f"(wall time {doc['wall_time']:.1f} s)")
+    for key, path in doc["files"].items():
+        print(f"wrote {key}: {path}")
+    errors = sum(s.get("errors", 0) for s in doc["summary"].values())
+    return 1 if errors else 0
+
+
+def add_eval(sub: Subparsers) -> None:
+    """Add the ``eval`` subcommand.
+
+    Parameters
+    ----------
+    sub:
+        The subparsers object of the ``wmiltrack`` parser.
+    """
+    p = sub.add_parser(
+        "eval",
+        help="benchmark trackers on an OTB-layout dataset (OPE or VOT protocol)",
+        description="Run trackers on every sequence of an OTB-layout dataset (or score box "
+        "files of other trackers with --results) and write a markdown table, a JSON file with "
+        "every figure, success/precision plots and per-sequence box files to --out.",
+        epilog="Speed: update-only FPS on pre-decoded frames. Parallel workers (-j) share the "
+        "cores: for honest speed figures use -j 1.",
+    )
+    p.add_argument("dataset", type=Path, help="folder of OTB sequence folders, or one of them")
+    p.add_argument(
+        "--trackers",
+        default="rcwmil",
+        help="comma-separated names: rcwmil, ct, fct, mil, wmil, osil, opencv:NAME "
+        "(default rcwmil)",
+    )
+    p.add_argument(
+        "--results",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="score box files DIR/<tracker>/<seq>.txt instead of running trackers",
+    )
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes (default 1)")
+    p.add_argument(
+        "--repeats",
+        type=int,
+        default=1,
+        help="runs per tracker and sequence with seeds seed, seed+1, ... (default 1)",
+    )
+    p.add_argument(
+        "--protocol",
+        choices=("ope", "vot"),
+        default="ope",
+        help="ope: OTB one-pass (default); vot: VOT2015 supervised with resets",
+    )
+    p.add_argument("--sequences", default=None, help="comma-separated names (default all)")
+    p.add_argument("--seed", type=int, default=0, help="first tracker seed (default 0)")
+    p.add_argument("--skip", type=int, default=5, help="VOT: frames to re-init (default 5)")
+    p.add_argument(
+        "--burnin",
+        type=int,
+        default=10,
+        help="VOT: frames left out of accuracy after each init (default 10)",
+    )
+    p.add_argument(
+        "--missing",
+        choices=("miss", "hold"),
+        default="miss",
+        help="OPE: frames without a predicted box score as misses (default) or get "
+        "the last box (OTB toolkit)",
+    )
+    p.add_argument(
+        "--cv-threads", type=int, default=None, help="cv2.setNumThreads(N) in every worker"
+    )
+    p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_eval)

@@ -1,0 +1,79 @@
+"""``wmiltrack variants``: the presets' defaults as a table, or every parameter of one."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from .options import Subparsers
+
+#: Parameters shown in the variants table, with their column titles.
+VARIANT_COLUMNS = [
+    ("features", "features"), ("M", "num_features"), ("K", "num_selected"), ("rects", "rects"),
+    ("rect weights", "weights"), ("lambda", "learning_rate"), ("positives", "pos_radius"),
+    ("negatives", "negatives"), ("selection", "selection"), ("instance weights", "instance_weights"),
+    ("search", "search"),
+]
+
+
+def variant_table() -> str:
+    """The defaults of every variant as a markdown table (the README's table)."""
+    from ..engine.params import VARIANTS
+
+    def cell(p: Any, key: str) -> str:
+        if key == "features":
+            return "sub-region (2x2)" if p.feature_kind == "subregion" else "random rects"
+        if key == "rects":
+            return f"{p.rects_min}-{p.rects_max}"
+        if key == "weights":
+            if p.feature_kind == "subregion":
+                w = f"+1/-1 at {p.positive_prob:.2f}/{1 - p.positive_prob:.2f}"
+            else:
+                w = {"sign": "+-1", "sign_sqrt": "+-1/sqrt(n)", "uniform": "U[-1,1]"}[p.weight_mode]
+            return w + (" / area" if p.area_normalize else ", raw sums")
+        if key == "pos_radius":
+            return f"d < {p.pos_radius:g}"
+        if key == "negatives":
+            how = "exactly" if p.neg_sampling == "exact" else "Bernoulli, max"
+            return f"{p.neg_inner:g} <= d < {p.neg_outer:g}, {how} {p.neg_count}"
+        if key == "selection":
+            return {"wmil": "WMIL gradient", "milboost": "MILBoost (Noisy-OR)",
+                    "none": "all features"}[p.selection]
+        if key == "instance_weights":
+            return "-" if p.selection != "wmil" else {"exp": "exp(-d)/sum", "exp_sq": "exp(-d^2)",
+                                                      "uniform": "equal"}[p.instance_weights]
+        if key == "search":
+            s = f"{p.coarse_radius}/{p.coarse_step}"
+            return s + (f" then {p.fine_radius}/{p.fine_step}" if p.fine_radius > 0 else "")
+        return f"{getattr(p, key):g}" if isinstance(getattr(p, key), float) else str(getattr(p, key))
+
+    head = "| variant | " + " | ".join(title for title, _ in VARIANT_COLUMNS) + " |"
+    rule = "|" + "---|" * (len(VARIANT_COLUMNS) + 1)
+    rows = [f"| **{name}** | " + " | ".join(cell(p, key) for _, key in VARIANT_COLUMNS) + " |"
+            for name, p in VARIANTS.items()]
+    return "\n".join([head, rule, *rows])
+
+
+def _cmd_variants(args: argparse.Namespace) -> int:
+    from ..engine.params import VARIANTS
+
+    if args.name:
+        p = VARIANTS.get(args.name.lower())
+        if p is None:
+            raise ValueError(f"unknown variant {args.name!r}; choose one of {', '.join(VARIANTS)}")
+        print(p.description)
+        for key, value in p.as_dict().items():
+            if key != "description":
+                print(f"  {key} = {value!r}")
+        return 0
+    print(variant_table())
+    return 0
+
+
+def add_variants(sub: Subparsers) -> None:
+    """Add the ``variants`` subcommand to ``sub``."""
+    p = sub.add_parser("variants", help="list the tracker variants and their default parameters",
+                       description="Print the variants' defaults as a markdown table, or every "
+                       "parameter of one variant.")
+    p.add_argument("name", nargs="?", help="show every parameter of this variant")
+    p.set_defaults(func=_cmd_variants)

@@ -1,0 +1,1 @@
+"""Sequences and box files: OTB-layout folders, image folders, videos, and generated sequences."""

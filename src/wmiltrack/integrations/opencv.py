@@ -1,0 +1,178 @@
+"""Drop-in replacements shaped like OpenCV's tracker classes.
+
+Code written for ``cv2.TrackerMIL`` runs unchanged with one of these::
+
+    from wmiltrack.compat import TrackerRCWMIL
+
+    tracker = TrackerRCWMIL.create()              # like cv2.TrackerMIL.create()
+    tracker.init(frame, (x, y, w, h))             # BGR or gray frame from cv2.VideoCapture
+    ok, rect = tracker.update(frame)              # rect: (x, y, w, h) ints, as OpenCV gives
+    tracker.getTrackingScore()                    # confidence of the last update in [0, 1]
+
+The richer :class:`wmiltrack.TrackResult` of the last update is :attr:`TrackerCompat.last_result`,
+and :attr:`TrackerCompat.tracker` is the underlying :class:`wmiltrack.Tracker`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..engine.params import Params
+from ..engine.result import TrackResult
+from ..engine.tracker import Tracker
+
+__all__ = [
+    "TrackerCT",
+    "TrackerCompat",
+    "TrackerFCT",
+    "TrackerMILBoost",
+    "TrackerOSIL",
+    "TrackerRCWMIL",
+    "TrackerWMIL",
+]
+
+Rect = tuple[int, int, int, int]
+
+
+class TrackerCompat:
+    """A :class:`wmiltrack.Tracker` behind OpenCV's ``cv2.Tracker`` interface.
+
+    Parameters
+    ----------
+    variant : str
+        Variant name (``"rcwmil"``, ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``).
+    params : Params or mapping, optional
+        Full parameters, or a mapping of overrides of the variant's defaults.
+    seed : int
+        Random seed (same seed and frames: same boxes).
+
+    Attributes
+    ----------
+    last_result : TrackResult or None
+        The full result of the last :meth:`update` (``None`` before the first one).
+    """
+
+    #: Variant that :meth:`create` builds; subclasses set it.
+    VARIANT: ClassVar[str] = "rcwmil"
+
+    def __init__(self, variant: str | None = None, params: Params | Mapping[str, Any] | None = None,
+                 seed: int = 0) -> None:
+        name = self.VARIANT if variant is None else variant
+        if params is None:
+            self._tracker = Tracker(name, seed=seed)
+        elif isinstance(params, Params):
+            self._tracker = Tracker(name, seed=seed, params=params)
+        elif isinstance(params, Mapping):
+            self._tracker = Tracker(name, seed=seed, **dict(params))
+        else:
+            raise TypeError("params must be a wmiltrack.Params, a mapping or None, "
+                            f"got {type(params).__name__}")
+        self.last_result: TrackResult | None = None
+
+    @classmethod
+    def create(cls, params: Params | Mapping[str, Any] | None = None, seed: int = 0) -> TrackerCompat:
+        """Make a tracker of this class's variant, as ``cv2.TrackerMIL.create(params)`` does.
+
+        Parameters
+        ----------
+        params : Params or mapping, optional
+            Parameters, or overrides of the variant's defaults.
+        seed : int
+            Random seed.
+
+        Returns
+        -------
+        TrackerCompat
+            A new, uninitialised tracker.
+        """
+        return cls(None, params, seed)
+
+    @property
+    def tracker(self) -> Tracker:
+        """The underlying :class:`wmiltrack.Tracker`."""
+        return self._tracker
+
+    def init(self, image: np.ndarray, boundingBox: Any) -> None:  # noqa: N803 (OpenCV's name)
+        """Start (or restart) tracking ``boundingBox = (x, y, w, h)`` in ``image``.
+
+        Parameters
+        ----------
+        image : numpy.ndarray
+            ``H x W`` gray or ``H x W x 3`` BGR frame (``uint8``, or 0..255 ints/floats).
+        boundingBox : sequence of 4 numbers
+            ``(x, y, w, h)``; ints or floats, rounded to whole pixels and clipped to the frame.
+        """
+        self._tracker.init(image, boundingBox)
+        self.last_result = None
+
+    def update(self, image: np.ndarray) -> tuple[bool, Rect]:
+        """Locate the target in the next frame.
+
+        Parameters
+        ----------
+        image : numpy.ndarray
+            The next frame, same size as the one given to :meth:`init`.
+
+        Returns
+        -------
+        tuple of (bool, tuple of 4 int)
+            ``(ok, (x, y, w, h))`` as OpenCV returns them; ``ok`` is False when the
+            confidence fell below the variant's ``lost_threshold`` (the box is still the
+            best guess).
+        """
+        r = self._tracker.update(image)
+        self.last_result = r
+        x, y, w, h = (int(round(v)) for v in r.box)
+        return bool(r.ok), (x, y, w, h)
+
+    def getTrackingScore(self) -> float:  # noqa: N802 (OpenCV's name)
+        """Confidence in [0, 1] of the last update (1.0 right after :meth:`init`).
+
+        Returns
+        -------
+        float
+            The ``score`` of :attr:`last_result`, as ``cv2.TrackerNano.getTrackingScore``.
+        """
+        return 1.0 if self.last_result is None else float(self.last_result.score)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._tracker!r})"
+
+
+class TrackerRCWMIL(TrackerCompat):
+    """OpenCV-shaped RCWMIL tracker (the paper's): ``TrackerRCWMIL.create()``."""
+
+    VARIANT = "rcwmil"
+
+
+class TrackerCT(TrackerCompat):
+    """OpenCV-shaped compressive tracker (CT): ``TrackerCT.create()``."""
+
+    VARIANT = "ct"
+
+
+class TrackerFCT(TrackerCompat):
+    """OpenCV-shaped fast compressive tracker (FCT): ``TrackerFCT.create()``."""
+
+    VARIANT = "fct"
+
+
+class TrackerMILBoost(TrackerCompat):
+    """OpenCV-shaped MILTrack (wmiltrack's ``mil`` variant): ``TrackerMILBoost.create()``."""
+
+    VARIANT = "mil"
+
+
+class TrackerWMIL(TrackerCompat):
+    """OpenCV-shaped weighted-MIL tracker: ``TrackerWMIL.create()``."""
+
+    VARIANT = "wmil"
+
+
+class TrackerOSIL(TrackerCompat):
+    """OpenCV-shaped online sparse instance learning tracker: ``TrackerOSIL.create()``."""
+
+    VARIANT = "osil"
