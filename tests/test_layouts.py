@@ -463,3 +463,54 @@ def test_detection_errors_name_the_layout_and_what_it_expects(tmp_path: Path) ->
         load_layout(tmp_path / "ls", sequences=["cat-9"])
     with pytest.raises(FileNotFoundError, match="dataset folder not found"):
         detect_layout(tmp_path / "nowhere")
+
+
+# ---------------------------------------------------------------------- scoring loaded sequences
+def test_benchmark_scores_follow_each_benchmarks_absent_policy(tmp_path: Path) -> None:
+    from wmiltrack.eval.benchmark_scores import benchmark_scores
+
+    _lasot_seq(tmp_path / "lasot", "cat", 1, occ=[0, 0, 1, 0, 0], oov=[0, 0, 0, 0, 1])
+    (ls,) = load_layout(tmp_path / "lasot")
+    pred = np.array([_box(k) for k in range(5)])  # exact on every frame
+    s = benchmark_scores(pred, ls)
+    assert s.layout == "lasot" and s.got10k is None and s.ope is not None
+    # LaSOT toolkit: 3 visible frames succeed, divided by all 5 frames
+    assert (s.ope.n_frames, s.ope.n_scored) == (5, 3)
+    assert s.ope.success_50 == pytest.approx(3 / 5)
+    assert s.ope.auc == pytest.approx(20 / 21 * 3 / 5)
+    assert s.ope.precision_20 == pytest.approx(3 / 5)
+    assert "failures" in s.note
+
+    _got_seq(tmp_path / "got", "GOT-10k_Val_000001", n=6, absence=[0, 0, 1, 0, 0, 0], cover=[8, 8, 0, 8, 8, 8])
+    (gs,) = load_layout(tmp_path / "got")
+    g = benchmark_scores(np.array([_box(k) for k in range(6)]), gs)
+    assert g.got10k is not None and g.ope is not None
+    assert g.got10k.n_scored == 4 and g.got10k.ao == pytest.approx(1.0)  # frame 0 and frame 2 left out
+    assert g.ope.n_scored == 5 and g.ope.success_50 == pytest.approx(1.0)  # left out, not failed
+    assert g.to_dict()["got10k"]["sr75"] == pytest.approx(1.0)
+
+    _tn_seq(tmp_path / "tn" / "TEST", "v", 3, rows=[_box(0)])
+    (ts,) = load_layout(tmp_path / "tn")
+    t = benchmark_scores(np.array([_box(k) for k in range(3)]), ts)
+    assert t.ope is None and t.got10k is None and "server" in t.note
+
+
+def test_count_absent_as_failures_reproduces_lasot_formula() -> None:
+    """LaSOT toolkit (eval_tracker.m): sum over visible frames of [iou > t], divided by all frames."""
+    from wmiltrack.eval.benchmark_scores import count_absent_as_failures
+    from wmiltrack.eval.metrics import SUCCESS_THRESHOLDS, iou, ope_metrics
+
+    rng = np.random.default_rng(11)
+    n = 60
+    gt = np.column_stack([rng.uniform(0, 100, n), rng.uniform(0, 100, n), rng.uniform(10, 40, n), rng.uniform(10, 40, n)])
+    pred = gt + rng.normal(0, 6, (n, 4))
+    absent = rng.random(n) < 0.25
+    absent[0] = False
+    gt_nan = gt.copy()
+    gt_nan[absent] = np.nan
+    r = count_absent_as_failures(ope_metrics(pred, gt_nan))
+    ov = iou(pred[~absent], gt[~absent])
+    expected = np.array([(ov > t).sum() / n for t in SUCCESS_THRESHOLDS])
+    np.testing.assert_allclose(r.success_curve, expected, atol=1e-12)
+    assert r.auc == pytest.approx(expected.mean())
+    assert r.n_missing == absent.sum()
