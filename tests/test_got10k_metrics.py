@@ -21,7 +21,7 @@ NAN4 = [np.nan] * 4
 SQ = [0.0, 0.0, 10.0, 10.0]
 
 # frame: ground truth, prediction, overlap by hand
-GT = np.array([SQ, SQ, SQ, NAN4, SQ, SQ, SQ])
+GT = np.array([SQ, SQ, SQ, NAN4, SQ, SQ, SQ, SQ])
 PRED = np.array(
     [
         [100.0, 100.0, 1.0, 1.0],  # frame 0: initialisation frame, never scored
@@ -31,38 +31,40 @@ PRED = np.array(
         NAN4,  # no box: 0
         [0.0, 0.0, 10.0, 5.0],  # 50 / 100 = 0.5 exactly: not a success at 0.5
         [0.0, 0.0, 10.0, 8.0],  # 80 / 100 = 0.8
+        [0.0, 0.0, 10.0, 7.5],  # 75 / 100 = 0.75 exactly: not a success at 0.75
     ]
 )
-HAND = [1.0, 1 / 3, 0.0, 0.5, 0.8]
+HAND = [1.0, 1 / 3, 0.0, 0.5, 0.8, 0.75]
 
 
 def test_hand_computed_ao_sr_and_curve() -> None:
     r = got10k_metrics(PRED, GT)
-    assert r.n_frames == 7 and r.n_scored == 5
-    np.testing.assert_allclose(r.ious[[1, 2, 4, 5, 6]], HAND, atol=1e-12)
+    assert r.n_frames == 8 and r.n_scored == 6
+    np.testing.assert_allclose(r.ious[[1, 2, 4, 5, 6, 7]], HAND, atol=1e-12)
     assert np.isnan(r.ious[[0, 3]]).all()
-    assert r.ao == pytest.approx(sum(HAND) / 5)  # 0.52667
-    assert r.sr50 == pytest.approx(2 / 5)  # 1.0 and 0.8; 0.5 is not > 0.5
-    assert r.sr75 == pytest.approx(2 / 5)
+    assert r.ao == pytest.approx(sum(HAND) / 6)  # 0.56389
+    assert r.sr50 == pytest.approx(3 / 6)  # 1.0, 0.8 and 0.75; 0.5 is not > 0.5
+    assert r.sr75 == pytest.approx(2 / 6)  # 1.0 and 0.8; 0.75 is not > 0.75
     curve = dict(zip(np.round(GOT10K_THRESHOLDS, 2), r.success_curve))
     assert len(r.success_curve) == 101
-    assert curve[0.0] == pytest.approx(4 / 5)  # the 0-overlap frame fails even at 0
-    assert curve[0.33] == pytest.approx(4 / 5)
-    assert curve[0.34] == pytest.approx(3 / 5)
-    assert curve[0.5] == pytest.approx(2 / 5)
-    assert curve[0.79] == pytest.approx(2 / 5)
-    assert curve[0.81] == pytest.approx(1 / 5)
+    assert curve[0.0] == pytest.approx(5 / 6)  # the 0-overlap frame fails even at 0
+    assert curve[0.33] == pytest.approx(5 / 6)
+    assert curve[0.34] == pytest.approx(4 / 6)
+    assert curve[0.5] == pytest.approx(3 / 6)
+    assert curve[0.74] == pytest.approx(3 / 6)
+    assert curve[0.79] == pytest.approx(2 / 6)
+    assert curve[0.81] == pytest.approx(1 / 6)
     assert curve[1.0] == 0.0
     d = r.to_dict(per_frame=True)
     assert d["ao"] == pytest.approx(r.ao) and d["ious"][0] is None and len(d["success_curve"]) == 101
 
 
 def test_visible_mask_like_cover_label() -> None:
-    cover = [8, 8, 8, 8, 8, 0, 8]  # frame 5 fully covered: left out
+    cover = [8, 8, 8, 8, 8, 0, 8, 8]  # frame 5 fully covered: left out
     r = got10k_metrics(PRED, GT, visible=cover)
-    assert r.n_scored == 4
-    assert r.ao == pytest.approx((1 + 1 / 3 + 0 + 0.8) / 4)
-    with pytest.raises(ValueError, match=r"visible must have shape \(7,\)"):
+    assert r.n_scored == 5
+    assert r.ao == pytest.approx((1 + 1 / 3 + 0 + 0.8 + 0.75) / 5)
+    with pytest.raises(ValueError, match=r"visible must have shape \(8,\)"):
         got10k_metrics(PRED, GT, visible=[1, 1])
 
 
