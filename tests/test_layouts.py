@@ -514,3 +514,18 @@ def test_count_absent_as_failures_reproduces_lasot_formula() -> None:
     np.testing.assert_allclose(r.success_curve, expected, atol=1e-12)
     assert r.auc == pytest.approx(expected.mean())
     assert r.n_missing == absent.sum()
+
+
+def test_iter_layout_loads_one_sequence_at_a_time(tmp_path: Path) -> None:
+    from wmiltrack.data.layouts import iter_layout
+
+    _lasot_seq(tmp_path, "cat", 1)
+    d = _lasot_seq(tmp_path, "cat", 2)
+    (d / "groundtruth.txt").write_text("1,2,3\n")  # broken, but only when reached
+    it = iter_layout(tmp_path)
+    first = next(it)
+    assert first.name == "cat-1" and len(first) == 5
+    with pytest.raises(LayoutError, match=r"groundtruth.txt:1: expected 4 values"):
+        next(it)
+    with pytest.raises(LayoutError, match="not in the LaSOT dataset"):
+        iter_layout(tmp_path, sequences=["cat-3"]).__next__()

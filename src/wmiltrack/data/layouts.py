@@ -3,11 +3,14 @@
 
 Every loader returns :class:`wmiltrack.data.sequences.Sequence` objects backed by image paths:
 **no image is opened while listing or loading a dataset** (frames are decoded when iterated), only
-folders are listed and annotation text files read.  Ground truth is ``(n, 4)`` ``x, y, w, h`` as
-written in the files, with ``nan`` rows on frames where the benchmark says the target is absent.
+folders are listed and annotation text files read (the OTB layout is the exception: its
+loader in :mod:`wmiltrack.data.sequences` decodes each sequence's first image to fail early).
+Ground truth is ``(n, 4)`` ``x, y, w, h`` as written in the files, with ``nan`` rows on frames
+where the benchmark says the target is absent.
 
-Entry points: :func:`detect_layout`, :func:`list_layout` (names only, reads no annotation) and
-:func:`load_layout`.  Each sequence's ``meta`` holds:
+Entry points: :func:`detect_layout`, :func:`list_layout` (names only, reads no annotation),
+:func:`load_layout` and :func:`iter_layout` (one sequence loaded at a time, for big datasets).
+Each sequence's ``meta`` holds:
 
 ``"layout"``
     The layout name (one of :data:`LAYOUTS`).
@@ -82,7 +85,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from collections.abc import Sequence as AbcSequence
 from dataclasses import dataclass
 from functools import partial
@@ -106,6 +109,7 @@ __all__ = [
     "LAYOUTS",
     "LayoutError",
     "detect_layout",
+    "iter_layout",
     "list_layout",
     "load_layout",
     "parse_vot_region",
@@ -169,13 +173,17 @@ def _images_in(folder: Path) -> list[Path]:
     if not folder.is_dir():
         return []
     with os.scandir(folder) as it:
-        files = [
-            Path(e.path)
+        names = [
+            e.name
             for e in it
             if e.is_file() and os.path.splitext(e.name)[1].lower() in IMAGE_EXTENSIONS
         ]
-    files.sort(key=lambda p: natural_key(p.name))
-    return files
+    if all(os.path.splitext(n)[0].isdigit() for n in names):
+        # the usual case (00000001.jpg, 0.jpg): numeric order, ~8x faster than natural_key
+        names.sort(key=lambda n: (int(os.path.splitext(n)[0]), n))
+    else:
+        names.sort(key=natural_key)
+    return [folder / n for n in names]
 
 
 def _has_images(folder: Path) -> bool:
@@ -201,12 +209,15 @@ def _read_box_file(path: Path) -> Boxes:
     try:
         arr = np.loadtxt(path, delimiter=",", dtype=np.float64, ndmin=2, encoding="utf-8-sig")
     except (ValueError, OSError):
-        return read_boxes(path)
-    if arr.size == 0:
+        arr = None
+    if arr is not None and arr.size == 0:
         return np.zeros((0, 4), dtype=np.float64)
-    if arr.shape[1] != 4:
-        return read_boxes(path)  # raises with the line number
-    return np.ascontiguousarray(arr)
+    if arr is not None and arr.shape[1] == 4:
+        return np.ascontiguousarray(arr)
+    try:
+        return read_boxes(path)  # other separators, or an error naming the line
+    except ValueError as exc:
+        raise LayoutError(str(exc)) from None
 
 
 _FLAG_SPLIT = re.compile(r"[,\s]+")
@@ -912,6 +923,25 @@ def list_layout(path: str | os.PathLike[str], layout: str | None = None) -> list
     return [e.name for e in _entries(path, layout)[1]]
 
 
+def _chosen(
+    path: str | os.PathLike[str], layout: str | None, sequences: AbcSequence[str] | None
+) -> list[_Entry]:
+    key, entries = _entries(path, layout)
+    if sequences is None:
+        return entries
+    names = [sequences] if isinstance(sequences, str) else list(sequences)
+    by_name = {e.name: e for e in entries}
+    missing = [n for n in names if n not in by_name]
+    if missing:
+        avail = sorted(by_name, key=natural_key)
+        shown = ", ".join(avail[:10]) + (f", ... ({len(avail)} in all)" if len(avail) > 10 else "")
+        raise LayoutError(
+            f"sequence(s) not in the {_TITLES[key]} dataset {path}: {', '.join(missing)}; "
+            f"available: {shown}"
+        )
+    return [by_name[n] for n in names]
+
+
 def load_layout(
     path: str | os.PathLike[str],
     layout: str | None = None,
@@ -933,7 +963,9 @@ def load_layout(
     -------
     list of Sequence
         Image-backed sequences (no image is decoded here), ground truth with ``nan`` rows on
-        absent frames, and ``meta`` as described in the module documentation.
+        absent frames, and ``meta`` as described in the module documentation.  Loading costs
+        folder listings and annotation parsing, roughly 10 ms per 1 000 frames: for all of LaSOT
+        (3.5 M frames) prefer :func:`iter_layout`, which loads one sequence at a time.
 
     Raises
     ------
@@ -946,19 +978,18 @@ def load_layout(
     ValueError
         If ``layout`` is not a known name.
     """
-    key, entries = _entries(path, layout)
-    if sequences is None:
-        chosen = entries
-    else:
-        names = [sequences] if isinstance(sequences, str) else list(sequences)
-        by_name = {e.name: e for e in entries}
-        missing = [n for n in names if n not in by_name]
-        if missing:
-            avail = sorted(by_name, key=natural_key)
-            shown = ", ".join(avail[:10]) + (f", ... ({len(avail)} in all)" if len(avail) > 10 else "")
-            raise LayoutError(
-                f"sequence(s) not in the {_TITLES[key]} dataset {path}: {', '.join(missing)}; "
-                f"available: {shown}"
-            )
-        chosen = [by_name[n] for n in names]
-    return [e.load() for e in chosen]
+    return [e.load() for e in _chosen(path, layout, sequences)]
+
+
+def iter_layout(
+    path: str | os.PathLike[str],
+    layout: str | None = None,
+    sequences: AbcSequence[str] | None = None,
+) -> Iterator[Sequence]:
+    """Like :func:`load_layout`, but load each sequence only when the iteration reaches it.
+
+    The dataset is detected and listed (and requested names checked) before the first sequence
+    is yielded; a broken sequence raises :class:`LayoutError` when it is reached.
+    """
+    for entry in _chosen(path, layout, sequences):
+        yield entry.load()
