@@ -529,3 +529,74 @@ def test_iter_layout_loads_one_sequence_at_a_time(tmp_path: Path) -> None:
         next(it)
     with pytest.raises(LayoutError, match="not in the LaSOT dataset"):
         iter_layout(tmp_path, sequences=["cat-3"]).__next__()
+
+
+# ---------------------------------------------------------------------- end to end, every layout
+def _build_from(seq: Sequence, root: Path, layout: str) -> Path:
+    """Write a generated sequence's frames and boxes in a benchmark's layout under root."""
+    assert seq.groundtruth is not None
+    gt = seq.groundtruth
+    rows = [[float(v) for v in r] for r in gt]
+    n = len(gt)
+    if layout == "lasot":
+        d = root / "toy" / "toy-1"
+        img_dir, names = d / "img", [f"{k + 1:08d}.jpg" for k in range(n)]
+        _write_lines(d / "groundtruth.txt", rows)
+        (d / "full_occlusion.txt").write_text(",".join("0" * n) + "\n")
+        (d / "out_of_view.txt").write_text(",".join("0" * n) + "\n")
+    elif layout == "got10k":
+        d = root / "val" / "GOT-10k_Val_000001"
+        img_dir, names = d, [f"{k + 1:08d}.jpg" for k in range(n)]
+        _write_lines(d / "groundtruth.txt", rows)
+        _write_lines(d / "absence.label", ["0"] * n)
+        _write_lines(d / "cover.label", ["8"] * n)
+        h, w = seq.frame(0).shape[:2]
+        (d / "meta_info.ini").write_text(f"[METAINFO]\nresolution: ({w}, {h})\n")
+        (root / "val" / "list.txt").write_text("GOT-10k_Val_000001\n")
+    elif layout == "uav123":
+        img_dir, names = root / "data_seq" / "UAV123" / "toy", [f"{k + 1:06d}.jpg" for k in range(n)]
+        _write_lines(root / "anno" / "UAV123" / "toy.txt", rows)
+    elif layout == "trackingnet":
+        img_dir, names = root / "TRAIN_0" / "frames" / "toy", [f"{k}.jpg" for k in range(n)]
+        _write_lines(root / "TRAIN_0" / "anno" / "toy.txt", rows)
+    else:  # vot: 8-value polygons, the corners of each box
+        img_dir, names = root / "toy" / "color", [f"{k + 1:08d}.jpg" for k in range(n)]
+        polys = [[x, y, x + w, y, x + w, y + h, x, y + h] for x, y, w, h in rows]
+        _write_lines(root / "toy" / "groundtruth.txt", polys)
+        (root / "list.txt").write_text("toy\n")
+    img_dir.mkdir(parents=True, exist_ok=True)
+    for name, frame in zip(names, seq):
+        assert cv2.imwrite(str(img_dir / name), frame)
+    return img_dir
+
+
+@pytest.mark.parametrize("layout", ["lasot", "got10k", "uav123", "trackingnet", "vot"])
+def test_every_layout_runs_through_tracker_and_scoring(tmp_path: Path, layout: str) -> None:
+    import pickle
+
+    from wmiltrack.data.sequences import open_input
+    from wmiltrack.data.synthetic import make_sequence
+    from wmiltrack.engine.tracker import Tracker
+    from wmiltrack.eval.benchmark_scores import benchmark_scores
+    from wmiltrack.eval.metrics import ope_metrics
+
+    syn = make_sequence(10, size=(96, 128), target_size=(24, 20), seed=3, occlusion=False, clutter=False)
+    img_dir = _build_from(syn, tmp_path, layout)
+    assert detect_layout(tmp_path) == layout
+    (seq,) = load_layout(tmp_path)
+    assert syn.groundtruth is not None and seq.groundtruth is not None
+    np.testing.assert_allclose(seq.groundtruth, syn.groundtruth, atol=1e-3)  # written with 6 digits
+    # each decoded (JPEG) frame is closest to the generated frame of the same index
+    originals = [f.astype(np.float64) for f in syn]
+    for k, frame in enumerate(seq):
+        diffs = [np.abs(frame - o).mean() for o in originals]
+        assert int(np.argmin(diffs)) == k
+    seq = pickle.loads(pickle.dumps(seq))  # sequences travel to worker processes as they are
+    pred = Tracker("rcwmil", seed=0).track(seq, seq.init_box)
+    # the same files opened as a plain image folder give the same trajectory (deterministic tracker)
+    ref = Tracker("rcwmil", seed=0).track(open_input(img_dir), seq.init_box)
+    np.testing.assert_array_equal(pred, ref)
+    s = benchmark_scores(pred, seq)
+    assert s.ope is not None and s.ope.n_scored == 10
+    assert s.ope.auc == pytest.approx(ope_metrics(pred, syn.groundtruth).auc, abs=0.01)
+    assert (s.got10k is not None) == (layout == "got10k")
