@@ -136,7 +136,9 @@ def test_listing_and_loading_decode_no_image(tmp_path: Path, monkeypatch: pytest
 
 
 # ---------------------------------------------------------------------- GOT-10k
-def _got_seq(split_dir: Path, name: str, n: int = 6, absence=None, cover=None, gt_rows=None) -> Path:
+def _got_seq(
+    split_dir: Path, name: str, n: int = 6, absence=None, cover=None, gt_rows=None, meta_ini: bool = True
+) -> Path:
     d = split_dir / name
     _write_frames(d, list(range(n)))
     _write_lines(d / "groundtruth.txt", gt_rows if gt_rows is not None else [_box(k) for k in range(n)])
@@ -144,10 +146,11 @@ def _got_seq(split_dir: Path, name: str, n: int = 6, absence=None, cover=None, g
         _write_lines(d / "absence.label", [str(v) for v in absence])
     if cover is not None:
         _write_lines(d / "cover.label", [str(v) for v in cover])
-    (d / "meta_info.ini").write_text(
-        "[METAINFO]\nurl: https://example.invalid\nobject_class: grey square\n"
-        f"resolution: ({W}, {H})\nmotion_class: moving\n"
-    )
+    if meta_ini:
+        (d / "meta_info.ini").write_text(
+            "[METAINFO]\nurl: https://example.invalid\nobject_class: grey square\n"
+            f"resolution: ({W}, {H})\nmotion_class: moving\n"
+        )
     return d
 
 
@@ -175,7 +178,8 @@ def test_got10k_root_splits_and_absent_frames(tmp_path: Path) -> None:
         },
     )
     first_only = [_box(0)]
-    _got_split(tmp_path, "test", {"GOT-10k_Test_000001": {"gt_rows": first_only}})
+    # the test split: first box only, no labels, no meta_info.ini (found by the folder names)
+    _got_split(tmp_path, "test", {"GOT-10k_Test_000001": {"gt_rows": first_only, "meta_ini": False}})
 
     assert detect_layout(tmp_path) == "got10k"
     assert list_layout(tmp_path) == ["GOT-10k_Val_000002", "GOT-10k_Val_000001"]  # val by default
@@ -188,8 +192,9 @@ def test_got10k_root_splits_and_absent_frames(tmp_path: Path) -> None:
     assert seq.meta["split"] == "val" and seq.meta["absent_policy"] == "exclude"
     assert seq.meta["cover"].tolist() == [8, 5, 0, 0, 3, 8]
 
+    assert detect_layout(tmp_path / "test") == "got10k"
     (test_seq,) = load_layout(tmp_path / "test")
-    assert test_seq.meta["first_frame_only"] is True
+    assert test_seq.meta["first_frame_only"] is True and "resolution" not in test_seq.meta
     assert len(test_seq) == n and test_seq.init_box == tuple(_box(0))
     assert np.isnan(test_seq.groundtruth[1:]).all()
     _assert_aligned(test_seq, n)
