@@ -220,8 +220,10 @@ def add_track(sub: Subparsers) -> None:
         "sequence folder (img/ + groundtruth_rect.txt: the first box comes from its ground truth "
         "unless --box is given). Prints or writes one x,y,w,h line per frame, each line as soon "
         "as it is computed, so an interrupted run keeps every box computed. A frame that cannot "
-        "be decoded (truncated or corrupt image, image of another size) is skipped: its line "
-        "repeats the last box, a warning names it, and the summary counts it.",
+        "be used (an image file that is truncated or does not decode, an image of another size) "
+        "is skipped: its line repeats the last box, a warning names it, and the summary counts "
+        "it. A video that stops reading before the frame count its header announces is reported "
+        "too.",
         epilog="Exit status: 0 done (skipped frames included); 1 error, including a bad frame "
         "with --strict or an output that cannot be written; 2 bad command line; 130 interrupted "
         "by SIGINT (Ctrl-C), 143 by SIGTERM. An interrupt stops after the current frame; the "
