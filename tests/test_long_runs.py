@@ -323,3 +323,17 @@ def test_a_killed_run_keeps_every_box_written_so_far(tmp_path: Path) -> None:
     got = read_boxes(out)
     assert 5 <= len(got) < 250
     assert np.array_equal(got, expected_boxes([base[k] for k in order[:len(got)]], box))
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+def test_a_full_disk_is_an_error_message_not_a_traceback(tmp_path: Path) -> None:
+    frames, box = make_frames(3)
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(folder / f"{i + 1:04d}.png"), f)
+    res = subprocess.run([sys.executable, "-m", "wmiltrack", "track", str(folder), "--box", box_arg(box),
+                          "-o", "/dev/full"], capture_output=True, text=True, timeout=120, env=ENV)
+    assert res.returncode == 1
+    assert "cannot write the boxes" in res.stderr and "No space left" in res.stderr
+    assert "Traceback" not in res.stderr

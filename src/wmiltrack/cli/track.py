@@ -153,7 +153,8 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
             if stop.signum is not None:
                 break
     except KeyboardInterrupt:  # a second SIGINT/SIGTERM while a frame was being processed
-        pass
+        if stop.signum is None:  # not from our handler (not installed outside the main thread)
+            stop.signum = int(signal.SIGINT)
     except OSError as exc:  # writing the boxes failed (disk full, closed pipe, ...)
         error = f"cannot write the boxes: {exc}"
     finally:
@@ -181,13 +182,12 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
         summary.append(f"{skipped} skipped (could not be used, last box held)")
     if reader.ended_early is not None and stop.signum is None:
         summary.append(reader.ended_early)
-    status = EXIT_OK
-    if stop.signum is not None:
+    status = EXIT_OK if error is None else EXIT_ERROR
+    if error is not None:
+        print(f"wmiltrack: error: {error}", file=sys.stderr)
+    if stop.signum is not None:  # the interrupt decides the exit status
         status = 128 + stop.signum
         summary.append(f"interrupted by {signal.Signals(stop.signum).name} (exit status {status})")
-    elif error is not None:
-        status = EXIT_ERROR
-        print(f"wmiltrack: error: {error}", file=sys.stderr)
     print(f"wmiltrack: {'; '.join(summary)}", file=sys.stderr)
     return status
 
