@@ -565,8 +565,8 @@ def _decode_image_checked(path: Path) -> tuple[Frame | None, str | None]:
 
     The bytes are decoded with :func:`cv2.imdecode`, not :func:`cv2.imread`: for a truncated
     JPEG, ``imread`` (libjpeg's file reader) pads the missing part with grey and returns an
-    image, while ``imdecode`` (OpenCV 5) returns ``None``. Older OpenCV versions may still return
-    a padded image from ``imdecode``, so a JPEG is also rejected when no end-of-image marker
+    image, while ``imdecode`` returns ``None`` (checked with OpenCV 5.0). In case another OpenCV
+    version's ``imdecode`` pads too, a JPEG is also rejected when no end-of-image marker
     (``FF D9``) follows its last start-of-scan marker (``FF DA``); these two byte pairs cannot
     occur inside entropy-coded data, and data appended after the end marker is allowed.
     Not detected: a JPEG whose scan data is damaged but which still ends with its end marker
