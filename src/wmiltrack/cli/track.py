@@ -1,20 +1,102 @@
-"""``wmiltrack track``: one object through a video, an image folder or an OTB sequence."""
+"""``wmiltrack track``: one object through a video, an image folder or an OTB sequence.
+
+Long runs lose nothing: each box is written (and flushed) as soon as it is computed, a frame
+that cannot be decoded is skipped with the last box held (``--strict`` stops instead), and
+SIGINT/SIGTERM stop the run after the current frame with the output and ``--video`` closed.
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import signal
 import sys
+import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from types import FrameType
+from typing import IO, Any
 
 from .options import Subparsers, add_tracker_options, parse_box, parse_overrides
 
+EXIT_OK = 0
+EXIT_ERROR = 1
+EXIT_USAGE = 2
+EXIT_SIGINT = 128 + int(signal.SIGINT)    # 130
+EXIT_SIGTERM = 128 + int(signal.SIGTERM)  # 143
+
+_HELD_COLOR = (0, 0, 255)  # red: the box drawn on a skipped frame is the last one, held
+
+
+class _StopRequest:
+    """SIGINT/SIGTERM handler: the first signal asks the loop to stop after the current frame;
+    a second one (the user insisting) raises :class:`KeyboardInterrupt` at once."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.hurry = True  # set to False once the run is closing: then signals are only noted
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        if self.signum is not None and self.hurry:
+            raise KeyboardInterrupt
+        if self.signum is None:
+            self.signum = signum
+
+
+@contextmanager
+def _stop_signals() -> Iterator[_StopRequest]:
+    """Route SIGINT and SIGTERM to a :class:`_StopRequest` while the block runs (main thread
+    only: elsewhere Python cannot set handlers, and the defaults stay)."""
+    stop = _StopRequest()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+    previous = {s: signal.signal(s, stop) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+class _BoxLines:
+    """One ``x,y,w,h`` line per frame, written and flushed as soon as it is computed, to a file
+    (same format as :func:`wmiltrack.data.boxes.write_boxes`) or to standard output."""
+
+    def __init__(self, path: Path | None) -> None:
+        from ..data.boxes import _fmt
+
+        self.path = path
+        self.count = 0
+        self._fh: IO[str]
+        self._fmt: Callable[[float], str]
+        if path is None:
+            self._fh = sys.stdout
+            self._fmt = lambda v: f"{v:g}"
+        else:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._fh = path.open("w", encoding="utf-8")
+            self._fmt = _fmt
+
+    def write(self, box: Sequence[float]) -> None:
+        self._fh.write(",".join(self._fmt(float(v)) for v in box) + "\n")
+        self._fh.flush()
+        self.count += 1
+
+    def close(self) -> None:
+        if self.path is not None:
+            self._fh.close()
+
 
 def _cmd_track(args: argparse.Namespace) -> int:
-    from ..data.boxes import write_boxes
-    from ..data.sequences import open_input
+    with _stop_signals() as stop:
+        return _track(args, stop)
+
+
+def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
+    from ..data.sequences import TolerantFrames, open_input
     from ..eval.peers import make_tracker
     from ..progress import progress
 
@@ -28,40 +110,91 @@ def _cmd_track(args: argparse.Namespace) -> int:
             f"wmiltrack: {args.input} has no ground truth; give the first box with --box x,y,w,h"
         )
     tracker = make_tracker(args.tracker, seed=args.seed, **parse_overrides(args.set))
+    reader = TolerantFrames(seq)
+    frames = iter(reader)
+    # Opened before tracking starts: an output that cannot be written fails now, not at the end.
+    out = _BoxLines(args.output)
+    bar = progress(frames, total=reader.expected, desc=f"{args.tracker} {seq.name}")
     writer = None
-    boxes: list[tuple[float, float, float, float]] = []
-    scores: list[float] = []
+    skipped = 0
     times: list[float] = []
+    error: str | None = None
+    last_box: tuple[float, ...] = ()
+    last_frame: Any = None
     try:
-        for i, frame in enumerate(progress(seq, total=len(seq), desc=f"{args.tracker} {seq.name}")):
-            if i == 0:
+        for i, frame, problem in bar:
+            if stop.signum is not None:  # a signal came before the first frame
+                break
+            color = (0, 255, 0)
+            if frame is None:
+                if i == 0:
+                    raise ValueError(f"frame 1 cannot be used ({problem}), and the first box "
+                                     "belongs to it")
+                if args.strict:
+                    error = f"frame {i + 1}: {problem} (--strict)"
+                    break
+                skipped += 1
+                bar.write(f"wmiltrack: warning: frame {i + 1} skipped, last box held: {problem}",
+                          file=sys.stderr)
+                r_box, score, shown, color = last_box, math.nan, last_frame, _HELD_COLOR
+            elif i == 0:
                 tracker.init(frame, box)
-                r_box, score = tuple(float(v) for v in box), float("nan")
+                r_box, score, shown = tuple(float(v) for v in box), math.nan, frame
             else:
                 t0 = time.perf_counter()
                 r = tracker.update(frame)
                 times.append(time.perf_counter() - t0)
-                r_box, score = r.box, r.score
-            boxes.append(r_box)  # type: ignore[arg-type]
-            scores.append(score)
+                r_box, score, shown = tuple(r.box), r.score, frame
+            out.write(r_box)
             if args.video is not None:
-                writer = _write_video_frame(writer, args.video, frame, r_box, i, score, seq.fps)
+                writer = _write_video_frame(writer, args.video, shown, r_box, i, score, seq.fps,
+                                            color)
+            last_box, last_frame = r_box, shown
+            if stop.signum is not None:
+                break
+    except KeyboardInterrupt:  # a second SIGINT/SIGTERM while a frame was being processed
+        if stop.signum is None:  # not from our handler (not installed outside the main thread)
+            stop.signum = int(signal.SIGINT)
+    except OSError as exc:  # writing the boxes failed (disk full, closed pipe, ...)
+        error = f"cannot write the boxes: {exc}"
     finally:
+        stop.hurry = False  # a signal now must not cut the closing of the output and video
+        bar.close()
+        frames.close()
+        seq.close()
         if writer is not None:
             writer.release()
-    if args.output is not None:
-        write_boxes(args.output, boxes)
-    else:
-        for b in boxes:
-            print(",".join(f"{v:g}" for v in b))
+        try:
+            out.close()
+        except OSError as exc:
+            error = error or f"cannot write the boxes: {exc}"
+
+    if error is None and stop.signum is None and reader.ended_early is not None:
+        if args.strict:
+            error = f"{reader.ended_early} (--strict)"
+        else:
+            print(f"wmiltrack: warning: {reader.ended_early}", file=sys.stderr)
+    where = "" if args.output is None else f", boxes in {args.output}"
+    summary = [f"{out.count} frame{'' if out.count == 1 else 's'}{where}"]
     if times:
-        fps = len(times) / sum(times)
-        print(f"{len(boxes)} frames, {fps:.0f} frames/s (update only)", file=sys.stderr)
-    return 0
+        summary.append(f"{len(times) / sum(times):.0f} frames/s (update only)")
+    if skipped:
+        summary.append(f"{skipped} skipped (could not be used, last box held)")
+    if reader.ended_early is not None and stop.signum is None:
+        summary.append(reader.ended_early)
+    status = EXIT_OK if error is None else EXIT_ERROR
+    if error is not None:
+        print(f"wmiltrack: error: {error}", file=sys.stderr)
+    if stop.signum is not None:  # the interrupt decides the exit status
+        status = 128 + stop.signum
+        summary.append(f"interrupted by {signal.Signals(stop.signum).name} (exit status {status})")
+    print(f"wmiltrack: {'; '.join(summary)}", file=sys.stderr)
+    return status
 
 
 def _write_video_frame(writer: Any, path: Path, frame: Any, box: Sequence[float], index: int,
-                       score: float, fps: float | None) -> Any:
+                       score: float, fps: float | None,
+                       color: tuple[int, int, int] = (0, 255, 0)) -> Any:
     import cv2
     import numpy as np
 
@@ -75,19 +208,35 @@ def _write_video_frame(writer: Any, path: Path, frame: Any, box: Sequence[float]
             raise SystemExit(f"wmiltrack: cannot write video {path}")
     img = (frame if frame.ndim == 3 and frame.shape[2] == 3
            else cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_GRAY2BGR))
-    writer.write(draw_result(img, box, index=index, score=score))
+    writer.write(draw_result(img, box, index=index, score=score, color=color))
     return writer
 
 
 def add_track(sub: Subparsers) -> None:
     """Add the ``track`` subcommand to ``sub``."""
-    p = sub.add_parser("track", help="track an object through a video, image folder or OTB sequence",
-                       description="Track one object. INPUT is a video file, a folder of images, or an "
-                       "OTB sequence folder (img/ + groundtruth_rect.txt: the first box comes from its "
-                       "ground truth unless --box is given). Prints or writes one x,y,w,h line per frame.")
+    p = sub.add_parser(
+        "track", help="track an object through a video, image folder or OTB sequence",
+        description="Track one object. INPUT is a video file, a folder of images, or an OTB "
+        "sequence folder (img/ + groundtruth_rect.txt: the first box comes from its ground truth "
+        "unless --box is given). Prints or writes one x,y,w,h line per frame, each line as soon "
+        "as it is computed, so an interrupted run keeps every box computed. A frame that cannot "
+        "be used (an image file that is truncated or does not decode, an image of another size) "
+        "is skipped: its line repeats the last box, a warning names it, and the summary counts "
+        "it. A video that stops reading before the frame count its header announces is reported "
+        "too.",
+        epilog="Exit status: 0 done (skipped frames included); 1 error, including a bad frame "
+        "with --strict or an output that cannot be written; 2 bad command line; 130 interrupted "
+        "by SIGINT (Ctrl-C), 143 by SIGTERM. An interrupt stops after the current frame; the "
+        "output then holds one line per frame processed and --video is closed so that it plays. "
+        "A second interrupt stops at once (the lines and video already written are still kept).")
     p.add_argument("input", type=Path, help="video file, image folder or OTB sequence folder")
     p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (pixels)")
     p.add_argument("-o", "--output", type=Path, help="write boxes here (default: print them)")
-    p.add_argument("--video", type=Path, help="write a video with the box, frame number and score drawn")
+    p.add_argument("--video", type=Path, help="write a video with the box, frame number and score "
+                   "drawn (a skipped frame shows the last good frame with the held box in red)")
+    p.add_argument("--strict", action="store_true",
+                   help="stop with exit status 1 at the first frame that cannot be decoded, or when "
+                   "a video ends before the frame count its container announces (default: skip "
+                   "the frame, hold the last box, warn)")
     add_tracker_options(p)
     p.set_defaults(func=_cmd_track)

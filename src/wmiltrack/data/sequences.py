@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from collections.abc import Sequence as AbcSequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,6 +37,7 @@ __all__ = [
     "GT_FILE",
     "IMAGE_EXTENSIONS",
     "Sequence",
+    "TolerantFrames",
     "default_otb_root",
     "list_otb_sequences",
     "load_dataset",
@@ -556,3 +557,125 @@ def open_input(path: str | os.PathLike[str]) -> Sequence:
     finally:
         cap.release()
     return Sequence(name=p.stem, video=p)
+
+
+# ---------------------------------------------------------------------- tolerant reading
+def _decode_image_checked(path: Path) -> tuple[Frame | None, str | None]:
+    """Decode one image file; ``(frame, None)``, or ``(None, reason)`` when it cannot be used.
+
+    The bytes are decoded with :func:`cv2.imdecode`, not :func:`cv2.imread`: for a truncated
+    JPEG, ``imread`` (libjpeg's file reader) pads the missing part with grey and returns an
+    image, while ``imdecode`` returns ``None`` (checked with OpenCV 5.0). In case another OpenCV
+    version's ``imdecode`` pads too, a JPEG is also rejected when no end-of-image marker
+    (``FF D9``) follows its last start-of-scan marker (``FF DA``); these two byte pairs cannot
+    occur inside entropy-coded data, and data appended after the end marker is allowed.
+    Not detected: a JPEG whose scan data is damaged but which still ends with its end marker
+    (libjpeg conceals the damage and only prints a warning).
+    """
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        return None, f"cannot read the file ({exc.strerror or exc})"
+    if not data:
+        return None, "empty file"
+    try:
+        img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    except cv2.error as exc:
+        return None, f"could not decode the image ({str(exc).strip().splitlines()[-1]})"
+    if img is None:
+        return None, "could not decode the image (truncated, corrupt or unsupported format)"
+    if data[:2] == b"\xff\xd8" and data.rfind(b"\xff\xd9") < data.rfind(b"\xff\xda"):
+        return None, "truncated JPEG (no end-of-image marker after the last scan)"
+    return np.ascontiguousarray(img, dtype=np.uint8), None
+
+
+class TolerantFrames:
+    """The frames of a :class:`Sequence`, in order, not stopping at one that cannot be used.
+
+    Iterating yields ``(index, frame, problem)`` for every frame: ``frame`` is the BGR ``uint8``
+    array and ``problem`` is ``None``, or ``frame`` is ``None`` and ``problem`` says why the frame
+    cannot be used: an image file that cannot be read or decoded (truncated JPEG or PNG, see
+    :func:`_decode_image_checked` for what is and is not detected), or a frame whose size differs
+    from the first usable frame's. Indices are 0-based and count every frame, usable or not.
+
+    A video is read with :meth:`cv2.VideoCapture.read` until it fails. A damaged tail usually
+    ends reading early; the frames never read get no entry, but :attr:`ended_early` then says
+    how many frames were read and how many the container announces.
+
+    Attributes
+    ----------
+    sequence:
+        The sequence read.
+    expected:
+        Number of frames the source announces: the image count, the container's frame count
+        for a video (``None`` when the container does not say), ``len(frames)`` in memory.
+        Known without decoding anything (``len(sequence)`` reads a whole video).
+    ended_early:
+        After iteration: for a video whose reading stopped before :attr:`expected` frames,
+        a message such as ``"the video ended after 32 frames; its container announces 40"``;
+        otherwise ``None``.
+    """
+
+    def __init__(self, sequence: Sequence) -> None:
+        self.sequence = sequence
+        self.ended_early: str | None = None
+        self.expected: int | None
+        if sequence._cache is not None:
+            self.expected = len(sequence._cache)
+        elif sequence.paths is not None:
+            self.expected = len(sequence.paths)
+        else:
+            cap = cv2.VideoCapture(str(sequence.video))
+            try:
+                n = cap.get(cv2.CAP_PROP_FRAME_COUNT) if cap.isOpened() else 0.0
+            finally:
+                cap.release()
+            self.expected = int(n) if math.isfinite(n) and n > 0 else None
+
+    def __iter__(self) -> Generator[tuple[int, Frame | None, str | None], None, None]:
+        """Yield ``(index, frame, problem)`` for each frame, in order (see the class).
+
+        Closing the generator early (``close()``) releases the video reader at once.
+        """
+        shape: tuple[int, ...] | None = None
+        raw = self._raw()
+        try:
+            for i, frame, problem in raw:
+                if frame is not None:
+                    if shape is None:
+                        shape = frame.shape
+                    elif frame.shape != shape:
+                        problem = (f"size {frame.shape[1]}x{frame.shape[0]} differs from the first "
+                                   f"frame's {shape[1]}x{shape[0]}")
+                        frame = None
+                yield i, frame, problem
+        finally:
+            raw.close()
+
+    def _raw(self) -> Generator[tuple[int, Frame | None, str | None], None, None]:
+        seq = self.sequence
+        if seq._cache is not None:
+            for i, f in enumerate(seq._cache):
+                yield i, f, None
+            return
+        if seq.paths is not None:
+            for i, p in enumerate(seq.paths):
+                img, problem = _decode_image_checked(p)
+                yield i, img, (None if problem is None else f"{p.name}: {problem}")
+            return
+        cap = cv2.VideoCapture(str(seq.video))
+        if not cap.isOpened():
+            raise ValueError(f"could not open video {seq.video}")
+        n = 0
+        try:
+            while True:
+                ok, raw = cap.read()
+                if not ok or raw is None:
+                    break
+                yield n, _as_frame(raw), None
+                n += 1
+        finally:
+            cap.release()
+        if self.expected is not None and n < self.expected:
+            self.ended_early = (f"the video ended after {n} frames; its container announces "
+                                f"{self.expected}")
