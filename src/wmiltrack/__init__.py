@@ -18,16 +18,18 @@ except PackageNotFoundError:  # running from a source tree that was never instal
 from .engine.result import TrackResult
 
 if TYPE_CHECKING:
+    from .engine.multi import MultiTracker
     from .engine.params import Params, variants
     from .engine.tracker import Tracker
 
 _LAZY = {
+    "MultiTracker": "engine.multi",
     "Tracker": "engine.tracker",
     "Params": "engine.params",
     "variants": "engine.params",
 }
 
-__all__ = ["Params", "TrackResult", "Tracker", "__version__", "variants"]
+__all__ = ["MultiTracker", "Params", "TrackResult", "Tracker", "__version__", "variants"]
 
 
 def __getattr__(name: str) -> Any:

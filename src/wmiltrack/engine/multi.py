@@ -1,0 +1,165 @@
+"""Several targets in one video: one :class:`~wmiltrack.Tracker` per target, updated together.
+
+Target ``i`` (the ``i``-th successful :meth:`MultiTracker.add`) runs exactly the tracker
+``Tracker(variant, seed=seed + i)`` would, so its boxes are those of a single tracker started on
+the same frame with the same box. What the targets share is the per-frame work that does not
+depend on the target: the frame is checked and converted once, and the targets' updates run in
+a thread pool (the compiled core releases the GIL, so targets proceed in parallel on several
+cores).
+"""
+
+from __future__ import annotations
+
+import os
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+
+from .frames import as_frame
+from .params import Params
+from .result import TrackResult
+from .tracker import Tracker
+
+__all__ = ["MultiTracker"]
+
+
+class MultiTracker:
+    """Track several objects in the same frames.
+
+    Parameters
+    ----------
+    variant : str
+        Preset of every target, as for :class:`~wmiltrack.Tracker` (``"rcwmil"``, ...).
+    seed : int
+        Target ``i`` uses seed ``seed + i``.
+    threads : int, optional
+        Worker threads for :meth:`update`; ``None`` = one per core (``os.cpu_count()``),
+        ``1`` = update the targets one after the other in the calling thread.
+    params : Params, optional
+        Start from these parameters instead of the preset's defaults.
+    **overrides
+        Any :class:`~wmiltrack.Params` field, applied to every target.
+
+    Examples
+    --------
+    >>> mt = MultiTracker("rcwmil", seed=0)           # doctest: +SKIP
+    >>> a = mt.add(frame0, (10, 20, 40, 40))           # doctest: +SKIP
+    >>> b = mt.add(frame0, (200, 80, 32, 64))          # doctest: +SKIP
+    >>> results = mt.update(frame1)                    # {0: TrackResult, 1: TrackResult}
+    >>> mt.remove(a)                                   # doctest: +SKIP
+
+    One ``MultiTracker`` must not be used from two threads at once (it runs its own pool).
+    """
+
+    def __init__(self, variant: str = "rcwmil", *, seed: int = 0, threads: int | None = None,
+                 params: Params | None = None, **overrides: Any) -> None:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise ValueError(f"seed must be a non-negative int, got {seed!r}")
+        if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int)
+                                    or threads < 1):
+            raise ValueError(f"threads must be None or an int >= 1, got {threads!r}")
+        # Validate the preset and overrides now, not at the first add().
+        self._params = (Params.for_variant(variant, **overrides) if params is None
+                        else params.replace(**overrides) if overrides else params)
+        self._seed = int(seed)
+        self._threads = threads if threads is not None else (os.cpu_count() or 1)
+        self._targets: dict[int, Tracker] = {}
+        self._next_id = 0
+        self._pool: ThreadPoolExecutor | None = None
+
+    # -- public API ------------------------------------------------------------------------
+    @property
+    def params(self) -> Params:
+        """The parameters every target uses (frozen)."""
+        return self._params
+
+    @property
+    def ids(self) -> list[int]:
+        """Ids of the live targets, in the order they were added."""
+        return list(self._targets)
+
+    def __len__(self) -> int:
+        return len(self._targets)
+
+    def __contains__(self, target_id: object) -> bool:
+        return target_id in self._targets
+
+    def add(self, frame: np.ndarray, box: Any) -> int:
+        """Start tracking the object in ``box = (x, y, w, h)`` of ``frame``; returns its id.
+
+        Ids are 0, 1, 2, ... in the order of successful calls. A bad box raises the same
+        ``ValueError``/``TypeError`` as :meth:`Tracker.init` and uses up no id; the other
+        targets are not affected.
+        """
+        tracker = Tracker(params=self._params, seed=self._seed + self._next_id)
+        tracker.init(frame, box)
+        target_id = self._next_id
+        self._targets[target_id] = tracker
+        self._next_id += 1
+        return target_id
+
+    def remove(self, target_id: int) -> None:
+        """Stop tracking one target; an unknown id is a ``KeyError``."""
+        if target_id not in self._targets:
+            raise KeyError(f"no live target with id {target_id!r}; live ids: {self.ids}")
+        del self._targets[target_id]
+
+    def update(self, frame: np.ndarray) -> dict[int, TrackResult]:
+        """Locate every live target in the next frame; ``{id: TrackResult}``.
+
+        The frame is checked once (bad frames raise as :meth:`Tracker.update` does, before any
+        target moves). A target whose update fails (for instance a frame of another size than
+        the one it started on) does not stop the others: its error is raised after all targets
+        have been updated, as a ``ValueError`` naming the target.
+        """
+        img = as_frame(frame)
+        items = list(self._targets.items())
+        if not items:
+            return {}
+        if self._threads == 1 or len(items) == 1:
+            outcomes = [self._step(t, img) for _, t in items]
+        else:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(max_workers=self._threads,
+                                                thread_name_prefix="wmiltrack")
+            outcomes = list(self._pool.map(lambda t: self._step(t, img), [t for _, t in items]))
+        results: dict[int, TrackResult] = {}
+        failed: list[str] = []
+        for (target_id, _), outcome in zip(items, outcomes):
+            if isinstance(outcome, Exception):
+                failed.append(f"target {target_id}: {outcome}")
+            else:
+                results[target_id] = outcome
+        if failed:
+            raise ValueError("; ".join(failed))
+        return results
+
+    def close(self) -> None:
+        """Shut the thread pool down (it is created again if :meth:`update` is called)."""
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None
+
+    def __enter__(self) -> MultiTracker:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        pool = getattr(self, "_pool", None)
+        if pool is not None:
+            pool.shutdown(wait=False)
+
+    def __repr__(self) -> str:
+        return (f"MultiTracker({self._params.variant!r}, seed={self._seed}, "
+                f"targets={self.ids}, threads={self._threads})")
+
+    # -- internals -------------------------------------------------------------------------
+    @staticmethod
+    def _step(tracker: Tracker, img: np.ndarray) -> TrackResult | Exception:
+        try:
+            return tracker.update(img)
+        except (ValueError, TypeError) as exc:  # reported per target by update()
+            return exc

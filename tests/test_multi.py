@@ -1,0 +1,133 @@
+"""MultiTracker: several targets in the same frames, each exactly a single Tracker."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import wmiltrack
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.multi import MultiTracker
+from wmiltrack.eval.metrics import iou
+
+
+@pytest.fixture(scope="module")
+def two_targets() -> tuple[list[np.ndarray], list[tuple[float, ...]], np.ndarray, np.ndarray]:
+    """Two generated sequences side by side: frames, first boxes, and both ground truths."""
+    a = make_sequence(30, size=(120, 160), target_size=(32, 28), seed=1, occlusion=False)
+    b = make_sequence(30, size=(120, 160), target_size=(28, 36), seed=2, occlusion=False)
+    frames = [np.hstack([fa, fb]) for fa, fb in zip(a.load(), b.load())]
+    gt_a = a.groundtruth.copy()
+    gt_b = b.groundtruth.copy()
+    gt_b[:, 0] += 160
+    return frames, [tuple(gt_a[0]), tuple(gt_b[0])], gt_a, gt_b
+
+
+def single(variant: str, seed: int, frames: list[np.ndarray], box: tuple[float, ...],
+           start: int = 0) -> list[tuple[float, ...]]:
+    t = wmiltrack.Tracker(variant, seed=seed)
+    t.init(frames[start], box)
+    return [t.update(f).box for f in frames[start + 1:]]
+
+
+@pytest.mark.parametrize("variant", ["rcwmil", "mil"])
+@pytest.mark.parametrize("threads", [1, 2])
+def test_each_target_gives_the_boxes_of_a_single_tracker(two_targets, variant: str, threads: int) -> None:
+    frames, boxes, _, _ = two_targets
+    with MultiTracker(variant, seed=5, threads=threads) as mt:
+        ids = [mt.add(frames[0], b) for b in boxes]
+        assert ids == [0, 1]
+        got: dict[int, list[tuple[float, ...]]] = {0: [], 1: []}
+        for f in frames[1:]:
+            for i, r in mt.update(f).items():
+                got[i].append(r.box)
+    for i, b in enumerate(boxes):
+        assert got[i] == single(variant, 5 + i, frames, b)
+
+
+def test_target_added_later_matches_a_tracker_started_there(two_targets) -> None:
+    frames, boxes, _, gt_b = two_targets
+    mt = MultiTracker("rcwmil", seed=0, threads=2)
+    mt.add(frames[0], boxes[0])
+    later: list[tuple[float, ...]] = []
+    for k, f in enumerate(frames[1:], start=1):
+        if k == 10:
+            assert mt.add(f, tuple(gt_b[10])) == 1
+            continue
+        res = mt.update(f)
+        if k > 10:
+            later.append(res[1].box)
+    assert later == single("rcwmil", 1, frames, tuple(gt_b[10]), start=10)
+
+
+def test_targets_follow_their_objects(two_targets) -> None:
+    frames, boxes, gt_a, gt_b = two_targets
+    mt = MultiTracker("rcwmil", seed=0)
+    for b in boxes:
+        mt.add(frames[0], b)
+    got: dict[int, list[tuple[float, ...]]] = {0: [], 1: []}
+    for f in frames[1:]:
+        for i, r in mt.update(f).items():
+            got[i].append(r.box)
+    # each target overlaps its own object, not the other one
+    for i, gt in enumerate((gt_a, gt_b)):
+        assert iou(np.array(got[i]), gt[1:]).mean() > 0.5
+        assert iou(np.array(got[i]), (gt_b, gt_a)[i][1:]).max() == 0.0
+
+
+def test_remove_ids_and_len(two_targets) -> None:
+    frames, boxes, _, _ = two_targets
+    mt = MultiTracker("fct", seed=0, threads=1)
+    a = mt.add(frames[0], boxes[0])
+    b = mt.add(frames[0], boxes[1])
+    assert len(mt) == 2 and mt.ids == [a, b] and a in mt
+    mt.remove(a)
+    assert mt.ids == [b] and len(mt) == 1 and a not in mt
+    assert set(mt.update(frames[1])) == {b}
+    with pytest.raises(KeyError, match="no live target"):
+        mt.remove(a)
+    with pytest.raises(KeyError):
+        mt.remove(99)
+    mt.remove(b)
+    assert mt.update(frames[2]) == {}
+    assert mt.add(frames[2], boxes[0]) == 2  # ids are never reused
+
+
+def test_bad_box_uses_no_id_and_leaves_others_alone(two_targets) -> None:
+    frames, boxes, _, _ = two_targets
+    mt = MultiTracker("rcwmil", seed=3, threads=2)
+    mt.add(frames[0], boxes[0])
+    with pytest.raises(ValueError, match="outside"):
+        mt.add(frames[0], (5000, 5000, 10, 10))
+    with pytest.raises(TypeError):
+        mt.add(frames[0], "1,2,3,4")
+    assert mt.add(frames[0], boxes[1]) == 1
+    got = [mt.update(f)[1].box for f in frames[1:]]
+    assert got == single("rcwmil", 4, frames, boxes[1])
+
+
+def test_bad_frame_moves_no_target(two_targets) -> None:
+    frames, boxes, _, _ = two_targets
+    mt = MultiTracker("rcwmil", seed=0)
+    for b in boxes:
+        mt.add(frames[0], b)
+    before = mt.update(frames[1])
+    with pytest.raises(TypeError):
+        mt.update(frames[2].astype(bool))
+    with pytest.raises(ValueError, match="frame size changed"):
+        mt.update(frames[2][:, :200])
+    after = mt.update(frames[2])
+    want = [single("rcwmil", i, frames, b)[1] for i, b in enumerate(boxes)]
+    assert [after[0].box, after[1].box] == want and before.keys() == after.keys()
+
+
+def test_constructor_checks_arguments() -> None:
+    with pytest.raises(ValueError, match="unknown variant"):
+        MultiTracker("nope")
+    with pytest.raises(TypeError, match="unknown parameter"):
+        MultiTracker("rcwmil", bogus=1)
+    with pytest.raises(ValueError, match="threads"):
+        MultiTracker("rcwmil", threads=0)
+    with pytest.raises(ValueError, match="seed"):
+        MultiTracker("rcwmil", seed=-1)
+    assert wmiltrack.MultiTracker is MultiTracker
