@@ -131,3 +131,54 @@ def test_constructor_checks_arguments() -> None:
     with pytest.raises(ValueError, match="seed"):
         MultiTracker("rcwmil", seed=-1)
     assert wmiltrack.MultiTracker is MultiTracker
+
+
+def test_track_cli_with_boxes_writes_mot_lines(two_targets, tmp_path, capsys) -> None:
+    import cv2
+
+    from wmiltrack.cli import main
+
+    frames, boxes, _, _ = two_targets
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k, f in enumerate(frames[:12]):
+        cv2.imwrite(str(folder / f"{k + 1:04d}.png"), f)
+    starts = tmp_path / "boxes.txt"
+    starts.write_text("".join(",".join(repr(float(v)) for v in b) + "\n" for b in boxes))
+    out = tmp_path / "mot.txt"
+    assert main(["track", str(folder), "--boxes", str(starts), "-o", str(out), "--seed", "2"]) == 0
+    assert "2 targets, 24 lines" in capsys.readouterr().err
+    rows = [line.split(",") for line in out.read_text().splitlines()]
+    assert len(rows) == 24 and all(len(r) == 10 and r[7:] == ["-1", "-1", "-1"] for r in rows)
+    assert [(int(r[0]), int(r[1])) for r in rows] == [(k, i) for k in range(1, 13) for i in (1, 2)]
+    assert [float(r[6]) for r in rows[:2]] == [1.0, 1.0]
+    # the same boxes as the Python API on the decoded (lossless PNG) frames
+    mt = MultiTracker("rcwmil", seed=2)
+    for b in boxes:
+        mt.add(frames[0], b)
+    want = [tuple(float(v) for v in b) for b in boxes]
+    for f in frames[1:12]:
+        res = mt.update(f)
+        want += [res[0].box, res[1].box]
+    assert [tuple(float(v) for v in r[2:6]) for r in rows] == want
+
+
+def test_track_cli_boxes_errors(tmp_path, capsys) -> None:
+    import cv2
+
+    from wmiltrack.cli import main
+
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(3):
+        cv2.imwrite(str(folder / f"{k + 1:04d}.png"), np.full((60, 80, 3), 40 * k, np.uint8))
+    empty = tmp_path / "none.txt"
+    empty.write_text("")
+    assert main(["track", str(folder), "--boxes", str(empty)]) == 1
+    assert "holds no box" in capsys.readouterr().err
+    one = tmp_path / "one.txt"
+    one.write_text("10,10,20,20\n")
+    assert main(["track", str(folder), "--boxes", str(one), "-t", "opencv:MIL"]) == 1
+    assert "OpenCV tracker" in capsys.readouterr().err
+    assert main(["track", str(folder), "--boxes", str(one), "--box", "1,1,5,5"]) == 1
+    assert "not both" in capsys.readouterr().err

@@ -66,22 +66,26 @@ class _BoxLines:
     (same format as :func:`wmiltrack.data.boxes.write_boxes`) or to standard output."""
 
     def __init__(self, path: Path | None) -> None:
-        from ..data.boxes import _fmt
+        from ..data.boxes import format_box
 
         self.path = path
         self.count = 0
         self._fh: IO[str]
-        self._fmt: Callable[[float], str]
+        self._format: Callable[[Sequence[float]], str]
         if path is None:
             self._fh = sys.stdout
-            self._fmt = lambda v: f"{v:g}"
+            self._format = lambda box: ",".join(f"{float(v):g}" for v in box)
         else:
             path.parent.mkdir(parents=True, exist_ok=True)
             self._fh = path.open("w", encoding="utf-8")
-            self._fmt = _fmt
+            self._format = format_box
 
     def write(self, box: Sequence[float]) -> None:
-        self._fh.write(",".join(self._fmt(float(v)) for v in box) + "\n")
+        self.write_line(self._format(box))
+
+    def write_line(self, line: str) -> None:
+        """One line (of one frame), flushed at once."""
+        self._fh.write(line + "\n")
         self._fh.flush()
         self.count += 1
 
@@ -101,15 +105,33 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     from ..progress import progress
 
     seq = open_input(args.input)
-    if args.box is not None:
-        box = args.box
+    starts: list[tuple[float, ...]]
+    if args.boxes is not None:
+        if args.box is not None:
+            raise ValueError("give either --box (one target) or --boxes (several), not both")
+        starts = _read_start_boxes(args.boxes)
+    elif args.box is not None:
+        starts = [tuple(args.box)]
     elif seq.groundtruth is not None:
-        box = seq.init_box
+        starts = [tuple(seq.init_box)]
     else:
         raise SystemExit(
             f"wmiltrack: {args.input} has no ground truth; give the first box with --box x,y,w,h"
         )
-    tracker = make_tracker(args.tracker, seed=args.seed, **parse_overrides(args.set))
+    several = args.boxes is not None
+    overrides = parse_overrides(args.set)
+    tracker: Any
+    if several:
+        from ..engine.multi import MultiTracker
+
+        if args.tracker.lower().startswith("opencv:"):
+            raise ValueError("--boxes tracks several targets with wmiltrack's presets only; "
+                             f"{args.tracker} is an OpenCV tracker")
+        tracker = MultiTracker(args.tracker, seed=args.seed, **overrides)
+    else:
+        tracker = make_tracker(args.tracker, seed=args.seed, **overrides)
+    box = starts[0]
+    ids: list[int] = []
     reader = TolerantFrames(seq)
     frames = iter(reader)
     # Opened before tracking starts: an output that cannot be written fails now, not at the end.
@@ -119,8 +141,9 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     skipped = 0
     times: list[float] = []
     error: str | None = None
-    last_box: tuple[float, ...] = ()
+    last_boxes: list[tuple[float, ...]] = []
     last_frame: Any = None
+    frames_done = 0
     try:
         for i, frame, problem in bar:
             if stop.signum is not None:  # a signal came before the first frame
@@ -136,20 +159,35 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
                 skipped += 1
                 bar.write(f"wmiltrack: warning: frame {i + 1} skipped, last box held: {problem}",
                           file=sys.stderr)
-                r_box, score, shown, color = last_box, math.nan, last_frame, _HELD_COLOR
+                shown, color = last_frame, _HELD_COLOR
+                boxes, scores = last_boxes, [math.nan] * len(last_boxes)
             elif i == 0:
-                tracker.init(frame, box)
-                r_box, score, shown = tuple(float(v) for v in box), math.nan, frame
+                if several:
+                    ids = [tracker.add(frame, b) for b in starts]
+                else:
+                    tracker.init(frame, box)
+                boxes = [tuple(float(v) for v in b) for b in starts]
+                scores, shown = [math.nan] * len(boxes), frame
             else:
                 t0 = time.perf_counter()
-                r = tracker.update(frame)
+                if several:
+                    results = tracker.update(frame)
+                    found = [results[k] for k in ids]
+                else:
+                    found = [tracker.update(frame)]
                 times.append(time.perf_counter() - t0)
-                r_box, score, shown = tuple(r.box), r.score, frame
-            out.write(r_box)
+                boxes = [tuple(r.box) for r in found]
+                scores, shown = [r.score for r in found], frame
+            if several:
+                for k, (b, s) in enumerate(zip(boxes, scores)):
+                    out.write_line(_mot_line(i, k, b, s, held=frame is None))
+            else:
+                out.write(boxes[0])
+            frames_done += 1
             if args.video is not None:
-                writer = _write_video_frame(writer, args.video, shown, r_box, i, score, seq.fps,
-                                            color)
-            last_box, last_frame = r_box, shown
+                writer = _write_video_frame(writer, args.video, shown, boxes, i,
+                                            scores[0] if not several else math.nan, seq.fps, color)
+            last_boxes, last_frame = boxes, shown
             if stop.signum is not None:
                 break
     except KeyboardInterrupt:  # a second SIGINT/SIGTERM while a frame was being processed
@@ -175,7 +213,9 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
         else:
             print(f"wmiltrack: warning: {reader.ended_early}", file=sys.stderr)
     where = "" if args.output is None else f", boxes in {args.output}"
-    summary = [f"{out.count} frame{'' if out.count == 1 else 's'}{where}"]
+    summary = [f"{frames_done} frame{'' if frames_done == 1 else 's'}{where}"]
+    if several:
+        summary.append(f"{len(starts)} targets, {out.count} lines")
     if times:
         summary.append(f"{len(times) / sum(times):.0f} frames/s (update only)")
     if skipped:
@@ -192,8 +232,28 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     return status
 
 
-def _write_video_frame(writer: Any, path: Path, frame: Any, box: Sequence[float], index: int,
-                       score: float, fps: float | None,
+def _read_start_boxes(path: Path) -> list[tuple[float, ...]]:
+    """The first boxes of ``--boxes FILE``: one ``x,y,w,h`` line per target."""
+    from ..data.boxes import read_boxes
+
+    boxes = read_boxes(path)
+    if len(boxes) == 0:
+        raise ValueError(f"{path} holds no box: write one x,y,w,h line per target")
+    return [tuple(float(v) for v in b) for b in boxes]
+
+
+def _mot_line(index: int, target: int, box: Sequence[float], score: float, held: bool) -> str:
+    """A MOTChallenge-style line ``frame,id,x,y,w,h,score,-1,-1,-1``: frame and id count from 1
+    (the id is the target's line in ``--boxes``); the score is 1 on the first frame (the given
+    box) and -1 on a skipped frame (the last box, held)."""
+    from ..data.boxes import format_box
+
+    s = -1.0 if held else (1.0 if index == 0 else score)
+    return f"{index + 1},{target + 1},{format_box(box)},{s:.4g},-1,-1,-1"
+
+
+def _write_video_frame(writer: Any, path: Path, frame: Any, boxes: Sequence[Sequence[float]],
+                       index: int, score: float, fps: float | None,
                        color: tuple[int, int, int] = (0, 255, 0)) -> Any:
     import cv2
     import numpy as np
@@ -208,7 +268,10 @@ def _write_video_frame(writer: Any, path: Path, frame: Any, box: Sequence[float]
             raise SystemExit(f"wmiltrack: cannot write video {path}")
     img = (frame if frame.ndim == 3 and frame.shape[2] == 3
            else cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_GRAY2BGR))
-    writer.write(draw_result(img, box, index=index, score=score, color=color))
+    for k, box in enumerate(boxes):  # frame number and score written once
+        img = draw_result(img, box, index=index if k == 0 else None,
+                          score=score if k == 0 else None, color=color)
+    writer.write(img)
     return writer
 
 
@@ -231,6 +294,10 @@ def add_track(sub: Subparsers) -> None:
         "A second interrupt stops at once (the lines and video already written are still kept).")
     p.add_argument("input", type=Path, help="video file, image folder or OTB sequence folder")
     p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (pixels)")
+    p.add_argument("--boxes", type=Path, metavar="FILE",
+                   help="track several targets: FILE holds one x,y,w,h line per target (on the "
+                   "first frame); output lines are MOTChallenge-style frame,id,x,y,w,h,score,-1,-1,-1 "
+                   "(frame and id from 1, id = line in FILE), one per target and frame")
     p.add_argument("-o", "--output", type=Path, help="write boxes here (default: print them)")
     p.add_argument("--video", type=Path, help="write a video with the box, frame number and score "
                    "drawn (a skipped frame shows the last good frame with the held box in red)")

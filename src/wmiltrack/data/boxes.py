@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["read_boxes", "write_boxes"]
+__all__ = ["format_box", "read_boxes", "write_boxes"]
 
 _SPLIT = re.compile(r"[,\t ;]+")
 
@@ -84,6 +84,12 @@ def _fmt(value: float) -> str:
     return repr(value)
 
 
+def format_box(box: Iterable[float]) -> str:
+    """One box as its ``x,y,w,h`` line (no newline), exactly as :func:`write_boxes` writes it:
+    integral values without a decimal point, others in full precision, ``NaN`` for missing."""
+    return ",".join(_fmt(float(v)) for v in box)
+
+
 def write_boxes(path: str | os.PathLike[str], boxes: ArrayLike | Iterable[Any]) -> None:
     """Write one ``x,y,w,h`` line per box (comma separated, ``NaN`` for missing boxes).
 
@@ -99,5 +105,5 @@ def write_boxes(path: str | os.PathLike[str], boxes: ArrayLike | Iterable[Any]) 
     arr = _as_box_array(boxes)
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    lines = [",".join(_fmt(float(v)) for v in row) for row in arr]
+    lines = [format_box(row) for row in arr]
     p.write_text("".join(line + "\n" for line in lines), encoding="utf-8")
