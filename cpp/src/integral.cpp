@@ -149,36 +149,10 @@ void accumulate_row(const std::uint8_t* v, int w, const double* prev, double* ou
 
 }  // namespace
 
+// The luma table alone. The same exact integer sums as the plain running-sum loop this
+// replaced, so the same doubles, through the vectorised row code of compute_channels.
 void IntegralImage::compute(const ImageView& image, Rect roi) {
-  const Rect r0 = clip_roi(image, roi);
-  x0_ = r0.x;
-  y0_ = r0.y;
-  width_ = r0.w;
-  height_ = r0.h;
-  channels_.assign(1, kLuma);
-  const std::ptrdiff_t s = stride();
-  data_.assign(static_cast<std::size_t>(s) * static_cast<std::size_t>(height_ + 1), 0.0);
-  std::vector<std::int64_t> column(static_cast<std::size_t>(width_) + 1, 0);  // exact running sums
-
-  for (int r = 0; r < height_; ++r) {
-    const std::uint8_t* src = image.data + (y0_ + r) * image.row_stride + x0_ * image.col_stride;
-    double* out = data_.data() + (r + 1) * s;
-    std::int64_t row_sum = 0;
-    if (image.channels == 1) {
-      for (int c = 0; c < width_; ++c, src += image.col_stride) {
-        row_sum += *src;
-        column[c + 1] += row_sum;
-        out[c + 1] = static_cast<double>(column[c + 1]);
-      }
-    } else {
-      const std::ptrdiff_t cs = image.channel_stride;
-      for (int c = 0; c < width_; ++c, src += image.col_stride) {
-        row_sum += bgr_to_gray(src[0], src[cs], src[2 * cs]);
-        column[c + 1] += row_sum;
-        out[c + 1] = static_cast<double>(column[c + 1]);
-      }
-    }
-  }
+  compute_channels(image, roi, {kLuma});
 }
 
 void IntegralImage::compute_channels(const ImageView& image, Rect roi,
