@@ -280,7 +280,8 @@ void test_channels(std::mt19937& rng) {
   const std::vector<int> all{kLuma, kGrad, kOppRG, kOppYB, kOrient0, kOrient1, kOrient2, kOrient3};
   const std::vector<int> gray_ok{kOrient3, kGrad, kLuma, kOrient0, kOrient1, kOrient2};
   const Rect rois[] = {{0, 0, 53, 37}, {7, 5, 30, 20}, {-3, -2, 10, 9}, {45, 30, 20, 20},
-                       {0, 10, 53, 1}, {20, 0, 1, 37}, {52, 36, 1, 1}, {4, 4, 2, 2}};
+                       {0, 10, 53, 1}, {20, 0, 1, 37}, {52, 36, 1, 1}, {4, 4, 2, 2},
+                       {5, 3, 32, 16}};  // a width of whole SIMD steps
   for (int channels : {1, 3, 4}) {
     const Frame f = random_frame(37, 53, channels, rng);
     const std::vector<int>& chans = channels == 1 ? gray_ok : all;

@@ -4,9 +4,10 @@
 // annulus), so the integral image is built over that rectangle alone, converting BGR(A)
 // to luma on the fly with the same fixed-point weights as cv::COLOR_BGR2GRAY.
 //
-// Sums are accumulated in 64-bit integers and stored as doubles: every value is an integer
-// below 255 * rows * cols, exact in a double for any frame under 3.5e13 pixels, and doubles
-// let the scoring loops vectorise (SSE2 has no int64 -> double conversion).
+// Sums are stored as doubles: every value is an integer below 255 * rows * cols, exact in a
+// double for any frame under 3.5e13 pixels, and doubles let the scoring loops vectorise
+// (SSE2 has no int64 -> double conversion). Each table row is the row above plus the row's
+// running sums (int32, or int64 for a row wider than 8.4 million pixels), all exact.
 //
 // compute_channels() builds several channels over the same ROI at once, one table per
 // channel ("plane"), stacked in one buffer: plane k starts at k * plane_size(). Every channel
