@@ -99,13 +99,18 @@ def add_eval(sub: Subparsers) -> None:
     )
     p.add_argument(
         "--missing",
-        choices=("miss", "hold"),
-        default="miss",
-        help="OPE: frames without a predicted box score as misses (default) or get "
-        "the last box (OTB toolkit)",
+        choices=("hold", "miss"),
+        default="hold",
+        help="OPE: a frame where a tracker gives no box gets its last box (hold, default, as "
+        "the OTB and got10k toolkits), or every frame a tracker reports lost is a miss (miss); "
+        "either way the same rule for every tracker",
     )
     p.add_argument(
-        "--cv-threads", type=int, default=None, help="cv2.setNumThreads(N) in every worker"
+        "--cv-threads",
+        type=int,
+        default=1,
+        help="cv2.setNumThreads(N) in every worker (default 1: one thread per tracker, as "
+        "wmiltrack uses; 0 lets OpenCV choose)",
     )
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
