@@ -282,3 +282,28 @@ def test_bad_arguments(
     assert (
         main(["eval", str(tmp_path), "--results", str(tmp_path), "--out", str(tmp_path / "o")]) == 1
     )
+
+
+def test_public_entry_points_are_unchanged(capsys: pytest.CaptureFixture[str]) -> None:
+    import importlib
+    import inspect
+
+    import wmiltrack
+
+    for name in ("Tracker", "Params", "TrackResult", "variants"):
+        assert hasattr(wmiltrack, name), name
+    for mod in ("wmiltrack.compat", "wmiltrack.integrations.got10k", "wmiltrack.vot"):
+        importlib.import_module(mod)
+    assert callable(importlib.import_module("wmiltrack.vot").main)
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    usage = capsys.readouterr().out
+    for cmd in ("track", "demo", "variants", "eval", "inspect"):
+        assert cmd in usage, cmd
+    from wmiltrack.eval.pipeline import run_eval
+
+    params = inspect.signature(run_eval).parameters
+    for p in ("trackers", "results", "protocol", "sequences", "jobs", "repeats", "seed",
+              "missing", "cv_threads"):
+        assert p in params, p
+    assert params["missing"].default == "hold" and params["cv_threads"].default == 1
