@@ -57,8 +57,10 @@ def add_eval(sub: Subparsers) -> None:
         description="Run trackers on every sequence of an OTB-layout dataset (or score box "
         "files of other trackers with --results) and write a markdown table, a JSON file with "
         "every figure, success/precision plots and per-sequence box files to --out.",
-        epilog="Speed: update-only FPS on pre-decoded frames. Parallel workers (-j) share the "
-        "cores: for honest speed figures use -j 1.",
+        epilog="Speed: update-only FPS on pre-decoded frames, OpenCV on one thread unless "
+        "--cv-threads says otherwise. Parallel workers (-j) share the cores: for honest speed "
+        "figures use -j 1. A frame where a tracker gives no box keeps its last box (--missing "
+        "hold); a frame left without a box is a miss in every figure.",
     )
     p.add_argument("dataset", type=Path, help="folder of OTB sequence folders, or one of them")
     p.add_argument(
@@ -86,7 +88,8 @@ def add_eval(sub: Subparsers) -> None:
         "--protocol",
         choices=("ope", "vot"),
         default="ope",
-        help="ope: OTB one-pass (default); vot: VOT2015 supervised with resets",
+        help="ope: OTB one-pass (default); vot: VOT-style supervised with resets (VOT2015's "
+        "rules on OTB's axis-aligned boxes)",
     )
     p.add_argument("--sequences", default=None, help="comma-separated names (default all)")
     p.add_argument("--seed", type=int, default=0, help="first tracker seed (default 0)")
