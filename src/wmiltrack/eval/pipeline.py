@@ -228,6 +228,68 @@ def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
     return ok
 
 
+def _box_writer(
+    box_root: Path, protocol: Protocol, missing: Missing, say: Callable[[str], None]
+) -> Callable[[RunOutcome], None]:
+    """What to do with each finished task: write its box file (the scored boxes for OPE) and
+    report a failure at once."""
+
+    def save(run: RunOutcome) -> None:
+        boxes = run_boxes(run, missing) if protocol == "ope" else run.boxes
+        write_run_boxes(box_root, run, boxes)
+        if run.error is not None:
+            say(f"{run.tracker} on {run.sequence} (seed {run.seed}) failed: {run.error}")
+
+    return save
+
+
+def _score_and_write(
+    runs: Sequence[RunOutcome],
+    gts: dict[str, FloatArray],
+    out: Path,
+    protocol: Protocol,
+    settings: dict[str, Any],
+    repeats: int,
+    timed: bool,
+    notes: list[str],
+    want_plots: bool,
+    files: dict[str, str],
+) -> dict[str, Any]:
+    """Score stage and report stage: the table (captioned), plots; returns the JSON document
+    (without the run's own fields) and records the files in ``files``."""
+    env = environment()
+    missing = settings["missing"]
+    title = caption(env, {**settings, "missing": missing if protocol == "ope" else None})
+    if protocol == "ope":
+        scored = score_ope(runs, gts, missing=missing, reference=REFERENCE)
+        table = format_ope_table(
+            scored, repeats, timed, title=title, missing=missing, reference=REFERENCE
+        )
+    else:
+        scored = score_vot(runs, reference=REFERENCE)
+        table = format_vot_table(scored, repeats, settings["skip"], settings["burnin"], title=title)
+    if notes:
+        table += "\nNotes:\n" + "".join(f"- {n}\n" for n in notes)
+    if want_plots:
+        files.update(write_plots(scored, out, len(gts)))
+    table_path = out / f"eval_{protocol}.md"
+    table_path.write_text(table, encoding="utf-8")
+    files["table"] = str(table_path)
+    files["json"] = str(out / f"eval_{protocol}.json")
+    return {
+        "protocol": protocol,
+        "sequences": list(gts),
+        "repeats": repeats,
+        "settings": settings,
+        "caption": title,
+        "environment": env,
+        "notes": notes,
+        "summary": scored["summary"],
+        "results": scored["results"],
+        "files": files,
+    }
+
+
 def run_eval(
     dataset: str | os.PathLike[str],
     out: str | os.PathLike[str],
@@ -349,24 +411,18 @@ def run_eval(
             raise ValueError("no tracker left to run")
         box_root = out_p / ("boxes" if protocol == "ope" else "boxes_vot")
         files["boxes"] = str(box_root)
-
-        def save(run: RunOutcome) -> None:
-            boxes = run_boxes(run, missing) if protocol == "ope" else run.boxes
-            write_run_boxes(box_root, run, boxes)
-            if run.error is not None:
-                say(f"{run.tracker} on {run.sequence} (seed {run.seed}) failed: {run.error}")
-
         tasks = make_tasks(paths, tracker_names, seeds, protocol, skip, burnin)
         if executor is None:
             executor = (
                 SerialExecutor(cv_threads) if jobs == 1 else ProcessExecutor(jobs, cv_threads)
             )
-        runs = run_tasks(tasks, executor, save, show_progress)
+        runs = run_tasks(
+            tasks, executor, _box_writer(box_root, protocol, missing, say), show_progress
+        )
         timed = True
         n_repeats = repeats
     wall = time.perf_counter() - t_start
 
-    env = environment()
     settings = {
         "jobs": jobs,
         "missing": missing,
@@ -378,42 +434,19 @@ def run_eval(
         "precision_thresholds": [float(t) for t in PRECISION_THRESHOLDS],
         "std": "population (ddof=0) over repeats",
     }
-    title = caption(env, {**settings, "missing": missing if protocol == "ope" else None})
-    if protocol == "ope":
-        scored = score_ope(runs, gts, missing=missing, reference=REFERENCE)
-        table = format_ope_table(
-            scored, n_repeats, timed, title=title, missing=missing, reference=REFERENCE
-        )
-    else:
-        scored = score_vot(runs, reference=REFERENCE)
-        table = format_vot_table(scored, n_repeats, skip, burnin, title=title)
-    if notes:
-        table += "\nNotes:\n" + "".join(f"- {n}\n" for n in notes)
-    if want_plots:
-        files.update(write_plots(scored, out_p, len(gts)))
-
-    table_path = out_p / f"eval_{protocol}.md"
-    json_path = out_p / f"eval_{protocol}.json"
-    table_path.write_text(table, encoding="utf-8")
-    files["table"] = str(table_path)
-    files["json"] = str(json_path)
-    doc: dict[str, Any] = {
-        "protocol": protocol,
-        "dataset": str(dataset_p.resolve()),
-        "sequences": list(gts),
-        "trackers": tracker_names,
-        "box_folders": {t: safe_name(t) for t in tracker_names},
-        "repeats": n_repeats,
-        "seeds": list(seeds) if results is None else None,
-        "source": "run" if results is None else f"results:{Path(results).resolve()}",
-        "settings": settings,
-        "caption": title,
-        "environment": env,
-        "wall_time": wall,
-        "notes": notes,
-        "summary": scored["summary"],
-        "results": scored["results"],
-        "files": files,
-    }
-    json_path.write_text(json.dumps(json_safe(doc), indent=1, allow_nan=False), encoding="utf-8")
+    source = "run" if results is None else f"results:{Path(results).resolve()}"
+    doc = _score_and_write(
+        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots, files
+    )
+    doc.update(
+        dataset=str(dataset_p.resolve()),
+        trackers=tracker_names,
+        box_folders={t: safe_name(t) for t in tracker_names},
+        seeds=settings["seeds"],
+        source=source,
+        wall_time=wall,
+    )
+    Path(files["json"]).write_text(
+        json.dumps(json_safe(doc), indent=1, allow_nan=False), encoding="utf-8"
+    )
     return doc
