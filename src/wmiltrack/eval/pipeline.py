@@ -31,7 +31,7 @@ Speed
 -----
 Update-only frames per second on frames decoded before timing (``tracker.update`` alone is
 inside the clock) and the time of ``init``; OpenCV runs with one thread per tracker
-(``--cv-threads``, default 1), as wmiltrack does.  Sequences run in parallel processes with
+(``--cv-threads``, default 1), as wmiltrack does.  Tasks run in parallel processes with
 ``-j N``; on a machine with few cores the processes compete for them (and for memory
 bandwidth), so FPS measured with ``-j`` > 1 is lower and noisier than with ``-j 1``, which
 gives the most honest speed figures.
