@@ -1,114 +1,52 @@
-"""Frames per second of every wmiltrack variant and OpenCV tracker on the same frames.
+"""Frames per second, with mean IoU beside it, of every wmiltrack variant and OpenCV tracker.
 
 Usage::
 
     python benchmarks/fps_compare.py                 # 3 frame sizes x 3 box sizes, ~2-4 min
     python benchmarks/fps_compare.py --quick         # 2 x 2, fewer frames, < 1 min
-    python benchmarks/fps_compare.py --cv-python PATH/TO/contrib-venv/bin/python
+    PATH/TO/contrib-venv/bin/python benchmarks/fps_compare.py   # all 7 OpenCV trackers
 
 For each frame size (320x240, 640x480, 1280x720) and target size (32, 64, 128 px) a synthetic
 sequence is generated (``wmiltrack.data.synthetic.make_sequence``) and decoded into memory; then
 every tracker runs over the same frames ``--repeats`` times (trackers interleaved within each
-round), timing ``update`` alone.  The table gives the median update-only FPS over the runs,
-and a second table divides it by OpenCV's TrackerMIL's on the same frames.  Trackers the
-installed ``cv2`` lacks are skipped with a note.
+round).  Every tracker, TrackerMIL (the divisor of the ratios) included, runs in this process
+with this ``cv2``, through the same code (:func:`wmiltrack.eval.runner.run_sequence`): the
+clock is read around each ``update`` only (after ``init``), and the garbage collector is
+handled the same way for every tracker.  OpenCV's thread pool is set to ``--cv-threads``
+(default 1, as wmiltrack runs on one core).
 
-``--cv-python PY`` times the OpenCV trackers in another interpreter (for instance a venv with
-``opencv-contrib-python-headless``, which has KCF, CSRT, MOSSE, MedianFlow, TLD and Boosting);
-the frames are handed over in a temporary ``.npy`` file and that interpreter only needs
-numpy and cv2.  The wmiltrack variants are timed in this process either way, one after the
-other on the same machine, so the ratios compare like with like.
+Each cell gives the median update-only FPS over the runs and, in brackets, the tracker's mean
+IoU with the ground truth on those frames (frames without a box hold the last box, as in
+``wmiltrack eval``), so a tracker that loses the target and then returns early does not just
+look fast.  A second table divides the FPS by TrackerMIL's on the same frames.  Trackers the
+installed ``cv2`` lacks are skipped with a note (run the script with the Python of a venv that
+has ``opencv-contrib-python-headless`` and wmiltrack installed to get all seven).
 """
 
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import math
 import os
 import platform
 import statistics
-import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
-OPENCV = ("MIL", "KCF", "CSRT", "MOSSE", "MedianFlow", "TLD", "Boosting")
+try:
+    import wmiltrack  # noqa: F401
+except ImportError:  # a checkout that was not installed
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from wmiltrack.eval.peers import OPENCV_TRACKERS, available_opencv_trackers, installed_opencv
+
 VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
-Frame = npt.NDArray[np.uint8]
-
-
-# --------------------------------------------------------------------- OpenCV (numpy + cv2 only)
-def _cv_factory(name: str) -> Any:
-    import cv2
-
-    for mod in (cv2, getattr(cv2, "legacy", None)):
-        f = getattr(mod, f"Tracker{name}_create", None) if mod is not None else None
-        if f is not None:
-            return f
-    return None
-
-
-def time_opencv(name: str, frames: Sequence[Frame], box: Sequence[float]) -> float:
-    """Update-only FPS of OpenCV's tracker ``name`` (NaN if it is not in this cv2)."""
-    import cv2
-
-    create = _cv_factory(name)
-    if create is None:
-        return math.nan
-    cv2.setRNGSeed(0)
-    tracker = create()
-    tracker.init(frames[0], tuple(round(v) for v in box))
-    total = 0.0
-    gc.collect()
-    gc.disable()
-    try:
-        for frame in frames[1:]:
-            t0 = time.perf_counter()
-            tracker.update(frame)
-            total += time.perf_counter() - t0
-    finally:
-        gc.enable()
-    return (len(frames) - 1) / total if total > 0 else math.nan
-
-
-def _worker(path: str, names: str, box: str) -> int:
-    frames = list(np.load(path))
-    b = [float(v) for v in box.split(",")]
-    out = {n: time_opencv(n, frames, b) for n in names.split(",") if n}
-    print(json.dumps({k: (None if math.isnan(v) else v) for k, v in out.items()}))
-    return 0
-
-
-def _cv_available_here() -> list[str]:
-    try:
-        return [n for n in OPENCV if _cv_factory(n) is not None]
-    except ImportError:
-        return []
-
-
-def _cv_available_in(python: str) -> list[str]:
-    code = (
-        f"import cv2;print(','.join(n for n in {OPENCV!r} if any(getattr(m,'Tracker'+n+'_create',"
-        "None) for m in (cv2,getattr(cv2,'legacy',None)) if m is not None)))"
-    )
-    res = subprocess.run([python, "-c", code], capture_output=True, text=True, check=True)
-    return [n for n in res.stdout.strip().split(",") if n]
-
-
-# --------------------------------------------------------------------- main
-def _time_variant(name: str, frames: Sequence[Frame], box: Sequence[float]) -> float:
-    from wmiltrack.eval.runner import run_sequence
-
-    run = run_sequence(name, frames, box, seed=0, raise_errors=True)
-    return run.fps
+REFERENCE = "opencv:MIL"
 
 
 def _fmt(v: float, spec: str = ".0f") -> str:
@@ -132,28 +70,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument(
         "--trackers",
         default=None,
-        help="comma-separated subset (default: all variants and OpenCV trackers)",
+        help="comma-separated subset (default: all variants and OpenCV trackers); "
+        "opencv:MIL is always added, being the reference of the ratios",
     )
     ap.add_argument(
-        "--cv-python",
-        default=None,
-        help="time the OpenCV trackers with this Python (e.g. a contrib venv)",
+        "--cv-threads", type=int, default=1, help="cv2.setNumThreads for OpenCV (default 1)"
     )
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
-    ap.add_argument("--worker", nargs=3, metavar=("NPY", "NAMES", "BOX"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
-    if args.worker:
-        return _worker(*args.worker)
 
-    try:
-        import wmiltrack  # noqa: F401
-    except ImportError:  # a checkout that was not installed
-        sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
     import cv2
 
     from wmiltrack.data.synthetic import make_sequence
-    from wmiltrack.eval.runner import cpu_model
+    from wmiltrack.eval.metrics import ope_metrics
+    from wmiltrack.eval.report import cpu_model
+    from wmiltrack.eval.runner import run_sequence, set_cv_threads
+    from wmiltrack.eval.scoring import scored_boxes
 
+    set_cv_threads(args.cv_threads)
     n_frames = args.frames or (30 if args.quick else 60)
     repeats = args.repeats or (2 if args.quick else 3)
     sizes_txt = args.sizes or ("320x240,640x480" if args.quick else "320x240,640x480,1280x720")
@@ -161,40 +95,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     sizes = [tuple(int(v) for v in s.lower().split("x")) for s in sizes_txt.split(",")]
     box_sizes = [int(b) for b in boxes_txt.split(",")]
 
-    cv_names = _cv_available_in(args.cv_python) if args.cv_python else _cv_available_here()
-    where = f"{args.cv_python}" if args.cv_python else "this Python"
-    for n in OPENCV:
+    cv_names = available_opencv_trackers()
+    for n in OPENCV_TRACKERS:
         if n not in cv_names:
-            print(f"note: opencv:{n} skipped (not in the cv2 of {where})", file=sys.stderr)
+            print(f"note: opencv:{n} skipped (not in this cv2)", file=sys.stderr)
     trackers = list(VARIANTS) + [f"opencv:{n}" for n in cv_names]
     if args.trackers:
         wanted = [t.strip() for t in args.trackers.split(",") if t.strip()]
-        trackers = [t for t in trackers if t in wanted]
-        if "opencv:MIL" in [f"opencv:{n}" for n in cv_names] and "opencv:MIL" not in trackers:
-            trackers.append("opencv:MIL")  # the reference of the ratios
-    cv_trackers = [t.split(":", 1)[1] for t in trackers if t.startswith("opencv:")]
-    wm_trackers = [t for t in trackers if not t.startswith("opencv:")]
+        trackers = [t for t in trackers if t in wanted or t == REFERENCE]
 
-    opencv_ver = cv2.__version__
-    if args.cv_python:
-        opencv_ver += (
-            " (OpenCV trackers: "
-            + subprocess.run(
-                [args.cv_python, "-c", "import cv2;print(cv2.__version__)"],
-                capture_output=True,
-                text=True,
-                check=True,
-            ).stdout.strip()
-            + ", contrib)"
-        )
+    dist, ver = installed_opencv()
     print(
         f"# {cpu_model()}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy "
-        f"{np.__version__}, OpenCV {opencv_ver}; {n_frames} frames per run, median of "
-        f"{repeats} runs, update-only FPS"
+        f"{np.__version__}, OpenCV {cv2.__version__} ({dist} {ver}), OpenCV threads "
+        f"{cv2.getNumThreads()}; {n_frames} frames per run, median of {repeats} runs, "
+        "update-only FPS; every tracker timed in this process"
     )
 
     combos = [(w, h, b) for (w, h) in sizes for b in box_sizes]
     fps: dict[str, dict[str, float]] = {t: {} for t in trackers}
+    ious: dict[str, dict[str, float]] = {t: {} for t in trackers}
     runs: dict[str, dict[str, list[float]]] = {t: {} for t in trackers}
     t_start = time.perf_counter()
     for w, h, b in combos:
@@ -204,44 +124,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         frames = seq.load()
         assert seq.groundtruth is not None
-        box = [float(v) for v in seq.groundtruth[0]]
+        gt = np.asarray(seq.groundtruth, dtype=np.float64)
         per: dict[str, list[float]] = {t: [] for t in trackers}
-        tmp: str | None = None
-        if args.cv_python and cv_trackers:
-            fd, tmp = tempfile.mkstemp(suffix=".npy")
-            os.close(fd)
-            np.save(tmp, np.stack(frames))
-        try:
-            for _ in range(repeats):
-                for t in wm_trackers:
-                    per[t].append(_time_variant(t, frames, box))
-                if not cv_trackers:
-                    continue
-                if tmp is not None:
-                    assert args.cv_python is not None
-                    res = subprocess.run(
-                        [
-                            args.cv_python,
-                            __file__,
-                            "--worker",
-                            tmp,
-                            ",".join(cv_trackers),
-                            ",".join(repr(v) for v in box),
-                        ],
-                        capture_output=True,
-                        text=True,
-                        check=True,
-                    )
-                    got = json.loads(res.stdout.strip().splitlines()[-1])
-                    for n in cv_trackers:
-                        v = got.get(n)
-                        per[f"opencv:{n}"].append(math.nan if v is None else float(v))
-                else:
-                    for n in cv_trackers:
-                        per[f"opencv:{n}"].append(time_opencv(n, frames, box))
-        finally:
-            if tmp is not None:
-                os.unlink(tmp)
+        for r in range(repeats):
+            for t in trackers:
+                run = run_sequence(t, frames, gt[0], seed=0, raise_errors=True)
+                per[t].append(run.fps)
+                if r == 0:  # same seed every round: the rounds repeat the timing only
+                    boxes = scored_boxes(run.boxes, run.oks, missing="hold")
+                    ious[t][key] = ope_metrics(boxes[1:], gt[1:]).mean_iou
         for t in trackers:
             vals = [v for v in per[t] if not math.isnan(v)]
             fps[t][key] = statistics.median(vals) if vals else math.nan
@@ -251,21 +142,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     keys = [f"{w}x{h}/{b}" for w, h, b in combos]
     head = "| Tracker | " + " | ".join(keys) + " |"
     rule = "|---|" + "---:|" * len(keys)
-    print("\nUpdate-only FPS (median of runs), by frame size / box size:\n")
+    print("\nUpdate-only FPS (median of runs) and, in brackets, mean IoU on the same frames,")
+    print("by frame size / box size:\n")
     print(head)
     print(rule)
     for t in trackers:
-        print(f"| {t} | " + " | ".join(_fmt(fps[t][k]) for k in keys) + " |")
-    ref = "opencv:MIL"
-    if ref in fps:
-        print("\nRatio to OpenCV TrackerMIL on the same frames:\n")
+        cells = [f"{_fmt(fps[t][k])} ({_fmt(ious[t][k], '.2f')})" for k in keys]
+        print(f"| {t} | " + " | ".join(cells) + " |")
+    if REFERENCE in fps:
+        print("\nRatio to OpenCV TrackerMIL on the same frames, same process, same run:\n")
         print(head)
         print(rule)
         for t in trackers:
-            ratios = [fps[t][k] / fps[ref][k] if fps[ref][k] > 0 else math.nan for k in keys]
-            print(f"| {t} | " + " | ".join(_fmt(r, ".1f") for r in ratios) + " |")
+            ref = fps[REFERENCE]
+            ratios = [fps[t][k] / ref[k] if ref[k] > 0 else math.nan for k in keys]
+            print(f"| {t} | " + " | ".join(_fmt(x, ".1f") for x in ratios) + " |")
     else:
-        print("\n(no ratios: opencv:MIL is not available)")
+        print(f"\n(no ratios: {REFERENCE} is not available)")
     print(f"\n(wall time {time.perf_counter() - t_start:.0f} s)")
     if args.json is not None:
         doc = {
@@ -273,10 +166,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             "cores": os.cpu_count(),
             "python": platform.python_version(),
             "numpy": np.__version__,
-            "opencv": opencv_ver,
+            "opencv": f"{cv2.__version__} ({dist} {ver})",
+            "opencv_threads": cv2.getNumThreads(),
             "frames": n_frames,
             "repeats": repeats,
             "fps_median": fps,
+            "mean_iou": ious,
             "fps_runs": runs,
         }
         args.json.parent.mkdir(parents=True, exist_ok=True)

@@ -134,20 +134,59 @@ def test_load_otb_basic(tmp_path: Path) -> None:
     assert seq.valid.all()
 
 
-def test_short_groundtruth_cuts_sequence(tmp_path: Path) -> None:
-    # like Football1: more images than boxes -> the annotated prefix only
-    seq = load_otb_sequence(make_otb(tmp_path, n_images=8, gt_lines=["1,1,5,5"] * 5))
-    assert len(seq) == 5
-    assert _frame_id(seq.frame(4)) == 4
+def test_more_images_than_boxes_is_refused_unless_the_range_is_known(tmp_path: Path) -> None:
+    # an unknown sequence with 8 images and 5 lines: nothing says which 5 are annotated
+    with pytest.raises(ValueError, match="8 images but 5 ground-truth lines.*start.txt"):
+        load_otb_sequence(make_otb(tmp_path, n_images=8, gt_lines=["1,1,5,5"] * 5))
+    # Football1 (81 images, 74 lines): OTB-100 annotates images 1..74
+    seq = load_otb_sequence(
+        make_otb(tmp_path, "Football1", n_images=81, gt_lines=[f"{k},1,5,5" for k in range(74)])
+    )
+    assert len(seq) == 74 and seq.paths is not None and seq.paths[-1].name == "0074.png"
+    assert seq.groundtruth is not None and seq.groundtruth[-1, 0] == 73
 
 
-def test_more_boxes_than_images_is_an_error(tmp_path: Path) -> None:
-    with pytest.raises(ValueError, match="7 boxes"):
-        load_otb_sequence(make_otb(tmp_path, n_images=3, gt_lines=["1,1,5,5"] * 7))
+def test_known_start_frame_lines_up_by_image_number(tmp_path: Path) -> None:
+    # David as OTB-100 ships it: images 0001..0770, 471 lines for images 300..770
+    lines = [f"{k},2,5,5" for k in range(471)]
+    seq = load_otb_sequence(make_otb(tmp_path, "David", n_images=770, gt_lines=lines))
+    assert len(seq) == 471 and seq.paths is not None
+    assert seq.paths[0].name == "0300.png" and seq.paths[-1].name == "0770.png"
+    assert _frame_id(seq.frame(0)) == 299 % 25  # _img(k) encodes k mod 25 in its mean
+    # Tiger1: 354 lines for images 1..354, OTB-100 starts at image 6 -> lines 6..354
+    tiger = make_otb(tmp_path, "Tiger1", n_images=354, gt_lines=[f"{k},2,5,5" for k in range(354)])
+    seq = load_otb_sequence(tiger)
+    assert len(seq) == 349 and seq.paths is not None and seq.paths[0].name == "0006.png"
+    assert seq.groundtruth is not None and seq.groundtruth[0, 0] == 5
+
+
+def test_images_missing_from_the_annotated_range_are_refused(tmp_path: Path) -> None:
+    path = make_otb(tmp_path, n_images=6)
+    (path / "img" / "0003.png").unlink()
+    with pytest.raises(ValueError, match=r"image\(s\) 3 are missing"):
+        load_otb_sequence(path)
+
+
+def test_two_target_sequences_load_as_name_dot_k(tmp_path: Path) -> None:
+    seq_dir = make_otb(tmp_path, "Jogging", n_images=4)
+    (seq_dir / "groundtruth_rect.txt").unlink()
+    (seq_dir / "groundtruth_rect.1.txt").write_text("1,1,5,5\n" * 4)
+    (seq_dir / "groundtruth_rect.2.txt").write_text("9,9,6,6\n" * 4)
+    make_otb(tmp_path, "Coke", n_images=3)
+    assert [p.name for p in list_otb_sequences(tmp_path)] == ["Coke", "Jogging.1", "Jogging.2"]
+    one = load_otb_sequence(tmp_path / "Jogging.1")
+    two = load_otb_sequence(tmp_path / "Jogging.2")
+    assert (one.name, two.name) == ("Jogging.1", "Jogging.2")
+    assert one.init_box == (1.0, 1.0, 5.0, 5.0) and two.init_box == (9.0, 9.0, 6.0, 6.0)
+    assert [s.name for s in load_dataset(tmp_path, ["Jogging.2"])] == ["Jogging.2"]
+    with pytest.raises(ValueError, match="2 targets: load one of Jogging.1, Jogging.2"):
+        load_otb_sequence(seq_dir)
+    with pytest.raises(FileNotFoundError, match="groundtruth_rect.3.txt"):
+        load_otb_sequence(tmp_path / "Jogging.3")
 
 
 def test_start_file_by_image_number(tmp_path: Path) -> None:
-    # images 0300..0307; start.txt names image 302 -> first GT line belongs to 0302
+    # images 0300..0307; start.txt names image 302 -> the 4 GT lines belong to 0302..0305
     path = make_otb(tmp_path, n_images=8, first_number=300, start="302\n", gt_lines=["1,2,3,4"] * 4)
     seq = load_otb_sequence(path)
     assert len(seq) == 4

@@ -1,4 +1,4 @@
-"""Tests of ``wmiltrack eval`` (src/wmiltrack/eval_cli.py) and the plots."""
+"""Tests of ``wmiltrack eval`` (wmiltrack.eval.pipeline) and the plots."""
 
 from __future__ import annotations
 
@@ -13,8 +13,10 @@ import pytest
 
 from wmiltrack.cli import main
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.eval.pipeline import RunOutcome, safe_name, score_ope, score_vot
 from wmiltrack.eval.plots import INSTALL_HINT, ranked, require_matplotlib
+from wmiltrack.eval.report import safe_name
+from wmiltrack.eval.runner import RunOutcome
+from wmiltrack.eval.scoring import score_ope, score_vot
 
 N = 24
 
@@ -193,9 +195,10 @@ def test_vot_protocol_and_repeats(
 def test_repeat_statistics_by_hand() -> None:
     gt = np.tile([10.0, 10.0, 20.0, 20.0], (6, 1))
     far = np.tile([300.0, 300.0, 20.0, 20.0], (6, 1))
+    ok = np.ones(6, dtype=bool)
     runs = [
-        RunOutcome("t", "s", 0, 0, gt.copy(), fps=100.0, n_updates=5),
-        RunOutcome("t", "s", 1, 1, far, fps=50.0, n_updates=5),
+        RunOutcome("t", "s", 0, 0, gt.copy(), ok, fps=100.0, n_updates=5),
+        RunOutcome("t", "s", 1, 1, far, ok, fps=50.0, n_updates=5),
     ]
     scored = score_ope(runs, {"s": gt})
     m = scored["results"]["t"]["s"]["mean"]
@@ -212,7 +215,7 @@ def test_repeat_statistics_by_hand() -> None:
         "n_frames": 100,
     }
     vruns = [
-        RunOutcome("t", "s", r, r, gt, vot={**vot, "failures": f}) for r, f in ((0, 2), (1, 4))
+        RunOutcome("t", "s", r, r, gt, ok, vot={**vot, "failures": f}) for r, f in ((0, 2), (1, 4))
     ]
     v = score_vot(vruns)["summary"]["t"]
     assert v["failures"] == 3.0 and v["failures_std"] == 1.0
@@ -279,3 +282,28 @@ def test_bad_arguments(
     assert (
         main(["eval", str(tmp_path), "--results", str(tmp_path), "--out", str(tmp_path / "o")]) == 1
     )
+
+
+def test_public_entry_points_are_unchanged(capsys: pytest.CaptureFixture[str]) -> None:
+    import importlib
+    import inspect
+
+    import wmiltrack
+
+    for name in ("Tracker", "Params", "TrackResult", "variants"):
+        assert hasattr(wmiltrack, name), name
+    for mod in ("wmiltrack.compat", "wmiltrack.integrations.got10k", "wmiltrack.vot"):
+        importlib.import_module(mod)
+    assert callable(importlib.import_module("wmiltrack.vot").main)
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    usage = capsys.readouterr().out
+    for cmd in ("track", "demo", "variants", "eval", "inspect"):
+        assert cmd in usage, cmd
+    from wmiltrack.eval.pipeline import run_eval
+
+    params = inspect.signature(run_eval).parameters
+    for p in ("trackers", "results", "protocol", "sequences", "jobs", "repeats", "seed",
+              "missing", "cv_threads"):
+        assert p in params, p
+    assert params["missing"].default == "hold" and params["cv_threads"].default == 1

@@ -1,23 +1,27 @@
-"""Tests of wmiltrack.eval.runner (running, timing, scoring and tables)."""
+"""Tests of the evaluation pipeline's stages: wmiltrack.eval.runner (running, timing, tasks,
+executors), wmiltrack.eval.scoring (conventions for frames without a box) and
+wmiltrack.eval.pipeline (box files written per task, failures reported, interruptions)."""
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
+import cv2
 import numpy as np
 import pytest
 
+import wmiltrack.eval.peers as peers
+import wmiltrack.eval.runner as runner
+from wmiltrack.cli import main
+from wmiltrack.data.boxes import read_boxes
 from wmiltrack.engine.result import TrackResult
-from wmiltrack.eval.runner import (
-    EvalRecord,
-    evaluate_sequences,
-    format_table,
-    fps_ratio,
-    run_sequence,
-    summarize,
-)
+from wmiltrack.eval.metrics import iou
+from wmiltrack.eval.pipeline import make_tasks, run_eval, run_tasks
+from wmiltrack.eval.runner import SerialExecutor, run_sequence
+from wmiltrack.eval.scoring import scored_boxes
 
 
 def _moving(n: int = 6, seed: int = 0, x0: int = 40) -> tuple[list[np.ndarray], np.ndarray]:
@@ -55,16 +59,6 @@ class Oracle:
         return TrackResult((x, y, w, h), 0.75, True)
 
 
-@dataclass
-class FakeSeq:
-    name: str
-    groundtruth: np.ndarray
-    frames: list[np.ndarray]
-
-    def load(self) -> list[np.ndarray]:
-        return self.frames
-
-
 def test_run_sequence_with_scripted_tracker() -> None:
     frames, gt = _moving(8)
     r = run_sequence(lambda: Oracle(gt), frames, gt[0])
@@ -97,202 +91,192 @@ def test_run_sequence_records_errors() -> None:
         run_sequence(lambda: Oracle(gt), frames, (1, 2, 3))
 
 
-def test_run_sequence_with_opencv_mil() -> None:
-    pytest.importorskip("cv2")
+def test_run_sequence_with_opencv_mil_follows_the_target() -> None:
     frames, gt = _moving(6)
     r = run_sequence("opencv:MIL", frames, gt[0], seed=0)
-    assert r.tracker == "opencv:MIL" and r.completed
-    assert r.boxes.shape == (6, 4)
-    assert np.isfinite(r.boxes).all()
-    assert r.fps > 0 and np.isnan(r.scores[1:]).all()
+    assert r.tracker == "opencv:MIL" and r.completed and r.n_updates == 5
+    # a textured patch on a static background moving 2 px/frame: MIL keeps it
+    assert float(iou(r.boxes, gt).min()) > 0.5
+    assert np.isnan(r.scores[1:]).all()  # OpenCV gives no confidence
 
 
-def _records(repeats: int = 1) -> list[EvalRecord]:
-    f1, g1 = _moving(6, seed=1)
-    f2, g2 = _moving(9, seed=2, x0=20)
-    g2[4] = np.nan  # one frame without ground truth
-    seqs = [FakeSeq("A", g1, f1), FakeSeq("B", g2, f2)]
-
-    class Follow(Oracle):
-        """Plays back the ground truth of whichever sequence it was started on."""
-
-        name = "follow"
-
-        def __init__(self) -> None:
-            super().__init__(g1)
-
-        def init(self, frame: np.ndarray, box: tuple[float, float, float, float]) -> None:
-            super().init(frame, box)
-            self.boxes = g1 if box == tuple(g1[0]) else np.nan_to_num(g2, nan=0.0)
-
-    class Lost(Oracle):
-        """Always far away from the target."""
-
-        name = "lost"
-
-        def __init__(self) -> None:
-            super().__init__(np.tile(np.array([300.0, 300.0, 5.0, 5.0]), (10, 1)))
-
-    return evaluate_sequences([Follow, Lost], seqs, repeats=repeats, progress=False)
+# ----------------------------------------------------------------------------- scoring
+def test_scored_boxes_conventions() -> None:
+    b = np.array([[1, 1, 5, 5], [2, 2, 5, 5], [np.nan] * 4, [4, 4, 5, 5], [5, 5, 5, 5], [6, 6, 5, 5]])
+    ok = np.array([True, True, False, False, True, True])
+    hold = scored_boxes(b, ok, missing="hold")
+    np.testing.assert_array_equal(hold[2], [2, 2, 5, 5])  # no box -> the last box
+    np.testing.assert_array_equal(hold[3], [4, 4, 5, 5])  # a box given with ok False is kept
+    miss = scored_boxes(b, ok, missing="miss")
+    assert np.isnan(miss[2:4]).all() and np.isfinite(miss[[0, 1, 4, 5]]).all()
+    crashed = scored_boxes(b, ok, frames_run=4, missing="hold")  # raised at frame 4
+    assert np.isnan(crashed[4:]).all() and np.isfinite(crashed[:4]).all()
+    with pytest.raises(ValueError, match="missing"):
+        scored_boxes(b, ok, missing="drop")  # type: ignore[arg-type]
 
 
-def test_evaluate_sequences_scores_and_speed() -> None:
-    recs = _records()
-    assert [(r.tracker, r.sequence) for r in recs] == [
-        ("follow", "A"),
-        ("lost", "A"),
-        ("follow", "B"),
-        ("lost", "B"),
-    ]
-    follow_a, lost_a, follow_b, _ = recs
-    assert follow_a.metrics.auc == pytest.approx(20 / 21)
-    # frame 0 holds the initialisation box, scored as in OTB: 1 good frame of 6
-    assert lost_a.metrics.auc == pytest.approx(20 / 21 / 6)
-    assert lost_a.metrics.success_50 == pytest.approx(1 / 6)
-    assert follow_b.metrics.n_missing == 1 and follow_b.metrics.n_scored == 8
-    assert follow_b.metrics.success_50 == 1.0
-    assert all(r.fps > 0 and len(r.fps_runs) == 1 for r in recs)
-    assert all(r.deterministic is None for r in recs)
-    json.dumps([r.to_dict() for r in recs], allow_nan=False)
+# ----------------------------------------------------------------------------- pipeline
+H, W = 72, 96
 
 
-def test_repeats_take_median_fps_and_check_determinism() -> None:
-    recs = _records(repeats=3)
-    for r in recs:
-        assert len(r.fps_runs) == 3
-        assert r.fps == pytest.approx(float(np.median(r.fps_runs)))
-        assert r.deterministic is True
-
-
-def test_fps_ratio_and_table() -> None:
-    recs = _records()
-    ratios = fps_ratio(recs, reference="lost")
-    for r in recs:
-        ref = next(x for x in recs if x.tracker == "lost" and x.sequence == r.sequence)
-        assert ratios[(r.tracker, r.sequence)] == pytest.approx(r.fps / ref.fps)
-    assert ratios[("lost", "A")] == pytest.approx(1.0)
-
-    summary = summarize(recs, reference="lost")
-    assert summary["follow"]["auc"] == pytest.approx(20 / 21)
-    assert summary["lost"]["fps_ratio"] == pytest.approx(1.0)
-    pooled = (5 + 8) / (5 / recs[0].fps + 8 / recs[2].fps)
-    assert summary["follow"]["fps"] == pytest.approx(pooled)
-
-    md = format_table(recs, reference="lost")
-    lines = md.splitlines()
-    assert lines[0].startswith("| Sequence | Tracker |")
-    mean_rows = [ln for ln in lines if ln.startswith("| **mean (2 seq)**")]
-    assert len(mean_rows) == 2
-    assert "| follow |" in mean_rows[0] and "0.952" in mean_rows[0]
-    assert "8/9" in md  # the frame without ground truth shows in the Frames column
-    assert "FPS ratio" in md
-
-    plain = format_table(recs, reference="lost", style="plain")
-    assert sum(ln.startswith("mean (2 seq)") for ln in plain.splitlines()) == 2
-    # without the reference in the run, the ratio column is empty, not invented
-    no_ref = format_table(recs, reference="opencv:MIL")
-    assert "nan" not in no_ref.lower()
-    with pytest.raises(ValueError):
-        format_table(recs, style="html")  # type: ignore[arg-type]
-
-
-def test_table_flags_errors() -> None:
-    frames, gt = _moving(6)
-
-    class Crash(Oracle):
-        name = "crash"
-
-        def __init__(self) -> None:
-            super().__init__(gt, raise_at=2)
-
-    with pytest.warns(RuntimeWarning):
-        recs = evaluate_sequences([Crash], [FakeSeq("S", gt, frames)], progress=False)
-    assert recs[0].error == "RuntimeError: boom"
-    table = format_table(recs)
-    assert "crash (!)" in table
-    assert "crash on S, frame 2: RuntimeError: boom" in table
-
-
-def test_bad_arguments() -> None:
-    frames, gt = _moving(4)
-    with pytest.raises(ValueError):
-        evaluate_sequences([], [FakeSeq("S", gt, frames)], progress=False)
-    with pytest.raises(ValueError):
-        evaluate_sequences(["opencv:MIL"], [FakeSeq("S", gt, frames)], repeats=0, progress=False)
-
-
-def _load_compare() -> object:
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "compare.py"
-    spec = importlib.util.spec_from_file_location("compare_benchmark", path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_compare_script_on_a_tiny_otb_folder(
-    tmp_path: object, capsys: pytest.CaptureFixture[str]
-) -> None:
-    cv2 = pytest.importorskip("cv2")
-    from pathlib import Path
-
-    root = Path(str(tmp_path)) / "otb"
-    for name, x0 in (("Alpha", 40), ("Beta", 20)):
-        frames, gt = _moving(5, seed=x0, x0=x0)
-        (root / name / "img").mkdir(parents=True)
-        for i, f in enumerate(frames, start=1):
-            cv2.imwrite(str(root / name / "img" / f"{i:04d}.png"), f)
-        lines = [",".join(str(int(v)) for v in row) for row in gt]
-        (root / name / "groundtruth_rect.txt").write_text("\n".join(lines) + "\n")
-    out = Path(str(tmp_path)) / "res" / "out.json"
-    compare = _load_compare()
-    rc = compare.main(  # type: ignore[attr-defined]
-        [
-            str(root),
-            "--trackers",
-            "opencv:MIL",
-            "--repeats",
-            "2",
-            "--no-progress",
-            "--json",
-            str(out),
-        ]
+def _write_otb(root: Path, name: str, n: int = 8, x0: int = 30, width: int = W) -> np.ndarray:
+    frames, gt = _moving(n, seed=len(name), x0=x0)
+    d = root / name / "img"
+    d.mkdir(parents=True)
+    for i, f in enumerate(frames):
+        assert cv2.imwrite(str(d / f"{i + 1:04d}.png"), np.ascontiguousarray(f[:H, :width]))
+    (root / name / "groundtruth_rect.txt").write_text(
+        "\n".join(",".join(str(float(v)) for v in row) for row in gt) + "\n"
     )
-    assert rc == 0
-    text = capsys.readouterr().out
-    assert "| Alpha | opencv:MIL | 5 |" in text and "| Beta | opencv:MIL | 5 |" in text
-    assert "| No box |" in text
-    assert "**mean (2 seq)**" in text
-    data = json.loads(out.read_text())
-    assert data["args"]["sequences"] == ["Alpha", "Beta"]
-    assert len(data["records"]) == 2 and len(data["records"][0]["fps_runs"]) == 2
-    assert data["summary"]["opencv:MIL"]["fps_ratio"] == pytest.approx(1.0)
-    # unknown sequence and unknown tracker: clear message, exit status 2
-    assert compare.main([str(root), "--trackers", "opencv:MIL", "--sequences", "Nope"]) == 2  # type: ignore[attr-defined]
-    assert compare.main([str(root), "--trackers", "opencv:Nope"]) == 2  # type: ignore[attr-defined]
-    err = capsys.readouterr().err
-    assert "available: Alpha, Beta" in err and "valid names" in err
+    return gt
 
 
-def test_missing_policy_reaches_the_metrics() -> None:
-    frames, gt = _moving(5)
-    traj = gt.copy()
-    traj[2:] = np.nan  # gives no box from frame 2 on
+class Scripted:
+    """Plays back a sequence's ground truth; ``lost`` frames get ``lost_box`` and ok False.
 
-    class Quits(Oracle):
-        name = "quits"
+    ``fail_width``: raise RuntimeError on frames of that width; ``interrupt_width``: raise
+    KeyboardInterrupt on frames of that width (an interrupted run)."""
 
-        def __init__(self) -> None:
-            super().__init__(traj)
+    def __init__(self, lost: tuple[int, ...] = (), lost_box: str = "nan", fail_width: int = 0,
+                 interrupt_width: int = 0) -> None:
+        self.lost, self.lost_box = lost, lost_box
+        self.fail_width, self.interrupt_width = fail_width, interrupt_width
+        self.i, self.box = 0, (0.0, 0.0, 1.0, 1.0)
 
-    seq = FakeSeq("S", gt, frames)
-    miss = evaluate_sequences([Quits], [seq], progress=False)[0]
-    hold = evaluate_sequences([Quits], [seq], progress=False, missing="hold")[0]
-    assert miss.metrics.n_no_prediction == hold.metrics.n_no_prediction == 3
-    assert miss.metrics.success_50 == pytest.approx(2 / 5)
-    assert hold.metrics.success_50 > miss.metrics.success_50
-    row = next(ln for ln in format_table([miss]).splitlines() if ln.startswith("| S |"))
-    assert row.split("|")[8].strip() == "3"  # the No box column
+    def init(self, frame: np.ndarray, box: tuple[float, float, float, float]) -> None:
+        self.i, self.box = 0, box
+
+    def update(self, frame: np.ndarray) -> TrackResult:
+        self.i += 1
+        if frame.shape[1] == self.fail_width and self.i == 3:
+            raise RuntimeError("boom")
+        if frame.shape[1] == self.interrupt_width:
+            raise KeyboardInterrupt
+        x, y, w, h = self.box
+        true = (x + 2 * self.i, y + self.i, w, h)  # _moving's motion
+        if self.i in self.lost:
+            box = (math.nan,) * 4 if self.lost_box == "nan" else (300.0, 300.0, w, h)
+            return TrackResult(box, 0.1, False)  # type: ignore[arg-type]
+        return TrackResult(true, 0.9, True)
+
+
+@pytest.fixture
+def fakes(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
+    """Make ``fake:<name>`` tracker specs available to the pipeline (in this process)."""
+    table: dict[str, Any] = {}
+    real = peers.make_tracker
+
+    def make(spec: str, seed: int = 0, **params: Any) -> Any:
+        return table[spec]() if spec in table else real(spec, seed=seed, **params)
+
+    monkeypatch.setattr(peers, "make_tracker", make)
+    monkeypatch.setattr(runner, "make_tracker", make)
+    return table
+
+
+def test_hold_last_box_is_the_default_for_every_tracker(tmp_path: Path, fakes: dict[str, Any]) -> None:
+    gt = _write_otb(tmp_path / "data", "A")
+    # an OpenCV-like tracker: no box on frames 3-5; a wmiltrack-like one: a wrong box, ok False
+    fakes["fake:nobox"] = lambda: Scripted(lost=(3, 4, 5), lost_box="nan")
+    fakes["fake:okfalse"] = lambda: Scripted(lost=(3, 4, 5), lost_box="far")
+    doc = run_eval(tmp_path / "data", tmp_path / "hold", trackers=["fake:nobox", "fake:okfalse"],
+                   plots=False, show_progress=False)
+    held = read_boxes(tmp_path / "hold" / "boxes" / "fake_nobox" / "A.txt")
+    np.testing.assert_array_equal(held[3:6], np.tile(gt[2], (3, 1)))  # the last box, held
+    nobox = doc["results"]["fake:nobox"]["A"]["runs"][0]
+    assert nobox["n_no_prediction"] == 0 and nobox["n_lost"] == 3
+    assert nobox["mean_center_error"] == pytest.approx(float(np.mean(
+        np.hypot(*(((gt[2, :2] - gt[3:6, :2])).T)))) * 3 / 8)
+    assert doc["settings"]["missing"] == "hold" and doc["settings"]["cv_threads"] == 1
+    assert "hold the last box" in doc["caption"] and "OpenCV threads: 1" in doc["caption"]
+
+    # the other convention: every frame a tracker reports lost is a miss, for both trackers
+    doc = run_eval(tmp_path / "data", tmp_path / "miss", trackers=["fake:nobox", "fake:okfalse"],
+                   plots=False, show_progress=False, missing="miss")
+    for name, folder in (("fake:nobox", "fake_nobox"), ("fake:okfalse", "fake_okfalse")):
+        run = doc["results"][name]["A"]["runs"][0]
+        assert run["n_no_prediction"] == 3 and run["precision_20"] == pytest.approx(5 / 8)
+        assert run["mean_center_error"] == "inf"  # the misses count in the centre error
+        assert np.isnan(read_boxes(tmp_path / "miss" / "boxes" / folder / "A.txt")[3:6]).all()
+    table = (tmp_path / "miss" / "eval_ope.md").read_text()
+    assert "a frame a tracker reports lost is a miss" in table.splitlines()[0]
+
+
+def test_a_failing_sequence_is_reported_and_the_rest_goes_on(
+    tmp_path: Path, fakes: dict[str, Any], capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = tmp_path / "data"
+    _write_otb(data, "A")
+    _write_otb(data, "B", width=W - 8)  # the tracker fails on this one
+    _write_otb(data, "C")
+    fakes["fake:flaky"] = lambda: Scripted(fail_width=W - 8)
+    fakes["fake:ok"] = lambda: Scripted()
+    out = tmp_path / "out"
+    rc = main(["eval", str(data), "--trackers", "fake:flaky,fake:ok", "--out", str(out),
+               "--no-plots", "--no-progress", "--repeats", "2"])
+    assert rc == 1  # an error is an exit status, not silence
+    text = capsys.readouterr()
+    assert "fake:flaky on B (seed 0) failed: RuntimeError: boom (frame 3)" in text.err
+    doc = json.loads((out / "eval_ope.json").read_text())
+    assert doc["summary"]["fake:flaky"]["errors"] == 2  # both repeats on B
+    assert doc["results"]["fake:flaky"]["B"]["runs"][1]["error"] == "RuntimeError: boom (frame 3)"
+    assert doc["results"]["fake:flaky"]["A"]["runs"][0]["error"] is None
+    for seq in "ABC":
+        for suffix in ("", ".r1"):
+            assert (out / "boxes" / "fake_flaky" / f"{seq}{suffix}.txt").is_file()
+    b = read_boxes(out / "boxes" / "fake_flaky" / "B.txt")
+    assert np.isfinite(b[:3]).all() and np.isnan(b[3:]).all()  # not held after the crash
+    table = (out / "eval_ope.md").read_text()
+    assert "| B | fake:flaky (!) |" in table and "fake:flaky on B: RuntimeError: boom" in table
+
+
+def test_an_interrupted_run_keeps_the_finished_box_files(tmp_path: Path, fakes: dict[str, Any]) -> None:
+    data = tmp_path / "data"
+    _write_otb(data, "A")
+    _write_otb(data, "B")
+    _write_otb(data, "C", width=W - 8)
+    fakes["fake:stop"] = lambda: Scripted(interrupt_width=W - 8)
+    with pytest.raises(KeyboardInterrupt):
+        run_eval(data, tmp_path / "out", trackers=["fake:stop"], plots=False,
+                 show_progress=False, repeats=2)
+    written = sorted(p.name for p in (tmp_path / "out" / "boxes" / "fake_stop").iterdir())
+    assert written == ["A.r1.txt", "A.txt", "B.r1.txt", "B.txt"]
+    assert not (tmp_path / "out" / "eval_ope.json").exists()
+
+
+def test_tasks_are_tracker_sequence_seed_and_repeats_use_their_own_seed(
+    tmp_path: Path, fakes: dict[str, Any]
+) -> None:
+    data = tmp_path / "data"
+    _write_otb(data, "A")
+    _write_otb(data, "B")
+    tasks = make_tasks([data / "A", data / "B"], ["rcwmil", "fake:x"], [5, 6])
+    assert [(t.tracker, Path(t.sequence).name, t.seed, t.repeat) for t in tasks[:4]] == [
+        ("rcwmil", "A", 5, 0), ("fake:x", "A", 5, 0), ("rcwmil", "A", 6, 1), ("fake:x", "A", 6, 1)
+    ]
+    seen: list[tuple[str, str, int]] = []
+    fakes["fake:x"] = lambda: Scripted()
+    runs = run_tasks(tasks, SerialExecutor(), lambda r: seen.append((r.tracker, r.sequence, r.seed)))
+    assert len(seen) == 8 and [(r.tracker, r.sequence, r.seed) for r in runs] == seen
+    a0, a1 = (r for r in runs if r.tracker == "rcwmil" and r.sequence == "A")
+    assert (a0.seed, a1.seed) == (5, 6)
+    assert not np.array_equal(a0.boxes, a1.boxes)  # another seed draws another feature bank
+
+
+def test_serial_executor_sets_and_restores_opencv_threads(tmp_path: Path, fakes: dict[str, Any]) -> None:
+    _write_otb(tmp_path, "A", n=3)
+    seen: list[int] = []
+
+    class Probe(Scripted):
+        def update(self, frame: np.ndarray) -> TrackResult:
+            seen.append(cv2.getNumThreads())
+            return super().update(frame)
+
+    fakes["fake:probe"] = Probe
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        run_tasks(make_tasks([tmp_path / "A"], ["fake:probe"], [0]), SerialExecutor(1))
+        assert seen == [1, 1] and cv2.getNumThreads() == 2
+    finally:
+        cv2.setNumThreads(before)

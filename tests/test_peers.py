@@ -10,6 +10,7 @@ import pytest
 cv2 = pytest.importorskip("cv2")
 
 from wmiltrack.engine.result import TrackResult
+from wmiltrack.eval.metrics import iou
 from wmiltrack.eval.peers import (
     OPENCV_TRACKERS,
     OpenCVTracker,
@@ -176,9 +177,15 @@ def test_lost_box_policy() -> None:
 def test_contrib_trackers_run_when_installed(name: str) -> None:
     if name not in available_opencv_trackers():
         pytest.skip(f"{name} needs opencv-contrib-python-headless")
-    frames, _ = _frames(3)
+    frames, boxes = _frames(6)
     t = make_tracker(f"opencv:{name}")
-    t.init(frames[0], (50, 40, 24, 30))
-    for f in frames[1:]:
+    t.init(frames[0], boxes[0])
+    for f, true in zip(frames[1:], boxes[1:], strict=True):
         r = t.update(f)
-        assert isinstance(r, TrackResult)
+        if name == "MOSSE":
+            # OpenCV 5.0's MOSSE reports "not found" on every frame of this clip (also blurred,
+            # also at 1 px/frame); the wrapper then gives no box, as for every peer
+            assert not r.ok and all(math.isnan(v) for v in r.box)
+            continue
+        # a textured patch on a static background, 2 px/frame: the other peers follow it
+        assert r.ok and float(iou([r.box], [true])[0]) > 0.5, (name, r, true)

@@ -1,7 +1,9 @@
 """Tracking accuracy on real OTB sequences from ../shared/data/otb (or $WMILTRACK_OTB).
 
-Bars sit about 0.1 below what rcwmil measured here (seed 0), and well above what a box that
-never moves scores, so a regression in any stage of the tracker shows.
+Each bar applies to the median AUC over seeds 0, 1, 2 (one seed swings a sequence a lot:
+rcwmil on Pedestrian3 scores 0.672 / 0.284 / 0.689) and sits about 0.1 below the median
+measured here, and well above what a box that never moves scores, so a regression in any stage
+of the tracker shows.
 """
 
 from __future__ import annotations
@@ -15,13 +17,15 @@ import wmiltrack
 from wmiltrack.data.sequences import load_otb_sequence
 from wmiltrack.eval.metrics import ope_metrics
 
-# sequence: (bar on success AUC, AUC measured when the bar was set)
+SEEDS = (0, 1, 2)
+# sequence: (bar on the median success AUC over SEEDS, that median when the bar was set;
+# the three AUCs measured then in the comment)
 BARS = {
-    "Woman_first129": (0.55, 0.682),
-    "Football1": (0.55, 0.653),
-    "Pedestrian3": (0.55, 0.672),
-    "Crossing": (0.42, 0.529),
-    "Panda": (0.42, 0.528),
+    "Woman_first129": (0.58, 0.682),  # 0.682 0.521 0.721
+    "Football1": (0.55, 0.653),  # 0.653 0.694 0.476
+    "Pedestrian3": (0.57, 0.672),  # 0.672 0.284 0.689
+    "Crossing": (0.50, 0.606),  # 0.529 0.606 0.674
+    "Panda": (0.30, 0.402),  # 0.528 0.402 0.221
 }
 
 
@@ -30,9 +34,12 @@ def test_rcwmil_on_real_sequences(otb_root: Path, name: str) -> None:
     seq = load_otb_sequence(otb_root / name)
     frames, gt = seq.load(), seq.groundtruth
     assert gt is not None
-    boxes = wmiltrack.Tracker("rcwmil", seed=0).track(frames, seq.init_box)
-    auc = ope_metrics(boxes, gt).auc
+    aucs = [
+        ope_metrics(wmiltrack.Tracker("rcwmil", seed=s).track(frames, seq.init_box), gt).auc
+        for s in SEEDS
+    ]
+    auc = float(np.median(aucs))
     still = ope_metrics(np.repeat(gt[:1], len(gt), axis=0), gt).auc
     bar, measured = BARS[name]
-    assert auc >= bar, f"{name}: AUC {auc:.3f} < bar {bar} (measured {measured} when set)"
-    assert auc > still + 0.1, f"{name}: AUC {auc:.3f} hardly beats a box that never moves ({still:.3f})"
+    assert auc >= bar, f"{name}: median AUC {auc:.3f} {aucs} < bar {bar} (measured {measured} when set)"
+    assert auc > still + 0.1, f"{name}: median AUC {auc:.3f} hardly beats a box that never moves ({still:.3f})"

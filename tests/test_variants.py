@@ -143,19 +143,55 @@ def test_bag_model_and_selection(variant: str, expected, monkeypatch: pytest.Mon
 
 
 def test_update_rules_differ_between_mil_and_the_gaussian_family() -> None:
-    t_mil, _ = bank("mil")
-    t_ct, _ = bank("ct")
-    assert t_mil.params.classifier == "mil" and t_mil.params.guard == 1e-5
-    assert t_ct.params.classifier == "gaussian" and t_ct.params.guard == 1e-30
-    assert t_ct.params.learning_rate == 0.85 and wmiltrack.Tracker().params.learning_rate == 0.9
+    """Same data, same lambda: the Gaussian family (spec 1.1) adds the spread of the means,
+    MILTrack (spec 1.2) re-centres the new samples' variance on the updated mean."""
+    from wmiltrack.engine.classifier import GaussianPool
+
+    lam = 0.8
+    x1 = np.array([[0.0, 2.0, 4.0]])  # frame 1: mean 2, variance 8/3
+    x2 = np.array([[10.0, 10.0, 16.0]])  # frame 2: mean 12, variance 8
+    sig2 = {}
+    for variant in ("ct", "mil"):
+        pool = GaussianPool(Params.for_variant(variant, learning_rate=lam, num_features=1, num_selected=1))
+        pool.update(x1, x1)
+        pool.update(x2, x2)
+        assert pool.mu1[0] == pytest.approx(lam * 2 + (1 - lam) * 12)  # 4.0 for both
+        sig2[variant] = float(pool.sigma1[0] ** 2)
+    assert sig2["ct"] == pytest.approx(lam * 8 / 3 + (1 - lam) * 8 + lam * (1 - lam) * 10**2)
+    assert sig2["mil"] == pytest.approx(lam * 8 / 3 + (1 - lam) * np.mean((x2 - 4.0) ** 2))
+    assert sig2["ct"] - sig2["mil"] > 3  # 19.73 vs 16.53
 
 
-def test_reference_compat_flags() -> None:
-    p = Params.for_variant("wmil", instance_weights="exp_sq", gradient="code", first_update="blend")
-    t = wmiltrack.Tracker(params=p)
-    t.init(FRAME, BOX)
-    r = t.update(FRAME)
-    assert all(math.isfinite(v) for v in r.box)
+def test_reference_compat_flags_change_what_they_name(monkeypatch: pytest.MonkeyPatch) -> None:
+    # first_update="blend": the first frame is blended into N(0, 1) instead of taken directly
+    direct, _ = bank("wmil")
+    p = Params.for_variant("wmil", first_update="blend")
+    blend = wmiltrack.Tracker(params=p, seed=0)
+    blend.init(FRAME, BOX)
+    lam = p.learning_rate
+    np.testing.assert_allclose(blend._pool.mu1, (1 - lam) * direct._pool.mu1, rtol=1e-9)
+
+    # instance_weights and gradient reach the selection, and change its inputs / result
+    seen: list[tuple[np.ndarray, bool, np.ndarray, np.ndarray]] = []
+    real = tracker_mod.wmil_select
+
+    def spy(h_pos, h_neg, w, k, *, code_gradient=False):
+        seen.append((w, code_gradient, h_pos, h_neg))
+        return real(h_pos, h_neg, w, k, code_gradient=code_gradient)
+
+    monkeypatch.setattr(tracker_mod, "wmil_select", spy)
+    last = []
+    for flags in ({}, {"instance_weights": "exp_sq", "gradient": "code"}):
+        t = wmiltrack.Tracker(params=Params.for_variant("wmil", **flags), seed=0)
+        t.init(FRAME, BOX)
+        t.update(FRAME)
+        last.append(seen[-1])
+    (w_exp, code0, hp, hn), (w_sq, code1, _, _) = last
+    assert (code0, code1) == (False, True)
+    assert not np.allclose(w_exp, w_sq)  # exp(-d) vs exp(-d^2)
+    np.testing.assert_array_equal(np.argsort(-w_exp, kind="stable"), np.argsort(-w_sq, kind="stable"))
+    k = 15
+    assert not np.array_equal(real(hp, hn, w_exp, k), real(hp, hn, w_exp, k, code_gradient=True))
 
 
 @pytest.mark.parametrize("variant", list(SEARCH))

@@ -11,6 +11,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from ..data.synthetic import make_preset
     from ..eval.metrics import ope_metrics
     from ..eval.runner import run_sequence
+    from ..eval.scoring import scored_boxes
 
     seq = make_preset("all", seed=args.seed, n_frames=args.frames)
     frames = seq.load()
@@ -24,7 +25,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         if run.error:
             print(f"{name:<10} failed: {run.error}")
             continue
-        m = ope_metrics(run.boxes, gt)
+        m = ope_metrics(scored_boxes(run.boxes, run.oks), gt)  # hold the last box, as eval
         print(f"{name:<10} {m.auc:6.3f} {m.success_50:7.3f} {m.precision_20:6.3f} {run.fps:8.0f}")
     return 0
 

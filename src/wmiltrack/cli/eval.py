@@ -57,8 +57,10 @@ def add_eval(sub: Subparsers) -> None:
         description="Run trackers on every sequence of an OTB-layout dataset (or score box "
         "files of other trackers with --results) and write a markdown table, a JSON file with "
         "every figure, success/precision plots and per-sequence box files to --out.",
-        epilog="Speed: update-only FPS on pre-decoded frames. Parallel workers (-j) share the "
-        "cores: for honest speed figures use -j 1.",
+        epilog="Speed: update-only FPS on pre-decoded frames, OpenCV on one thread unless "
+        "--cv-threads says otherwise. Parallel workers (-j) share the cores: for honest speed "
+        "figures use -j 1. A frame where a tracker gives no box keeps its last box (--missing "
+        "hold); a frame left without a box is a miss in every figure.",
     )
     p.add_argument("dataset", type=Path, help="folder of OTB sequence folders, or one of them")
     p.add_argument(
@@ -86,7 +88,8 @@ def add_eval(sub: Subparsers) -> None:
         "--protocol",
         choices=("ope", "vot"),
         default="ope",
-        help="ope: OTB one-pass (default); vot: VOT2015 supervised with resets",
+        help="ope: OTB one-pass (default); vot: VOT-style supervised with resets (VOT2015's "
+        "rules on OTB's axis-aligned boxes)",
     )
     p.add_argument("--sequences", default=None, help="comma-separated names (default all)")
     p.add_argument("--seed", type=int, default=0, help="first tracker seed (default 0)")
@@ -99,13 +102,18 @@ def add_eval(sub: Subparsers) -> None:
     )
     p.add_argument(
         "--missing",
-        choices=("miss", "hold"),
-        default="miss",
-        help="OPE: frames without a predicted box score as misses (default) or get "
-        "the last box (OTB toolkit)",
+        choices=("hold", "miss"),
+        default="hold",
+        help="OPE: a frame where a tracker gives no box gets its last box (hold, default, as "
+        "the OTB and got10k toolkits), or every frame a tracker reports lost is a miss (miss); "
+        "either way the same rule for every tracker",
     )
     p.add_argument(
-        "--cv-threads", type=int, default=None, help="cv2.setNumThreads(N) in every worker"
+        "--cv-threads",
+        type=int,
+        default=1,
+        help="cv2.setNumThreads(N) in every worker (default 1: one thread per tracker, as "
+        "wmiltrack uses; 0 lets OpenCV choose)",
     )
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -36,6 +36,7 @@ __all__ = [
     "DATA_ENV",
     "GT_FILE",
     "IMAGE_EXTENSIONS",
+    "OTB100_FRAMES",
     "Sequence",
     "TolerantFrames",
     "default_otb_root",
@@ -54,6 +55,25 @@ GT_FILE = "groundtruth_rect.txt"
 
 START_FILE = "start.txt"
 """Optional file inside an OTB sequence folder: the image the first ground-truth line belongs to."""
+
+OTB100_FRAMES: dict[str, tuple[int, int]] = {
+    "BlurCar1": (247, 988),
+    "BlurCar3": (3, 359),
+    "BlurCar4": (18, 397),
+    "David": (300, 770),
+    "Diving": (1, 215),
+    "Football1": (1, 74),
+    "Freeman3": (1, 460),
+    "Freeman4": (1, 283),
+    "Tiger1": (6, 354),
+}
+"""OTB-100's annotated image range ``(start, end)`` (1-based image numbers, inclusive) for the
+sequences whose images and ground-truth lines do not simply start together at image 1 and end
+together (from the OTB toolkit's ``configSeqs100.m``, as the got10k and pytracking loaders use
+it).  Every other OTB sequence covers images ``1 .. len(groundtruth)``."""
+
+_TARGET_GT = re.compile(r"^groundtruth_rect\.(\d+)\.txt$")
+_TARGET_NAME = re.compile(r"^(?P<folder>.+)\.(?P<target>\d+)$")
 
 IMAGE_EXTENSIONS = frozenset(
     {".jpg", ".jpeg", ".png", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pbm"}
@@ -403,46 +423,143 @@ def _image_sequence(
     return Sequence(name=name, groundtruth=gt, paths=tuple(images))
 
 
+def _target_files(path: Path) -> list[tuple[int, Path]]:
+    """``(k, groundtruth_rect.<k>.txt)`` of a folder annotating several targets, sorted by k."""
+    found = []
+    for f in path.iterdir():
+        m = _TARGET_GT.match(f.name)
+        if m is not None and f.is_file():
+            found.append((int(m.group(1)), f))
+    return sorted(found)
+
+
 def _is_otb_folder(path: Path) -> bool:
-    return (path / "img").is_dir() and (path / GT_FILE).is_file()
+    return (path / "img").is_dir() and (
+        (path / GT_FILE).is_file() or bool(_target_files(path))
+    )
+
+
+def _image_numbers(images: list[Path]) -> list[int]:
+    """The number in each image's name (last digit group), or positions 1..n if the names
+    are not all numbered or not all different."""
+    nums: list[int] = []
+    for p in images:
+        digits = _DIGITS.findall(p.stem)
+        if not digits:
+            return list(range(1, len(images) + 1))
+        nums.append(int(digits[-1]))
+    if len(set(nums)) != len(nums):
+        return list(range(1, len(images) + 1))
+    return nums
+
+
+def _otb_sequence(name: str, folder: Path, gt_file: Path) -> Sequence:
+    """Line up an OTB folder's images with its ground truth by image number, or refuse."""
+    img_dir = folder / "img"
+    images = _list_images(img_dir)
+    if not images:
+        exts = ", ".join(sorted(IMAGE_EXTENSIONS))
+        raise ValueError(f"no images in {img_dir} (looked for {exts})")
+    gt = read_boxes(gt_file)
+    if len(gt) == 0:
+        raise ValueError(f"{gt_file} holds no boxes")
+    numbers = _image_numbers(images)
+    by_number = dict(zip(numbers, images, strict=True))
+    start_file = folder / START_FILE
+    known = OTB100_FRAMES.get(name.split(".")[0])
+    if start_file.is_file():
+        first = numbers[_read_start(start_file, images)]
+        last = first + len(gt) - 1
+        why = f"{START_FILE} names image {first}"
+    elif known is not None:
+        first, last = known
+        why = f"OTB-100 annotates images {first}..{last} of {name}"
+    else:
+        first, last = 1, len(gt)
+        why = f"{gt_file.name} has {len(gt)} lines for images 1..{len(gt)}"
+    span = last - first + 1
+    if len(gt) == span:
+        rows = gt
+    elif known is not None and not start_file.is_file() and len(gt) == last:
+        rows = gt[first - 1 : last]  # lines start at image 1 (Tiger1): keep the range's lines
+    else:
+        raise ValueError(
+            f"{folder}: {why}, but {gt_file.name} has {len(gt)} lines; the images and the "
+            "ground truth do not line up"
+        )
+    absent = [n for n in range(first, last + 1) if n not in by_number]
+    if absent:
+        raise ValueError(
+            f"{folder}: {why}, but image(s) {', '.join(map(str, absent[:5]))}"
+            + (" ..." if len(absent) > 5 else "")
+            + f" are missing from {img_dir}"
+        )
+    extra = [n for n in numbers if not first <= n <= last]
+    if extra and known is None and not start_file.is_file():
+        raise ValueError(
+            f"{folder}: {len(images)} images but {len(gt)} ground-truth lines, and OTB-100's "
+            f"start/end frames are not known for {name!r}; add a {START_FILE} naming the image "
+            "of the first line, or remove the images that are not annotated"
+        )
+    chosen = [by_number[n] for n in range(first, last + 1)]
+    _read_image(chosen[0])  # fail early on an unreadable folder
+    return Sequence(name=name, groundtruth=np.asarray(rows, dtype=np.float64), paths=tuple(chosen))
 
 
 def load_otb_sequence(path: str | os.PathLike[str]) -> Sequence:
-    """Load an OTB-layout sequence folder.
+    """Load an OTB-layout sequence folder (or one target of a two-target folder).
 
     Parameters
     ----------
     path:
-        Folder holding ``img/`` and ``groundtruth_rect.txt`` (optionally ``start.txt``).
+        Folder holding ``img/`` and ``groundtruth_rect.txt`` (optionally ``start.txt``); or
+        ``<root>/<Seq>.<k>`` for the ``k``-th target of a folder ``<root>/<Seq>`` that holds
+        ``groundtruth_rect.<k>.txt`` files instead (Jogging, Skating2, Human4: the sequence
+        is then named ``Jogging.1``, ``Jogging.2`` as the OTB toolkits name them).
 
     Returns
     -------
     Sequence
-        Image-backed sequence named after the folder. Images are taken in natural order.
-        If ``start.txt`` exists, it names the image of the first ground-truth line: the image
-        whose number equals its value (OTB convention, e.g. ``300`` -> ``0300.jpg``), or, if no
-        file has that number, the value-th image (1-based). When the ground truth has fewer lines
-        than there are images, the sequence is cut to the annotated frames (Football1: 81 images,
-        74 boxes -> 74 frames). Boxes are kept exactly as written (no 1-based shift).
+        Image-backed sequence.  Ground-truth line ``i`` belongs to the image numbered
+        ``first + i`` (the number in the file name, e.g. ``0300.jpg`` -> 300), where ``first``
+        is the image named by ``start.txt`` if present (its number, or else its 1-based
+        position), else OTB-100's known start frame (:data:`OTB100_FRAMES`: David 300..770,
+        Football1 1..74, ...), else 1.  Boxes are kept exactly as written (no 1-based shift).
 
     Raises
     ------
     FileNotFoundError
         If the folder, ``img/`` or the ground-truth file is missing.
     ValueError
-        If there are no images, more boxes than images, a malformed box line, or the first
-        image cannot be decoded.
+        If the images and the ground truth do not line up (an annotated image is missing,
+        the line count does not match the known range, or there are more images than lines
+        and nothing says which ones are annotated), or a folder of several targets is given
+        without choosing one; the message says which.  Also for no images, a malformed box
+        line, or an unreadable first image.
     """
     p = Path(path)
     if not p.is_dir():
+        m = _TARGET_NAME.match(p.name)
+        folder = p.parent / m.group("folder") if m else None
+        if m is not None and folder is not None and folder.is_dir():
+            gt_file = folder / f"groundtruth_rect.{m.group('target')}.txt"
+            if not gt_file.is_file():
+                raise FileNotFoundError(f"{folder} has no {gt_file.name}")
+            if not (folder / "img").is_dir():
+                raise FileNotFoundError(f"{folder} has no img/ folder (expected OTB layout)")
+            return _otb_sequence(p.name, folder, gt_file)
         raise FileNotFoundError(f"sequence folder not found: {p}")
     img_dir = p / "img"
     gt_file = p / GT_FILE
     if not img_dir.is_dir():
         raise FileNotFoundError(f"{p} has no img/ folder (expected OTB layout)")
     if not gt_file.is_file():
+        targets = _target_files(p)
+        if targets:
+            names = ", ".join(f"{p.name}.{k}" for k, _ in targets)
+            raise ValueError(f"{p} annotates {len(targets)} targets: load one of {names}")
         raise FileNotFoundError(f"{p} has no {GT_FILE}")
-    return _image_sequence(p.name, img_dir, gt_file, p / START_FILE)
+    return _otb_sequence(p.name, p, gt_file)
 
 
 def list_otb_sequences(root: str | os.PathLike[str] | None = None) -> list[Path]:
@@ -456,7 +573,10 @@ def list_otb_sequences(root: str | os.PathLike[str] | None = None) -> list[Path]
     Returns
     -------
     list of pathlib.Path
-        Sub-folders holding ``img/`` and ``groundtruth_rect.txt``, sorted by name.
+        Sub-folders holding ``img/`` and ``groundtruth_rect.txt``, sorted by name; a folder
+        annotating several targets (``groundtruth_rect.1.txt``, ``.2.txt``: Jogging, Skating2,
+        Human4) gives one path per target, ``<root>/Jogging.1``, ``<root>/Jogging.2``, which
+        :func:`load_otb_sequence` accepts.
 
     Raises
     ------
@@ -468,9 +588,15 @@ def list_otb_sequences(root: str | os.PathLike[str] | None = None) -> list[Path]
         raise FileNotFoundError(
             f"OTB root not found: {r} (set {DATA_ENV} to the folder holding the sequences)"
         )
-    return sorted(
-        (p for p in r.iterdir() if p.is_dir() and _is_otb_folder(p)), key=lambda p: p.name
-    )
+    out: list[Path] = []
+    for p in r.iterdir():
+        if not (p.is_dir() and _is_otb_folder(p)):
+            continue
+        if (p / GT_FILE).is_file():
+            out.append(p)
+        else:
+            out += [r / f"{p.name}.{k}" for k, _ in _target_files(p)]
+    return sorted(out, key=lambda p: p.name)
 
 
 def load_dataset(

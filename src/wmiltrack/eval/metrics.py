@@ -18,14 +18,15 @@ Figures reported by :func:`ope_metrics`
 
 Frames whose ground truth has a NaN or a non-positive width or height are left out of every
 figure and counted in ``n_missing``.  A predicted box containing NaN (tracker gave no box)
-counts as IoU 0 and infinite centre error, so it fails every threshold; with
-``missing="hold"`` it is replaced by the last box given before it instead, which is what the
-OTB toolkit's ``calcSeqErrRobust.m`` does with NaN or degenerate result rows.
+counts as IoU 0 and infinite centre error, so it fails every threshold and makes the mean
+centre error infinite; with ``missing="hold"`` it is replaced by the last box given before it
+instead, which is what the OTB toolkit's ``calcSeqErrRobust.m`` does with NaN or degenerate
+result rows.  (:mod:`wmiltrack.eval.scoring` applies the evaluation's convention, the same for
+every tracker, before calling :func:`ope_metrics`.)
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -36,9 +37,7 @@ __all__ = [
     "NORM_PRECISION_THRESHOLDS",
     "PRECISION_THRESHOLDS",
     "SUCCESS_THRESHOLDS",
-    "AggregateResult",
     "OPEResult",
-    "aggregate",
     "as_boxes",
     "center_error",
     "hold_missing",
@@ -211,9 +210,9 @@ class OPEResult:
     mean_iou:
         Mean IoU over scored frames (frames without a prediction count as 0).
     mean_center_error:
-        Mean centre error in pixels over scored frames that have a prediction (a frame with
-        no predicted box has an infinite error and is left out of this mean only; see
-        ``n_no_prediction``).  NaN if no such frame.
+        Mean centre error in pixels over all scored frames.  A frame without a predicted box
+        has an infinite error, so the mean is infinite when there is one (it is a miss here
+        as in every other figure); NaN if no frame is scored.
     n_frames:
         Number of frames in the sequence (scored or not).
     n_scored:
@@ -386,7 +385,6 @@ def ope_metrics(
     success = _curve_gt(ov, SUCCESS_THRESHOLDS)
     precision = _curve_le(ce, PRECISION_THRESHOLDS)
     norm_precision = _curve_le(nce, NORM_PRECISION_THRESHOLDS)
-    finite_ce = ce[np.isfinite(ce)]
 
     nan = np.full(n, np.nan)
     return OPEResult(
@@ -398,7 +396,7 @@ def ope_metrics(
         norm_precision_curve=norm_precision,
         norm_precision_20=_rate(nce <= 0.2),
         mean_iou=float(np.mean(ov)) if ov.size else float("nan"),
-        mean_center_error=float(np.mean(finite_ce)) if finite_ce.size else float("nan"),
+        mean_center_error=float(np.mean(ce)) if ce.size else float("nan"),
         n_frames=n,
         n_scored=int(valid.sum()),
         n_missing=int(n - valid.sum()),
@@ -406,117 +404,4 @@ def ope_metrics(
         ious=np.where(valid, ov_all, nan),
         center_errors=np.where(valid, ce_all, nan),
         norm_center_errors=np.where(valid, nce_all, nan),
-    )
-
-
-@dataclass(frozen=True)
-class AggregateResult:
-    """Scores over several sequences.
-
-    Attributes
-    ----------
-    per_sequence:
-        Means of the per-sequence figures (each sequence weighs the same): the usual OTB
-        "overall" plot, whose AUC is the mean of the per-sequence AUCs.
-    pooled:
-        Figures over all scored frames of all sequences taken together (longer sequences
-        weigh more), or ``None`` if not asked for.
-    n_sequences:
-        Number of sequences aggregated.
-    """
-
-    per_sequence: dict[str, Any]
-    pooled: OPEResult | None
-    n_sequences: int
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-serialisable dictionary."""
-        return {
-            "n_sequences": self.n_sequences,
-            "per_sequence": self.per_sequence,
-            "pooled": None if self.pooled is None else self.pooled.to_dict(),
-        }
-
-
-_SCALARS = (
-    "auc",
-    "success_50",
-    "precision_20",
-    "norm_precision_20",
-    "mean_iou",
-    "mean_center_error",
-)
-_CURVES = ("success_curve", "precision_curve", "norm_precision_curve")
-
-
-def aggregate(results: Sequence[OPEResult], pooled: bool = False) -> AggregateResult:
-    """Average per-sequence results.
-
-    Parameters
-    ----------
-    results:
-        One :class:`OPEResult` per sequence.
-    pooled:
-        Also compute the figures over all scored frames pooled together.
-
-    Returns
-    -------
-    AggregateResult
-        ``per_sequence`` holds the mean of each scalar and curve over sequences (NaN values,
-        from sequences with no scored frame, are skipped) and the summed frame counts.
-
-    Raises
-    ------
-    ValueError
-        If ``results`` is empty.
-    """
-    if len(results) == 0:
-        raise ValueError("aggregate() needs at least one result")
-    mean: dict[str, Any] = {}
-    for key in _SCALARS:
-        vals = np.array([getattr(r, key) for r in results], dtype=np.float64)
-        vals = vals[~np.isnan(vals)]
-        mean[key] = float(vals.mean()) if vals.size else float("nan")
-    for key in _CURVES:
-        stack = np.stack([getattr(r, key) for r in results])
-        keep = ~np.any(np.isnan(stack), axis=1)
-        mean[key] = (
-            [float(v) for v in stack[keep].mean(axis=0)]
-            if keep.any()
-            else [float("nan")] * stack.shape[1]
-        )
-    for key in ("n_frames", "n_scored", "n_missing", "n_no_prediction"):
-        mean[key] = int(sum(getattr(r, key) for r in results))
-
-    pooled_result: OPEResult | None = None
-    if pooled:
-        pooled_result = _pool(results)
-    return AggregateResult(per_sequence=mean, pooled=pooled_result, n_sequences=len(results))
-
-
-def _pool(results: Sequence[OPEResult]) -> OPEResult:
-    ious = np.concatenate([r.ious for r in results])
-    ce = np.concatenate([r.center_errors for r in results])
-    nce = np.concatenate([r.norm_center_errors for r in results])
-    scored = ~np.isnan(ious)
-    ov, c, nc = ious[scored], ce[scored], nce[scored]
-    success = _curve_gt(ov, SUCCESS_THRESHOLDS)
-    finite_ce = c[np.isfinite(c)]
-    return OPEResult(
-        success_curve=success,
-        auc=float(np.mean(success)),
-        success_50=_rate(ov > 0.5),
-        precision_curve=_curve_le(c, PRECISION_THRESHOLDS),
-        precision_20=_rate(c <= 20.0),
-        norm_precision_curve=_curve_le(nc, NORM_PRECISION_THRESHOLDS),
-        norm_precision_20=_rate(nc <= 0.2),
-        mean_iou=float(np.mean(ov)) if ov.size else float("nan"),
-        mean_center_error=float(np.mean(finite_ce)) if finite_ce.size else float("nan"),
-        n_frames=int(ious.size),
-        n_scored=int(scored.sum()),
-        n_missing=int(ious.size - scored.sum()),
-        n_no_prediction=int(sum(r.n_no_prediction for r in results)),
-        ious=ious,
-        center_errors=ce,
-        norm_center_errors=nce,
     )

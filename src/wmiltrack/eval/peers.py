@@ -87,13 +87,16 @@ def _lookup(cv2: Any, dotted: str) -> Any:
 
 
 def installed_opencv() -> tuple[str, str]:
-    """Return the distribution that provides ``cv2`` and its version."""
-    for dist in (
-        "opencv-python-headless",
-        "opencv-contrib-python-headless",
-        "opencv-python",
-        "opencv-contrib-python",
-    ):
+    """Return the distribution that provides ``cv2`` and its version.
+
+    When a contrib and a plain wheel are both recorded as installed (they share the ``cv2``
+    folder, so the last one installed is the one imported), the loaded ``cv2`` decides: one
+    with a contrib-only tracker is reported as the contrib wheel.
+    """
+    plain = ("opencv-python-headless", "opencv-python")
+    contrib = ("opencv-contrib-python-headless", "opencv-contrib-python")
+    has_contrib = _factory("KCF") is not None
+    for dist in (*contrib, *plain) if has_contrib else (*plain, *contrib):
         try:
             return dist, version(dist)
         except PackageNotFoundError:

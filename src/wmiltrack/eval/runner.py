@@ -1,4 +1,12 @@
-"""Run trackers on sequences, score them (OTB one-pass) and time them honestly.
+"""Run stage of the evaluation: run trackers on sequences and time them honestly.
+
+The unit of work is a :class:`Task`, one (tracker spec, sequence, seed) with the protocol's
+settings; :func:`run_task` turns it into a :class:`RunOutcome` (boxes as the tracker gave
+them, its "found" flags, timing, any error).  An executor maps tasks to outcomes and hands
+each one back as soon as it is finished (:class:`SerialExecutor` in this process,
+:class:`ProcessExecutor` in worker processes; anything with the same ``map`` method, e.g. a
+Dask client wrapper, can stand in), so the caller can write each result at once and a failure
+or an interruption loses only the tasks not yet finished.
 
 Timing rules
 ------------
@@ -6,78 +14,54 @@ Timing rules
 * ``time.perf_counter()`` is read right before and after each ``update`` call, and nothing
   else is inside the interval.  ``init`` is timed separately (``init_time``), and creating the
   tracker object is not timed.
-* Python's garbage collector is run before a sequence and disabled during the timed loop
-  (as :mod:`timeit` does), so a collection does not land on one tracker's update.
+* Python's garbage collector is run before every run and disabled during it, for every
+  tracker alike (as :mod:`timeit` does), so a collection does not land on one tracker's
+  update.
 * ``fps`` is *update-only* throughput: ``updates / sum(update times)``.  The median
   per-update time is kept too (``median_update_time``), being robust to a slow outlier.
-* With ``repeats > 1`` every (tracker, sequence) pair is run that many times, the trackers
-  interleaved within each round so that slow drifts of the machine hit all of them alike;
-  the reported FPS is the median over the rounds.  Boxes and scores come from the first
-  round, and ``deterministic`` records whether every round gave the same boxes.
-* If a tracker raises, the exception is recorded in ``RunResult.error`` (type, message and
-  frame index) and shown in the tables; the remaining frames have NaN boxes and so count as
-  misses.  Nothing is swallowed silently: a :class:`RuntimeWarning` is issued as well, and
-  ``raise_errors=True`` re-raises instead.
+* OpenCV's own thread pool is set to ``cv_threads`` (1 by default: one thread per tracker, as
+  wmiltrack uses) in every process that runs trackers.
+* If a tracker raises, the exception is recorded (type, message and frame index) and the
+  remaining frames have no box; nothing is swallowed silently.
 """
 
 from __future__ import annotations
 
 import gc
 import math
-import operator
-import os
-import platform
 import time
 import traceback
 import warnings
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
+from multiprocessing import get_context
 from pathlib import Path
 from typing import Any, Literal, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
-from ..engine.result import TrackerLike
-from .metrics import OPEResult, ope_metrics
+from ..engine.result import TrackerLike, TrackResult
+from .metrics import valid_mask
 from .peers import make_tracker
 
 __all__ = [
-    "EvalRecord",
+    "Executor",
+    "ProcessExecutor",
+    "RunOutcome",
     "RunResult",
-    "SequenceLike",
-    "cpu_model",
-    "environment",
-    "evaluate_sequences",
-    "format_table",
-    "fps_ratio",
-    "json_safe",
+    "SerialExecutor",
+    "Task",
     "run_sequence",
-    "summarize",
+    "run_task",
+    "set_cv_threads",
 ]
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 Frame = npt.NDArray[np.uint8]
 TrackerSpec = str | Callable[[], TrackerLike]
-
-
-class SequenceLike(Protocol):
-    """What :func:`evaluate_sequences` needs of a sequence (``wmiltrack.data.sequences.Sequence``)."""
-
-    @property
-    def name(self) -> str:
-        """Sequence name."""
-        ...
-
-    @property
-    def groundtruth(self) -> npt.NDArray[np.float64] | None:
-        """``(n, 4)`` ground-truth boxes (NaN rows where absent)."""
-        ...
-
-    def load(self) -> list[Frame]:
-        """All frames, decoded."""
-        ...
 
 
 @dataclass(frozen=True)
@@ -295,446 +279,325 @@ def run_sequence(
     )
 
 
+
+# ----------------------------------------------------------------------------- tasks
 @dataclass(frozen=True)
-class EvalRecord:
-    """Scores and speed of one tracker on one sequence.
+class Task:
+    """One unit of work: a tracker on a sequence with one seed.
 
     Attributes
     ----------
-    tracker, sequence:
-        Names.
-    metrics:
-        OTB one-pass scores of the first run.
-    run:
-        The first run (boxes, scores, per-frame times, error if any).
-    fps_runs:
-        Update-only FPS of every run.
-    fps:
-        Median of ``fps_runs``.
-    median_update_time:
-        Median over runs of each run's median seconds per update.
-    deterministic:
-        Whether every run gave the same boxes (``None`` with a single run).
+    tracker:
+        Tracker spec for :func:`wmiltrack.eval.peers.make_tracker`.
+    sequence:
+        Path of the OTB sequence (:func:`wmiltrack.data.sequences.load_otb_sequence`).
+    seed:
+        Tracker seed.
+    repeat:
+        Index of the repeat this seed belongs to (``seed = first seed + repeat``).
+    protocol:
+        ``"ope"`` (one pass from the first frame with ground truth) or ``"vot"`` (supervised,
+        re-initialised ``skip`` frames after each failure; ``burnin`` frames left out).
+    skip, burnin:
+        VOT settings.
     """
 
     tracker: str
     sequence: str
-    metrics: OPEResult
-    run: RunResult
-    fps_runs: list[float]
-    fps: float
-    median_update_time: float
-    deterministic: bool | None
+    seed: int
+    repeat: int = 0
+    protocol: Literal["ope", "vot"] = "ope"
+    skip: int = 5
+    burnin: int = 10
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """What one :class:`Task` gave (or, untimed, one box file read back).
+
+    Attributes
+    ----------
+    tracker, sequence:
+        Names (the sequence's name, not its path).
+    repeat, seed:
+        Repeat index and the tracker seed it used.
+    boxes:
+        ``(n, 4)`` boxes, one per ground-truth frame, as the tracker gave them: NaN where it
+        gave none (an OpenCV tracker saying "not found"), before the first frame with ground
+        truth, and from the frame where it raised on.  With the VOT protocol, NaN on frames
+        not tracked.
+    oks:
+        ``(n,)`` the tracker's own "found" flag (False where it did not run).
+    fps:
+        Update-only frames per second (NaN when not timed, e.g. ``--results``).
+    init_time:
+        Seconds in ``init`` (mean over the initialisations for VOT).
+    median_update_time:
+        Median seconds per ``update``.
+    n_updates:
+        Number of timed updates.
+    n_lost:
+        Frames where the tracker reported the target lost (``ok`` False) after ``init``.
+    error:
+        ``"<Exception>: <message> (frame i)"`` if the task failed, else ``None``.
+    error_frame:
+        Frame where it failed (the first frame not tracked), else ``None``.
+    vot:
+        :meth:`wmiltrack.eval.vot_style.SupervisedResult.to_dict` for the VOT protocol.
+    """
+
+    tracker: str
+    sequence: str
+    repeat: int
+    seed: int
+    boxes: FloatArray = field(repr=False)
+    oks: BoolArray = field(repr=False)
+    fps: float = math.nan
+    init_time: float = math.nan
+    median_update_time: float = math.nan
+    n_updates: int = 0
+    n_lost: int = 0
+    error: str | None = None
+    error_frame: int | None = None
+    vot: dict[str, Any] | None = field(default=None, repr=False)
 
     @property
-    def n_frames(self) -> int:
-        """Frames in the sequence."""
-        return self.metrics.n_frames
-
-    @property
-    def error(self) -> str | None:
-        """The first run's error, if any."""
-        return self.run.error
-
-    def to_dict(self, per_frame: bool = False) -> dict[str, Any]:
-        """JSON-serialisable dictionary."""
-        return {
-            "tracker": self.tracker,
-            "sequence": self.sequence,
-            "fps": _num(self.fps),
-            "fps_runs": [_num(v) for v in self.fps_runs],
-            "median_update_time": _num(self.median_update_time),
-            "deterministic": self.deterministic,
-            "metrics": self.metrics.to_dict(per_frame=per_frame),
-            "run": self.run.to_dict(per_frame=per_frame),
-        }
+    def frames_run(self) -> int:
+        """Frames up to (not including) the one where the task failed, else all of them."""
+        return int(self.boxes.shape[0]) if self.error_frame is None else self.error_frame
 
 
-def _median(values: Sequence[float]) -> float:
-    arr = np.asarray(values, dtype=np.float64)
-    arr = arr[~np.isnan(arr)]
-    return float(np.median(arr)) if arr.size else float("nan")
-
-
-def _progress(it: Iterable[Any], total: int | None, desc: str, enabled: bool) -> Iterable[Any]:
-    from ..progress import progress
-
-    return progress(it, total=total, desc=desc, enabled=None if enabled else False)
-
-
-def evaluate_sequences(
-    specs: Sequence[TrackerSpec],
-    sequences: Iterable[SequenceLike],
-    *,
-    seed: int = 0,
-    repeats: int = 1,
-    progress: bool = True,
-    params: Mapping[str, Mapping[str, Any]] | None = None,
-    raise_errors: bool = False,
-    missing: Literal["miss", "hold"] = "miss",
-) -> list[EvalRecord]:
-    """Run every tracker on every sequence (one-pass) and score it.
+def set_cv_threads(n: int | None) -> int:
+    """Set OpenCV's thread pool size (``cv2.setNumThreads``) and return the previous size.
 
     Parameters
     ----------
-    specs:
-        Tracker names (or factories), e.g. ``["rcwmil", "opencv:MIL"]``.
-    sequences:
-        Sequences with ``name``, ``groundtruth`` and ``load()``; may be a generator (each
-        sequence's frames are decoded once, used by all trackers, and dropped before the
-        next sequence if nothing else holds it).  The tracker starts from the first
-        ground-truth box.
-    seed:
-        Seed of every run (all repeats use the same seed: repeats measure time).
-    repeats:
-        Runs per (tracker, sequence); FPS is the median, accuracy is from the first run.
-    progress:
-        Show a progress bar over sequences (``wmiltrack.progress``).
-    params:
-        Per-tracker-name extra parameters, e.g. ``{"opencv:KCF": {"detect_thresh": 0.3}}``.
-    raise_errors:
-        Re-raise tracker exceptions instead of recording them.
-    missing:
-        How frames where a tracker gave no box are scored (see
-        :func:`wmiltrack.eval.metrics.ope_metrics`): ``"miss"`` or ``"hold"`` (OTB toolkit).
+    n:
+        Threads; ``None`` leaves the setting alone.
 
     Returns
     -------
-    list of EvalRecord
-        In the order sequence by sequence, trackers in the order given.
-
-    Raises
-    ------
-    ValueError
-        If ``repeats < 1``, ``specs`` is empty, or a sequence has no ground truth.
-    """
-    if repeats < 1:
-        raise ValueError(f"repeats must be at least 1, got {repeats}")
-    if len(specs) == 0:
-        raise ValueError("no trackers given")
-    names = [_spec_name(s) for s in specs]
-    total = operator.length_hint(sequences) or None
-    records: list[EvalRecord] = []
-    for seq in _progress(sequences, total, "sequences", progress):
-        gt = seq.groundtruth
-        if gt is None:
-            raise ValueError(f"sequence {seq.name!r} has no ground truth")
-        gt = np.asarray(gt, dtype=np.float64)
-        frames = seq.load()
-        init_box = gt[0]
-        runs: dict[str, list[RunResult]] = {n: [] for n in names}
-        for _ in range(repeats):
-            for spec, name in zip(specs, names, strict=True):
-                p = None if params is None or not isinstance(spec, str) else params.get(name)
-                runs[name].append(
-                    run_sequence(
-                        spec, frames, init_box, seed=seed, params=p, raise_errors=raise_errors
-                    )
-                )
-        for name in names:
-            rs = runs[name]
-            first = rs[0]
-            deterministic = (
-                None
-                if len(rs) == 1
-                else all(np.array_equal(first.boxes, r.boxes, equal_nan=True) for r in rs[1:])
-            )
-            records.append(
-                EvalRecord(
-                    tracker=name,
-                    sequence=seq.name,
-                    metrics=ope_metrics(first.boxes, gt, missing=missing),
-                    run=first,
-                    fps_runs=[r.fps for r in rs],
-                    fps=_median([r.fps for r in rs]),
-                    median_update_time=_median([r.median_update_time for r in rs]),
-                    deterministic=deterministic,
-                )
-            )
-        del frames
-    return records
-
-
-def fps_ratio(
-    records: Sequence[EvalRecord], reference: str = "opencv:MIL"
-) -> dict[tuple[str, str], float]:
-    """FPS of each record divided by the reference tracker's FPS on the same sequence.
-
-    Parameters
-    ----------
-    records:
-        Output of :func:`evaluate_sequences` (the reference must have been run with them, so
-        both were timed on the same machine in the same session).
-    reference:
-        Name of the reference tracker.
-
-    Returns
-    -------
-    dict
-        ``{(tracker, sequence): ratio}``; sequences without the reference are left out.
-    """
-    ref = {r.sequence: r.fps for r in records if r.tracker == reference}
-    out: dict[tuple[str, str], float] = {}
-    for r in records:
-        if r.sequence in ref:
-            base = ref[r.sequence]
-            out[(r.tracker, r.sequence)] = r.fps / base if base > 0 else float("nan")
-    return out
-
-
-def _nanmean(values: Iterable[float]) -> float:
-    arr = np.asarray(list(values), dtype=np.float64)
-    arr = arr[~np.isnan(arr)]
-    return float(arr.mean()) if arr.size else float("nan")
-
-
-def _pooled_fps(recs: Sequence[EvalRecord]) -> float:
-    frames = sum(r.run.n_updates for r in recs)
-    seconds = sum(r.run.n_updates / r.fps for r in recs if r.run.n_updates and r.fps > 0)
-    return frames / seconds if seconds > 0 else float("nan")
-
-
-def summarize(
-    records: Sequence[EvalRecord], reference: str = "opencv:MIL"
-) -> dict[str, dict[str, Any]]:
-    """Per-tracker means over sequences.
-
-    Parameters
-    ----------
-    records:
-        Output of :func:`evaluate_sequences`.
-    reference:
-        Tracker whose FPS the others are compared with.
-
-    Returns
-    -------
-    dict
-        ``{tracker: {"n_sequences", "auc", "success_50", "precision_20", "norm_precision_20",
-        "mean_center_error", "no_box", "fps", "fps_ratio", "errors"}}``.  Accuracy figures
-        are means of the per-sequence figures; ``fps`` is all update frames divided by
-        all update time (the median run of each sequence), and ``fps_ratio`` is that over the
-        reference's, on the sequences both ran (NaN if the reference was not run).
-    """
-    order: list[str] = []
-    for r in records:
-        if r.tracker not in order:
-            order.append(r.tracker)
-    ref_recs = {r.sequence: r for r in records if r.tracker == reference}
-    out: dict[str, dict[str, Any]] = {}
-    for name in order:
-        recs = [r for r in records if r.tracker == name]
-        fps = _pooled_fps(recs)
-        shared = [r for r in recs if r.sequence in ref_recs]
-        if shared:
-            mine = _pooled_fps(shared)
-            theirs = _pooled_fps([ref_recs[r.sequence] for r in shared])
-            ratio = mine / theirs if theirs > 0 else float("nan")
-        else:
-            ratio = float("nan")
-        out[name] = {
-            "n_sequences": len(recs),
-            "auc": _nanmean(r.metrics.auc for r in recs),
-            "success_50": _nanmean(r.metrics.success_50 for r in recs),
-            "precision_20": _nanmean(r.metrics.precision_20 for r in recs),
-            "norm_precision_20": _nanmean(r.metrics.norm_precision_20 for r in recs),
-            "mean_center_error": _nanmean(r.metrics.mean_center_error for r in recs),
-            "fps": fps,
-            "fps_ratio": ratio,
-            "no_box": sum(r.metrics.n_no_prediction for r in recs),
-            "errors": sum(r.error is not None for r in recs),
-        }
-    return out
-
-
-def _fmt(v: float, spec: str) -> str:
-    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
-
-
-_HEADERS = (
-    "Sequence",
-    "Tracker",
-    "Frames",
-    "AUC",
-    "SR@0.5",
-    "P@20",
-    "CLE px",
-    "No box",
-    "FPS",
-    "FPS ratio",
-)
-
-
-def format_table(
-    records: Sequence[EvalRecord],
-    *,
-    reference: str = "opencv:MIL",
-    style: Literal["markdown", "plain"] = "markdown",
-) -> str:
-    """Format results as a table: one row per (sequence, tracker) and a mean row per tracker.
-
-    Parameters
-    ----------
-    records:
-        Output of :func:`evaluate_sequences`.
-    reference:
-        Tracker whose FPS the ``FPS ratio`` column divides by (measured in the same run).
-    style:
-        ``"markdown"`` (pipe table) or ``"plain"`` (aligned columns).
-
-    Returns
-    -------
-    str
-        The table, followed by notes on the definitions and any tracker errors.
-    """
-    ratios = fps_ratio(records, reference)
-    rows: list[tuple[str, ...]] = []
-    for r in records:
-        m = r.metrics
-        flag = " (!)" if r.error is not None else ""
-        rows.append(
-            (
-                r.sequence,
-                r.tracker + flag,
-                str(m.n_scored if m.n_missing == 0 else f"{m.n_scored}/{m.n_frames}"),
-                _fmt(m.auc, ".3f"),
-                _fmt(m.success_50, ".3f"),
-                _fmt(m.precision_20, ".3f"),
-                _fmt(m.mean_center_error, ".1f"),
-                str(m.n_no_prediction),
-                _fmt(r.fps, ".1f"),
-                _fmt(ratios.get((r.tracker, r.sequence), float("nan")), ".2f"),
-            )
-        )
-    summary = summarize(records, reference)
-    mean_rows: list[tuple[str, ...]] = []
-    for name, s in summary.items():
-        frames = sum(r.metrics.n_frames for r in records if r.tracker == name)
-        mean_rows.append(
-            (
-                f"mean ({s['n_sequences']} seq)",
-                name + (" (!)" if s["errors"] else ""),
-                str(frames),
-                _fmt(s["auc"], ".3f"),
-                _fmt(s["success_50"], ".3f"),
-                _fmt(s["precision_20"], ".3f"),
-                _fmt(s["mean_center_error"], ".1f"),
-                str(s["no_box"]),
-                _fmt(s["fps"], ".1f"),
-                _fmt(s["fps_ratio"], ".2f"),
-            )
-        )
-
-    if style == "markdown":
-        lines = ["| " + " | ".join(_HEADERS) + " |", "|" + "|".join(["---"] * len(_HEADERS)) + "|"]
-        lines += ["| " + " | ".join(row) + " |" for row in rows]
-        lines += ["| **" + row[0] + "** | " + " | ".join(row[1:]) + " |" for row in mean_rows]
-    elif style == "plain":
-        table = [_HEADERS, *rows, *mean_rows]
-        widths = [max(len(row[c]) for row in table) for c in range(len(_HEADERS))]
-
-        def line(row: tuple[str, ...]) -> str:
-            return "  ".join(
-                cell.ljust(w) if c < 2 else cell.rjust(w)
-                for c, (cell, w) in enumerate(zip(row, widths, strict=True))
-            ).rstrip()
-
-        rule = "  ".join("-" * w for w in widths)
-        lines = [
-            line(_HEADERS),
-            rule,
-            *(line(r) for r in rows),
-            rule,
-            *(line(r) for r in mean_rows),
-        ]
-    else:
-        raise ValueError(f"style must be 'markdown' or 'plain', not {style!r}")
-
-    notes = [
-        "",
-        (
-            "AUC: mean success rate over IoU thresholds 0, 0.05, ..., 1 (IoU > t); "
-            "SR@0.5: IoU > 0.5; P@20: centre error <= 20 px; "
-            "CLE: mean centre error over frames with a box; No box: scored frames where the "
-            "tracker gave no box (scored as misses unless --missing hold)."
-        ),
-        (
-            "Frames: scored frames (scored/total when some ground truth is absent). "
-            "FPS: update-only frames per second (decoding and init excluded). "
-            f"FPS ratio: FPS / FPS of {reference} on the same sequence in the same run."
-        ),
-        "Mean rows: accuracy = mean over sequences; FPS = all update frames / all update time.",
-    ]
-    errs = [r for r in records if r.error is not None]
-    if errs:
-        notes.append("(!) tracker errors (remaining frames scored as misses):")
-        notes += [
-            f"  {r.tracker} on {r.sequence}, frame {r.run.error_frame}: {r.error}" for r in errs
-        ]
-    return "\n".join(lines + notes)
-
-
-# ----------------------------------------------------------------------------- reporting
-def cpu_model() -> str:
-    """The CPU's model name (``/proc/cpuinfo``; ``platform.processor()`` elsewhere)."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.lower().startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "?"
-
-
-def environment() -> dict[str, Any]:
-    """Machine and versions that timings depend on, for benchmark reports.
-
-    Returns
-    -------
-    dict
-        Date, Python, platform, CPU model and count, numpy, the installed OpenCV wheel and
-        version with its thread count, matplotlib (None if absent) and wmiltrack.
+    int
+        ``cv2.getNumThreads()`` before the call.
     """
     import cv2
 
-    from .. import __version__
-    from .peers import installed_opencv
+    before = int(cv2.getNumThreads())
+    if n is not None:
+        cv2.setNumThreads(int(n))
+    return before
 
+
+# one decoded sequence per process: tasks come sequence by sequence, so each is decoded once
+_decoded: dict[str, tuple[str, FloatArray, list[Frame]]] = {}
+
+
+def _load(path: str) -> tuple[str, FloatArray, list[Frame]]:
+    if path not in _decoded:
+        from ..data.sequences import load_otb_sequence
+
+        _decoded.clear()
+        seq = load_otb_sequence(path)
+        if seq.groundtruth is None:  # pragma: no cover - the OTB loader always reads it
+            raise ValueError(f"{path}: no ground truth")
+        gt = np.asarray(seq.groundtruth, dtype=np.float64)
+        _decoded[path] = (seq.name, gt, seq.load())  # decoded before any clock starts
+    return _decoded[path]
+
+
+class _TimedTracker:
+    """Wraps a tracker and records the time spent in ``init`` and ``update``."""
+
+    def __init__(self, inner: TrackerLike, init_times: list[float], update_times: list[float]):
+        self.inner = inner
+        self.init_times = init_times
+        self.update_times = update_times
+
+    def init(self, frame: Frame, box: tuple[float, float, float, float]) -> object:
+        t0 = time.perf_counter()
+        out = self.inner.init(frame, box)
+        self.init_times.append(time.perf_counter() - t0)
+        return out
+
+    def update(self, frame: Frame) -> TrackResult:
+        t0 = time.perf_counter()
+        r = self.inner.update(frame)
+        self.update_times.append(time.perf_counter() - t0)
+        return r
+
+
+def _run_ope(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> RunOutcome:
+    n = len(frames)
+    idx = np.flatnonzero(valid_mask(gt))
+    if idx.size == 0:
+        raise ValueError(f"{name}: no frame has a valid ground-truth box")
+    start = int(idx[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the error is recorded instead
+        run = run_sequence(task.tracker, frames[start:], gt[start], seed=task.seed)
+    boxes = np.full((n, 4), np.nan)
+    oks = np.zeros(n, dtype=bool)
+    boxes[start:] = run.boxes
+    oks[start:] = run.oks
+    error_frame = None if run.error_frame is None else start + run.error_frame
+    end = n if error_frame is None else error_frame
+    return RunOutcome(
+        tracker=task.tracker,
+        sequence=name,
+        repeat=task.repeat,
+        seed=task.seed,
+        boxes=boxes,
+        oks=oks,
+        fps=run.fps,
+        init_time=run.init_time,
+        median_update_time=run.median_update_time,
+        n_updates=run.n_updates,
+        n_lost=int(np.sum(~oks[start + 1 : end])),
+        error=None if run.error is None else f"{run.error} (frame {error_frame})",
+        error_frame=error_frame,
+    )
+
+
+def _run_vot(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> RunOutcome:
+    from .vot_style import run_supervised
+
+    init_times: list[float] = []
+    update_times: list[float] = []
+
+    def factory() -> TrackerLike:
+        return _TimedTracker(make_tracker(task.tracker, seed=task.seed), init_times, update_times)
+
+    gc.collect()
+    was_enabled = gc.isenabled()
+    gc.disable()
     try:
-        import matplotlib
+        res = run_supervised(factory, frames, gt, skip=task.skip, burnin=task.burnin)
+    finally:
+        if was_enabled:
+            gc.enable()
+    total = float(sum(update_times))
+    n = len(update_times)
+    boxes = np.asarray(res.boxes, dtype=np.float64)
+    return RunOutcome(
+        tracker=task.tracker,
+        sequence=name,
+        repeat=task.repeat,
+        seed=task.seed,
+        boxes=boxes,
+        oks=np.all(np.isfinite(boxes), axis=1),
+        fps=n / total if n and total > 0 else math.nan,
+        init_time=float(np.mean(init_times)) if init_times else math.nan,
+        median_update_time=float(np.median(update_times)) if update_times else math.nan,
+        n_updates=n,
+        vot=res.to_dict(),
+    )
 
-        mpl: str | None = matplotlib.__version__
-    except ImportError:
-        mpl = None
-    dist, ver = installed_opencv()
-    return {
-        "date": time.strftime("%Y-%m-%d %H:%M:%S"),
-        "python": platform.python_version(),
-        "platform": platform.platform(),
-        "cpu": cpu_model(),
-        "cpu_count": os.cpu_count(),
-        "numpy": np.__version__,
-        "opencv": cv2.__version__,
-        "opencv_wheel": f"{dist} {ver}",
-        "opencv_threads": cv2.getNumThreads(),
-        "matplotlib": mpl,
-        "wmiltrack": __version__,
-    }
+
+def run_task(task: Task) -> RunOutcome:
+    """Run one task; a failure (of the tracker, or of loading) becomes the outcome's ``error``.
+
+    Parameters
+    ----------
+    task:
+        What to run.
+
+    Returns
+    -------
+    RunOutcome
+        With ``error`` set and NaN boxes from the failing frame on if anything raised; the
+        exception does not propagate (``KeyboardInterrupt`` does).
+    """
+    name = Path(task.sequence).name
+    n = 0
+    try:
+        name, gt, frames = _load(task.sequence)
+        n = len(frames)
+        if task.protocol == "vot":
+            return _run_vot(task, name, frames, gt)
+        return _run_ope(task, name, frames, gt)
+    except Exception as exc:  # noqa: BLE001 - recorded in the outcome, reported in the table
+        return RunOutcome(
+            tracker=task.tracker,
+            sequence=name,
+            repeat=task.repeat,
+            seed=task.seed,
+            boxes=np.full((n, 4), np.nan),
+            oks=np.zeros(n, dtype=bool),
+            error=f"{type(exc).__name__}: {exc}",
+            error_frame=0,
+        )
 
 
-def json_safe(obj: Any) -> Any:
-    """A copy fit for strict JSON: NaN -> None, infinities -> "inf"/"-inf", numpy scalars ->
-    Python numbers, tuples -> lists, dict keys -> str (recursively)."""
-    if isinstance(obj, (float, np.floating)):
-        f = float(obj)
-        if math.isnan(f):
-            return None
-        if math.isinf(f):
-            return "inf" if f > 0 else "-inf"
-        return f
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, dict):
-        return {str(k): json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_safe(v) for v in obj]
-    return obj
+# ----------------------------------------------------------------------------- executors
+class Executor(Protocol):
+    """Maps tasks to outcomes, yielding each outcome as soon as its task is finished."""
+
+    def map(
+        self, fn: Callable[[Task], RunOutcome], tasks: Sequence[Task]
+    ) -> Iterator[RunOutcome]:
+        """Run ``fn`` on every task; yield the outcomes in the order they finish."""
+        ...
+
+
+class SerialExecutor:
+    """Runs the tasks one after the other in this process.
+
+    Parameters
+    ----------
+    cv_threads:
+        ``cv2.setNumThreads`` while the tasks run (restored afterwards); ``None`` leaves it.
+    """
+
+    def __init__(self, cv_threads: int | None = 1) -> None:
+        self.cv_threads = cv_threads
+
+    def map(
+        self, fn: Callable[[Task], RunOutcome], tasks: Sequence[Task]
+    ) -> Iterator[RunOutcome]:
+        """Run ``fn`` on every task in order, yielding each outcome at once."""
+        before = set_cv_threads(self.cv_threads)
+        try:
+            for t in tasks:
+                yield fn(t)
+        finally:
+            set_cv_threads(before)
+            _decoded.clear()
+
+
+class ProcessExecutor:
+    """Runs the tasks in ``jobs`` worker processes (spawned: OpenCV's thread pool does not
+    survive a fork reliably).
+
+    Parameters
+    ----------
+    jobs:
+        Worker processes.
+    cv_threads:
+        ``cv2.setNumThreads`` in every worker; ``None`` leaves OpenCV's default.
+    """
+
+    def __init__(self, jobs: int, cv_threads: int | None = 1) -> None:
+        if jobs < 1:
+            raise ValueError(f"jobs must be at least 1, got {jobs}")
+        self.jobs = jobs
+        self.cv_threads = cv_threads
+
+    def map(
+        self, fn: Callable[[Task], RunOutcome], tasks: Sequence[Task]
+    ) -> Iterator[RunOutcome]:
+        """Submit every task; yield outcomes as they finish.  Closing the iterator early (an
+        interruption) cancels the tasks not yet started."""
+        if not tasks:
+            return
+        pool = ProcessPoolExecutor(
+            max_workers=min(self.jobs, len(tasks)),
+            mp_context=get_context("spawn"),
+            initializer=set_cv_threads,
+            initargs=(self.cv_threads,),
+        )
+        try:
+            futures: list[Future[RunOutcome]] = [pool.submit(fn, t) for t in tasks]
+            for fut in as_completed(futures):
+                yield fut.result()
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
