@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # Memory-safety checks of the C++ core (and of the compiled modules in a real tracking run).
 #
-#   scripts/sanitize.sh [asan] [valgrind] [python]      (no argument: all three)
+#   scripts/sanitize.sh [asan] [tsan] [valgrind] [python]      (no argument: all four)
 #
 #   asan      build the C++ tests with -DWMILTRACK_SANITIZE=ON (AddressSanitizer + UBSan, Eigen
 #             asserts on) out of tree in build/sanitize and run them; any report fails.
+#   tsan      build the C++ tests with -DWMILTRACK_TSAN=ON (ThreadSanitizer) in build/tsan and
+#             run test_threads: writer threads recompute one SharedIntegralImage (the object
+#             behind Python's IntegralImage) while reader threads project and score on it;
+#             any race report fails.
 #   valgrind  build the same tests without sanitizers (and without -march=native: valgrind
 #             does not decode AVX-512) in build/memcheck, run them under valgrind memcheck.
 #   python    build the extension modules (_core and the Cython _select) with ASan + UBSan in
@@ -24,7 +28,7 @@ ROOT=$(pwd)
 PY=${PYTHON:-python}
 JOBS=${JOBS:-2}
 STEPS=("$@")
-[ ${#STEPS[@]} -eq 0 ] && STEPS=(asan valgrind python)
+[ ${#STEPS[@]} -eq 0 ] && STEPS=(asan tsan valgrind python)
 
 log() { printf '== sanitize: %s\n' "$*"; }
 
@@ -58,18 +62,32 @@ SAN_CXX="-O1 -g -fno-omit-frame-pointer"
 
 run_asan() {
   log "C++ tests under AddressSanitizer + UndefinedBehaviorSanitizer (build/sanitize)"
-  build build/sanitize test_core -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
-    -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=ON -DWMILTRACK_BUILD_PYTHON=OFF
-  ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:halt_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1" \
-    build/sanitize/test_core
+  build build/sanitize test_core test_threads -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
+    -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=ON -DWMILTRACK_TSAN=OFF -DWMILTRACK_BUILD_PYTHON=OFF
+  local opts="detect_leaks=1:abort_on_error=0:halt_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1"
+  ASAN_OPTIONS="$opts" build/sanitize/test_core
+  ASAN_OPTIONS="$opts" build/sanitize/test_threads
   log "asan: clean"
+}
+
+run_tsan() {
+  log "threaded C++ test under ThreadSanitizer (build/tsan)"
+  build build/tsan test_threads -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
+    -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=OFF -DWMILTRACK_TSAN=ON -DWMILTRACK_BUILD_PYTHON=OFF
+  # setarch -R: TSan's shadow memory layout needs the ASLR of older kernels (newer ones map
+  # the binary where TSan cannot work: "unexpected memory mapping").
+  local run=()
+  command -v setarch >/dev/null && run=(setarch "$(uname -m)" -R)
+  TSAN_OPTIONS="halt_on_error=1:abort_on_error=0:second_deadlock_stack=1" "${run[@]}" build/tsan/test_threads
+  log "tsan: clean"
 }
 
 run_valgrind() {
   command -v valgrind >/dev/null || { echo "valgrind not installed (apt-get install -y valgrind)" >&2; return 1; }
   log "C++ tests under valgrind memcheck (build/memcheck)"
   build build/memcheck test_core -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" \
-    -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=OFF -DWMILTRACK_NATIVE=OFF -DWMILTRACK_BUILD_PYTHON=OFF
+    -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=OFF -DWMILTRACK_TSAN=OFF -DWMILTRACK_NATIVE=OFF \
+    -DWMILTRACK_BUILD_PYTHON=OFF
   valgrind --tool=memcheck --error-exitcode=99 --leak-check=full --show-leak-kinds=definite,indirect \
     --errors-for-leak-kinds=definite,indirect --track-origins=yes -q build/memcheck/test_core
   log "valgrind: clean"
@@ -83,7 +101,7 @@ run_python() {
     -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
     -DCMAKE_C_FLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer" \
     -DSKBUILD_PROJECT_NAME=wmiltrack -DSKBUILD_PROJECT_VERSION=0.0.0 \
-    -DWMILTRACK_BUILD_PYTHON=ON -DWMILTRACK_SANITIZE=ON
+    -DWMILTRACK_BUILD_PYTHON=ON -DWMILTRACK_SANITIZE=ON -DWMILTRACK_TSAN=OFF
   site=build/sanitize-py/site
   rm -rf "$site" && mkdir -p "$site/wmiltrack"
   cp src/wmiltrack/*.py "$site/wmiltrack/"
@@ -128,8 +146,9 @@ PYEOF
 for step in "${STEPS[@]}"; do
   case "$step" in
     asan) ensure_eigen; run_asan ;;
+    tsan) ensure_eigen; run_tsan ;;
     valgrind) ensure_eigen; run_valgrind ;;
     python) ensure_eigen; run_python ;;
-    *) echo "unknown step $step (asan, valgrind, python)" >&2; exit 2 ;;
+    *) echo "unknown step $step (asan, tsan, valgrind, python)" >&2; exit 2 ;;
   esac
 done

@@ -189,6 +189,47 @@ def test_project_corner_near_int_max_is_refused(x: int, y: int) -> None:
             _core.project(ii, fb, xs, ys)
 
 
+@FAST
+@given(vals=st.lists(st.one_of(st.integers(-60, 60), st.integers(-2**63, 2**63 - 1)), min_size=2,
+                     max_size=2),
+       kind=st.sampled_from(["int64", "uint64", "float64", "float64+0.5", "float32", "list"]))
+def test_project_coordinates_of_any_dtype_are_exact_or_refused(vals: list[int], kind: str) -> None:
+    """int64/uint64/float coordinates: the int32 result when they are integers in int32 range,
+    ValueError otherwise (never wrapped around or truncated)."""
+    frame = np.arange(400, dtype=np.uint8).reshape(20, 20)
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 20, 20))
+    fb = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[2, 3, 4, 4]], np.int32), np.ones(1))
+    x, y = vals
+    if kind == "uint64":
+        x, y = abs(x), abs(y)
+    exact: bool = True
+    xs: Any
+    ys: Any
+    if kind == "list":
+        xs, ys = [x], [y]
+    elif kind.startswith("float"):
+        dt = np.float32 if kind == "float32" else np.float64
+        xs, ys = np.array([x], dt), np.array([y], dt)
+        if kind.endswith("+0.5"):
+            xs = xs + 0.5
+        exact = bool(np.all(np.isfinite(xs)) and np.all(xs == np.floor(xs)))
+        x, y = (int(v) if np.isfinite(v) and v == np.floor(v) else 0 for v in (xs[0], ys[0]))
+    else:
+        xs, ys = np.array([x], kind), np.array([y], kind)
+    in_range = exact and all(-INT_MAX - 1 <= v <= INT_MAX for v in (x, y))
+    if not in_range:
+        with pytest.raises(ValueError, match="int32 range|not an integer"):
+            _core.project(ii, fb, xs, ys)
+        return
+    ref_x, ref_y = np.array([x], np.int32), np.array([y], np.int32)
+    if 0 <= x + 2 and x + 6 <= 20 and 0 <= y + 3 and y + 7 <= 20:
+        np.testing.assert_array_equal(_core.project(ii, fb, xs, ys), _core.project(ii, fb, ref_x, ref_y))
+    else:
+        with pytest.raises(IndexError):
+            _core.project(ii, fb, xs, ys)
+
+
 # ---------------------------------------------------------------- log ratio
 def naive_log_ratio(v: np.ndarray, mu1: np.ndarray, s1: np.ndarray, mu0: np.ndarray, s0: np.ndarray,
                     guard: float) -> np.ndarray:

@@ -1,5 +1,7 @@
 #include <pybind11/stl.h>
 
+#include <cmath>
+#include <limits>
 #include <tuple>
 #include <vector>
 
@@ -32,6 +34,76 @@ ImageView image_view(const py::array& frame) {
 
 namespace {
 
+constexpr std::int64_t kInt32Min = std::numeric_limits<std::int32_t>::min();
+constexpr std::int64_t kInt32Max = std::numeric_limits<std::int32_t>::max();
+
+[[noreturn]] void out_of_int32(const char* name, const std::string& value) {
+  throw py::value_error(std::string(name) + " holds " + value + ", outside the int32 range [" +
+                        std::to_string(kInt32Min) + ", " + std::to_string(kInt32Max) + "]");
+}
+
+template <typename T>
+py::array_t<T, py::array::c_style | py::array::forcecast> as_c_array(const py::array& a) {
+  return py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(a);
+}
+
+}  // namespace
+
+Int32Array int32_array(const py::handle& obj, const char* name) {
+  py::array a = py::array::ensure(obj);
+  if (!a) {
+    PyErr_Clear();
+    throw py::type_error(std::string(name) + " must be an array of integers");
+  }
+  Int32Array out;
+  out.shape.assign(a.shape(), a.shape() + a.ndim());
+  out.values.resize(static_cast<std::size_t>(a.size()));
+  const char kind = a.dtype().kind();
+  if (kind == 'u' && a.itemsize() == 8) {
+    const auto c = as_c_array<std::uint64_t>(a);
+    for (py::ssize_t i = 0; i < c.size(); ++i) {
+      const std::uint64_t v = c.data()[i];
+      if (v > static_cast<std::uint64_t>(kInt32Max)) out_of_int32(name, std::to_string(v));
+      out.values[i] = static_cast<std::int32_t>(v);
+    }
+  } else if (kind == 'i' || kind == 'u') {
+    const auto c = as_c_array<std::int64_t>(a);
+    for (py::ssize_t i = 0; i < c.size(); ++i) {
+      const std::int64_t v = c.data()[i];
+      if (v < kInt32Min || v > kInt32Max) out_of_int32(name, std::to_string(v));
+      out.values[i] = static_cast<std::int32_t>(v);
+    }
+  } else if (kind == 'f') {
+    const auto c = as_c_array<double>(a);
+    for (py::ssize_t i = 0; i < c.size(); ++i) {
+      const double v = c.data()[i];
+      if (!std::isfinite(v) || std::floor(v) != v) {
+        throw py::value_error(std::string(name) + " holds " + py::repr(py::float_(v)).cast<std::string>() +
+                              ", not an integer (float coordinates and indices are not rounded)");
+      }
+      if (v < static_cast<double>(kInt32Min) || v > static_cast<double>(kInt32Max)) {
+        out_of_int32(name, py::repr(py::float_(v)).cast<std::string>());
+      }
+      out.values[i] = static_cast<std::int32_t>(v);
+    }
+  } else {
+    throw py::type_error(std::string(name) + " must hold integers, got dtype " +
+                         py::str(a.dtype()).cast<std::string>());
+  }
+  return out;
+}
+
+std::shared_ptr<const IntegralImage> computed_table(const SharedIntegralImage& ii) {
+  auto table = ii.snapshot();
+  if (!table) {
+    throw py::value_error(
+        "the IntegralImage has not been computed yet: call compute() or compute_channels() first");
+  }
+  return table;
+}
+
+namespace {
+
 void require_plane(const IntegralImage& self, int plane) {
   if (plane < 0 || plane >= self.num_channels()) {
     throw py::index_error("plane " + std::to_string(plane) + " outside the integral image's " +
@@ -52,12 +124,18 @@ void bind_integral(py::module_& m) {
   m.attr("CH_ORIENT3") = static_cast<int>(kOrient3);
   m.attr("NUM_CHANNEL_KINDS") = kNumChannelKinds;
 
-  py::class_<IntegralImage>(m, "IntegralImage",
-                            "Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY.")
+  py::class_<SharedIntegralImage>(
+      m, "IntegralImage",
+      "Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY.\n\n"
+      "Every method and property but `computed` raises ValueError until compute() or\n"
+      "compute_channels() succeeded. Threads may share one object: readers (project,\n"
+      "score_grid, rect_sum, table, the properties) each see one complete table, the one\n"
+      "current when they started, while another thread recomputes it; a failed compute leaves\n"
+      "the object unchanged.")
       .def(py::init<>())
       .def(
           "compute",
-          [](IntegralImage& self, const py::array& frame, std::tuple<int, int, int, int> roi) {
+          [](SharedIntegralImage& self, const py::array& frame, std::tuple<int, int, int, int> roi) {
             const ImageView view = image_view(frame);
             const auto [x, y, w, h] = roi;
             py::gil_scoped_release release;
@@ -67,7 +145,7 @@ void bind_integral(py::module_& m) {
           "Rebuild over roi = (x, y, w, h), clipped to the frame.")
       .def(
           "compute_channels",
-          [](IntegralImage& self, const py::array& frame, std::tuple<int, int, int, int> roi,
+          [](SharedIntegralImage& self, const py::array& frame, std::tuple<int, int, int, int> roi,
              const std::vector<int>& channels) {
             const ImageView view = image_view(frame);
             const auto [x, y, w, h] = roi;
@@ -78,36 +156,48 @@ void bind_integral(py::module_& m) {
           "Rebuild over roi = (x, y, w, h), clipped to the frame, with plane k holding channel\n"
           "channels[k] (CH_* ids). ValueError for an unknown id, no channels, or a colour\n"
           "channel on a gray frame.")
-      .def_property_readonly("num_channels", &IntegralImage::num_channels)
+      .def_property_readonly(
+          "computed", [](const SharedIntegralImage& self) { return self.snapshot() != nullptr; },
+          "Whether a compute() or compute_channels() succeeded (the other members need one).")
+      .def_property_readonly(
+          "num_channels",
+          [](const SharedIntegralImage& self) { return computed_table(self)->num_channels(); })
       .def_property_readonly(
           "channels",
-          [](const IntegralImage& self) {
-            py::tuple t(self.channels().size());
-            for (std::size_t k = 0; k < self.channels().size(); ++k) t[k] = self.channels()[k];
+          [](const SharedIntegralImage& self) {
+            const auto ii = computed_table(self);
+            py::tuple t(ii->channels().size());
+            for (std::size_t k = 0; k < ii->channels().size(); ++k) t[k] = ii->channels()[k];
             return t;
           },
           "The channel id of each plane.")
-      .def_property_readonly("x0", &IntegralImage::x0)
-      .def_property_readonly("y0", &IntegralImage::y0)
-      .def_property_readonly("width", &IntegralImage::width)
-      .def_property_readonly("height", &IntegralImage::height)
+      .def_property_readonly(
+          "x0", [](const SharedIntegralImage& self) { return computed_table(self)->x0(); })
+      .def_property_readonly(
+          "y0", [](const SharedIntegralImage& self) { return computed_table(self)->y0(); })
+      .def_property_readonly(
+          "width", [](const SharedIntegralImage& self) { return computed_table(self)->width(); })
+      .def_property_readonly(
+          "height", [](const SharedIntegralImage& self) { return computed_table(self)->height(); })
       .def(
           "table",
-          [](const IntegralImage& self, int plane) {
-            require_plane(self, plane);
-            CArray<double> out({self.height() + 1, self.width() + 1});
-            std::copy(self.plane(plane), self.plane(plane) + out.size(), out.mutable_data());
+          [](const SharedIntegralImage& self, int plane) {
+            const auto ii = computed_table(self);
+            require_plane(*ii, plane);
+            CArray<double> out({ii->height() + 1, ii->width() + 1});
+            std::copy(ii->plane(plane), ii->plane(plane) + out.size(), out.mutable_data());
             return out;
           },
           py::arg("plane") = 0,
           "A copy of plane `plane`'s (height + 1) x (width + 1) table; row and column 0 are zero.")
       .def(
           "rect_sum",
-          [](const IntegralImage& self, int x, int y, int w, int h, int plane) {
+          [](const SharedIntegralImage& self, int x, int y, int w, int h, int plane) {
+            const auto ii = computed_table(self);
             const Rect r{x, y, w, h};
-            if (!self.covers(r)) throw py::index_error("rectangle outside the integral image");
-            require_plane(self, plane);
-            return self.sum(r, plane);
+            if (!ii->covers(r)) throw py::index_error("rectangle outside the integral image");
+            require_plane(*ii, plane);
+            return ii->sum(r, plane);
           },
           py::arg("x"), py::arg("y"), py::arg("w"), py::arg("h"), py::arg("plane") = 0,
           "Exact sum over columns [x, x+w) and rows [y, y+h), in frame coordinates, on a plane.");

@@ -49,17 +49,24 @@ void bind_scoring(py::module_& m) {
 
   m.def(
       "score_grid",
-      [](const IntegralImage& ii, const FeatureBank& bank, const CArray<std::int32_t>& selected,
+      [](const SharedIntegralImage& shared, const FeatureBank& bank, const py::object& selected_obj,
          CArray<double> mu1, CArray<double> sigma1, CArray<double> mu0, CArray<double> sigma0,
          double guard, std::tuple<int, int, int, int> box, int radius, int step,
          std::tuple<int, int> frame_size, bool return_scores) -> py::tuple {
-        require(selected.ndim() == 1 && selected.shape(0) > 0, "selected must be a non-empty 1-D array");
-        require_planes(ii, bank);
-        const WeakGaussians weak = make_weak({mu1, sigma1, mu0, sigma0}, selected.shape(0), guard);
+        // The sizes first: nothing is allocated for a grid the core would refuse.
+        require(radius >= 1 && radius <= kMaxSearchRadius,
+                "radius must be in 1 .. " + std::to_string(kMaxSearchRadius) +
+                    " (the grid is walked in full), got " + std::to_string(radius));
+        require(step >= 1, "step must be >= 1, got " + std::to_string(step));
         const auto [x, y, w, h] = box;
         const auto [fw, fh] = frame_size;
         require(w > 0 && h > 0, "box must have positive size");
-        require(radius >= 1 && step >= 1, "radius and step must be >= 1");
+        const Int32Array selected = int32_array(selected_obj, "selected");
+        require(selected.ndim() == 1 && selected.size() > 0, "selected must be a non-empty 1-D array");
+        const auto ii = computed_table(shared);
+        require_planes(*ii, bank);
+        const WeakGaussians weak = make_weak({mu1, sigma1, mu0, sigma0}, selected.size(), guard);
+        // radius <= kMaxSearchRadius: side <= 2 * 4095 + 1, no overflow.
         const int side = 2 * grid_half_size(radius, step) + 1;
         CArray<double> scores;
         double* scores_ptr = nullptr;
@@ -70,7 +77,7 @@ void bind_scoring(py::module_& m) {
         GridResult r;
         {
           py::gil_scoped_release release;
-          r = score_grid(ii, bank, selected.data(), static_cast<int>(selected.shape(0)), weak,
+          r = score_grid(*ii, bank, selected.data(), static_cast<int>(selected.size()), weak,
                          Rect{x, y, w, h}, radius, step, fw, fh, scores_ptr);
         }
         if (return_scores) return py::make_tuple(r.dx, r.dy, r.score, r.candidates, scores);
@@ -81,7 +88,8 @@ void bind_scoring(py::module_& m) {
       py::arg("step"), py::arg("frame_size"), py::arg("return_scores") = false,
       "Score the grid of offsets (i*step, j*step) inside a disc of `radius` around `box`.\n\n"
       "Returns (dx, dy, best_score, n_candidates[, scores]); the best is the first maximum in\n"
-      "row-major order; n_candidates == 0 means no candidate box fits in the frame.");
+      "row-major order; n_candidates == 0 means no candidate box fits in the frame.\n"
+      "radius must be in 1 .. 4096 and step >= 1 (checked before anything is allocated).");
 }
 
 }  // namespace wmiltrack::bindings

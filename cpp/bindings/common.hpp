@@ -5,10 +5,13 @@
 #include <pybind11/pybind11.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/integral.hpp"
+#include "wmiltrack/shared.hpp"
 
 namespace wmiltrack::bindings {
 
@@ -17,6 +20,25 @@ namespace py = pybind11;
 // C-contiguous arrays of a fixed dtype; other dtypes and layouts are converted once.
 template <typename T>
 using CArray = py::array_t<T, py::array::c_style | py::array::forcecast>;
+
+// An integer array copied into int32 values the binding owns (so that another thread cannot
+// change them between a check and their use), with its shape.
+struct Int32Array {
+  std::vector<std::int32_t> values;
+  std::vector<py::ssize_t> shape;
+  const std::int32_t* data() const { return values.data(); }
+  py::ssize_t size() const { return static_cast<py::ssize_t>(values.size()); }
+  py::ssize_t ndim() const { return static_cast<py::ssize_t>(shape.size()); }
+};
+
+// `obj` (an array or a sequence) as int32 values, never converted silently: integers outside
+// int32 raise ValueError, floats are accepted only when every value is an integer in range
+// (else ValueError), and other dtypes (bool, complex, object, strings) raise TypeError.
+Int32Array int32_array(const py::handle& obj, const char* name);
+
+// The table of an IntegralImage, or ValueError when it was never computed. The snapshot
+// stays valid and unchanged while held, whatever other threads do to the object.
+std::shared_ptr<const IntegralImage> computed_table(const SharedIntegralImage& ii);
 
 // An 8-bit frame (H x W, H x W x 1, 3 or 4) as a strided view, without copying.
 ImageView image_view(const py::array& frame);

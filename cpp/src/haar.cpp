@@ -80,36 +80,51 @@ CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* 
   }
 }
 
-void check_boxes_covered(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* xs,
-                         const std::int32_t* ys, int n_boxes) {
+namespace {
+
+void check_planes(const IntegralImage& ii, const FeatureBank& bank) {
+  if (!ii.computed()) throw std::invalid_argument("the integral image has not been computed");
   if (bank.planes_needed() > ii.num_channels()) {
     throw std::out_of_range("the feature bank uses " + std::to_string(bank.planes_needed()) +
                             " plane(s) but the integral image has " +
                             std::to_string(ii.num_channels()));
   }
-  const Rect& e = bank.extent();
+}
+
+void check_box(const IntegralImage& ii, const Rect& e, std::int32_t bx, std::int32_t by) {
   constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
-  for (int n = 0; n < n_boxes; ++n) {
-    // In 64 bits: a corner near INT_MAX plus the extent's offset must not wrap around.
-    const std::int64_t x = static_cast<std::int64_t>(xs[n]) + e.x;
-    const std::int64_t y = static_cast<std::int64_t>(ys[n]) + e.y;
-    if (x > kIntMax || y > kIntMax ||
-        !ii.covers(Rect{static_cast<int>(x), static_cast<int>(y), e.w, e.h})) {
-      throw std::out_of_range("box at (" + std::to_string(xs[n]) + ", " + std::to_string(ys[n]) +
-                              ") reaches outside the integral image's region");
-    }
+  // In 64 bits: a corner near INT_MAX plus the extent's offset must not wrap around.
+  const std::int64_t x = static_cast<std::int64_t>(bx) + e.x;
+  const std::int64_t y = static_cast<std::int64_t>(by) + e.y;
+  if (x > kIntMax || y > kIntMax ||
+      !ii.covers(Rect{static_cast<int>(x), static_cast<int>(y), e.w, e.h})) {
+    throw std::out_of_range("box at (" + std::to_string(bx) + ", " + std::to_string(by) +
+                            ") reaches outside the integral image's region");
   }
+}
+
+}  // namespace
+
+void check_boxes_covered(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* xs,
+                         const std::int32_t* ys, int n_boxes) {
+  check_planes(ii, bank);
+  for (int n = 0; n < n_boxes; ++n) check_box(ii, bank.extent(), xs[n], ys[n]);
 }
 
 void project(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* features,
              int n_features, const std::int32_t* xs, const std::int32_t* ys, int n_boxes,
              double* out) {
-  check_boxes_covered(ii, bank, xs, ys, n_boxes);
+  check_planes(ii, bank);
   const CompiledFeatures compiled(bank, features, n_features, ii);
   const int n_out = compiled.size();
   const std::ptrdiff_t s = ii.stride();
   for (int n = 0; n < n_boxes; ++n) {
-    const double* base = ii.data() + (ys[n] - ii.y0()) * s + (xs[n] - ii.x0());
+    // Each coordinate is read once, checked, and the checked copy used: a caller that
+    // changes xs/ys meanwhile gets values for some box, never a read outside the table.
+    const std::int32_t x = xs[n], y = ys[n];
+    check_box(ii, bank.extent(), x, y);
+    const double* base = ii.data() + (static_cast<std::ptrdiff_t>(y) - ii.y0()) * s +
+                         (static_cast<std::ptrdiff_t>(x) - ii.x0());
     for (int k = 0; k < n_out; ++k) {
       out[static_cast<std::ptrdiff_t>(k) * n_boxes + n] = compiled.value(base, k);
     }

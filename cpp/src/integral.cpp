@@ -149,14 +149,34 @@ void accumulate_row(const std::uint8_t* v, int w, const double* prev, double* ou
 
 }  // namespace
 
-// The luma table alone. The same exact integer sums as the plain running-sum loop this
-// replaced, so the same doubles, through the vectorised row code of compute_channels.
+// compute() and compute_channels() build a new table in a fresh object and swap it in only
+// when complete: an exception (a bad argument, std::bad_alloc) leaves *this as it was.
 void IntegralImage::compute(const ImageView& image, Rect roi) {
-  compute_channels(image, roi, {kLuma});
+  // The luma table alone, through the vectorised row code of build_channels: the same exact
+  // integer sums as a plain running-sum loop, so the same doubles.
+  IntegralImage next;
+  next.build_channels(image, roi, {kLuma});
+  swap(next);
 }
 
 void IntegralImage::compute_channels(const ImageView& image, Rect roi,
                                      const std::vector<int>& channels) {
+  IntegralImage next;
+  next.build_channels(image, roi, channels);
+  swap(next);
+}
+
+void IntegralImage::swap(IntegralImage& other) noexcept {
+  std::swap(x0_, other.x0_);
+  std::swap(y0_, other.y0_);
+  std::swap(width_, other.width_);
+  std::swap(height_, other.height_);
+  channels_.swap(other.channels_);
+  data_.swap(other.data_);
+}
+
+void IntegralImage::build_channels(const ImageView& image, Rect roi,
+                                   const std::vector<int>& channels) {
   if (channels.empty()) throw std::invalid_argument("integral image: no channels requested");
   bool need_luma = false, need_grad = false, need_orient = false, need_colour = false;
   for (int ch : channels) {

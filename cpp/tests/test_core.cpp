@@ -408,6 +408,82 @@ void test_channels(std::mt19937& rng) {
   const GridResult g2 = score_grid(stacked, zeros, sel, 1, weak, Rect{30, 30, 10, 8}, 6, 1, 70, 60, nullptr);
   CHECK(g1.dx == g2.dx && g1.dy == g2.dy && g1.score == g2.score && g1.candidates == g2.candidates);
 }
+
+// Issue 12: an uncomputed image refuses every read; a failed compute leaves the object as it
+// was; a log ratio depends on its own value only.
+void test_hardening(std::mt19937& rng) {
+  FeatureBank bank({0, 1}, {Rect{0, 0, 2, 2}}, {1.0});
+  IntegralImage empty;
+  CHECK(!empty.computed());
+  CHECK(!empty.covers(Rect{0, 0, 0, 0}));
+  const std::int32_t zero = 0, zero_y = 0;
+  double out = 0.0;
+  bool threw = false;
+  try {
+    project(empty, bank, nullptr, 0, &zero, &zero_y, 1, &out);
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+  const double mu[] = {0.0}, sg[] = {1.0};
+  const WeakGaussians weak1(mu, sg, mu, sg, 1, 1e-30);
+  threw = false;
+  try {
+    score_grid(empty, bank, &zero, 1, weak1, Rect{0, 0, 2, 2}, 3, 1, 10, 10, nullptr);
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+
+  // Strong guarantee: a bad ROI and a failed allocation leave the table untouched.
+  const Frame f = random_frame(30, 40, 3, rng);
+  IntegralImage ii;
+  ii.compute(f.view(), Rect{2, 3, 20, 10});
+  const std::vector<double> before(ii.data(), ii.data() + ii.plane_size());
+  threw = false;
+  try {
+    ii.compute_channels(f.view(), Rect{100, 100, 5, 5}, {kLuma});
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+  // A view that claims a huge frame: its table (2^60 doubles per plane) exceeds the vector's
+  // max_size, so resize throws std::length_error before touching the pixels. (A real
+  // std::bad_alloc takes the same path; it is tested from Python: ASan's and valgrind's
+  // operator new abort instead of throwing.)
+  ImageView huge = f.view();
+  huge.rows = huge.cols = 1 << 30;
+  threw = false;
+  try {
+    ii.compute_channels(huge, Rect{0, 0, 1 << 30, 1 << 30}, {kLuma, kLuma});
+  } catch (const std::bad_alloc&) {
+    threw = true;
+  } catch (const std::length_error&) {
+    threw = true;
+  }
+  CHECK(threw);
+  CHECK(ii.computed() && ii.x0() == 2 && ii.y0() == 3 && ii.width() == 20 && ii.height() == 10);
+  CHECK(ii.num_channels() == 1);
+  CHECK(std::equal(before.begin(), before.end(), ii.data()));
+
+  // log_ratio: value i gives the same bits alone, at any position of any batch, and next to
+  // values that take the guarded formula.
+  const double m1[] = {10.0}, s1[] = {3.0}, m0[] = {-4.0}, s0[] = {5.0};
+  const WeakGaussians weak(m1, s1, m0, s0, 1, 1e-30);
+  std::uniform_real_distribution<double> d(-20.0, 30.0);
+  std::vector<double> xs(37), batch(37), scratch(2 * 37 + 2);
+  for (double& x : xs) x = d(rng);
+  xs[5] = 1e6;  // far in both tails: the guarded formula
+  weak.log_ratio(0, xs.data(), 37, batch.data(), false, scratch.data());
+  for (int i = 0; i < 37; ++i) {
+    for (int offset = 0; offset < 9; ++offset) {  // alone, after `offset` other values
+      std::vector<double> in(offset + 1, 0.5), o(offset + 1);
+      in[offset] = xs[i];
+      weak.log_ratio(0, in.data(), offset + 1, o.data(), false, scratch.data());
+      CHECK(o[offset] == batch[i]);
+    }
+  }
+}
 }  // namespace
 
 int main() {
@@ -417,6 +493,7 @@ int main() {
   test_overflow_guards(rng);
   test_orientation_bin();
   test_channels(rng);
+  test_hardening(rng);
   if (failures == 0) {
     std::printf("test_core: all checks passed\n");
     return EXIT_SUCCESS;

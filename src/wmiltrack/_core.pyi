@@ -7,7 +7,13 @@ import numpy as np
 import numpy.typing as npt
 
 _F64 = npt.NDArray[np.float64]
+# Integer arrays (coordinates, indices): any integer dtype or integral floats, every value in
+# the int32 range; out-of-range or fractional values raise ValueError, other dtypes TypeError.
 _I32 = npt.ArrayLike
+
+# True when built with WMILTRACK_NATIVE=ON (-march=native): runs only on CPUs like the build
+# machine's. The default build is portable (x86-64 baseline) and gives the same bits on any CPU.
+BUILD_NATIVE: Final[bool]
 
 # Channel ids of IntegralImage.compute_channels; every channel is an integer in 0..255.
 # gx, gy: central differences of the luma (neighbours outside the ROI used when the frame
@@ -23,9 +29,18 @@ CH_ORIENT3: Final[int]  # 7: ... nearest 135 deg
 NUM_CHANNEL_KINDS: Final[int]  # 8
 
 class IntegralImage:
-    """Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY."""
+    """Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY.
+
+    Every method and property but ``computed`` raises ValueError until compute() or
+    compute_channels() succeeded. Threads may share one object: readers (project,
+    score_grid, rect_sum, table, the properties) each see one complete table, the one
+    current when they started, while another thread recomputes it; a failed compute leaves
+    the object unchanged."""
 
     def __init__(self) -> None: ...
+    @property
+    def computed(self) -> bool:
+        """Whether a compute() or compute_channels() succeeded (the other members need one)."""
     def compute(self, frame: npt.NDArray[np.uint8], roi: tuple[int, int, int, int]) -> None:
         """Rebuild over roi = (x, y, w, h), clipped to the frame."""
     def compute_channels(self, frame: npt.NDArray[np.uint8], roi: tuple[int, int, int, int],
@@ -72,11 +87,17 @@ class FeatureBank:
 
 def project(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32,
             features: _I32 | None = None) -> _F64:
-    """Feature values (features x boxes) for boxes with top-left corners (xs, ys)."""
+    """Feature values (features x boxes) for boxes with top-left corners (xs, ys).
+
+    xs, ys and features must hold integers in the int32 range: floats are accepted only
+    when integral, anything else raises ValueError (out of range, fractional) or TypeError."""
 
 def log_ratio(values: npt.ArrayLike, mu1: npt.ArrayLike, sigma1: npt.ArrayLike,
               mu0: npt.ArrayLike, sigma0: npt.ArrayLike, guard: float) -> _F64:
-    """Per-feature Gaussian log-likelihood ratio h(x) = ln(p1 + guard) - ln(p0 + guard)."""
+    """Per-feature Gaussian log-likelihood ratio h(x) = ln(p1 + guard) - ln(p0 + guard).
+
+    Each value depends on its own inputs only (not on the other samples): the same value
+    gives the same bits here and inside score_grid."""
 
 @overload
 def score_grid(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayLike,

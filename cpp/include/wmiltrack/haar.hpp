@@ -82,12 +82,14 @@ class CompiledFeatures {
 };
 
 // Checks that features at every box lie inside the integral image's region and that the
-// image has every plane the bank uses; throws std::out_of_range.
+// image has every plane the bank uses; throws std::out_of_range (std::invalid_argument for
+// an integral image that was never computed).
 void check_boxes_covered(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* xs,
                          const std::int32_t* ys, int n_boxes);
 
 // out[k * n_boxes + n] = value of feature features[k] (or k) at box n, whose top-left corner
-// is (xs[n], ys[n]) in frame coordinates.
+// is (xs[n], ys[n]) in frame coordinates. Same checks and errors as check_boxes_covered(),
+// made box by box on the value that is then used (each coordinate is read once).
 void project(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* features,
              int n_features, const std::int32_t* xs, const std::int32_t* ys, int n_boxes,
              double* out);

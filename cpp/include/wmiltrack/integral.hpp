@@ -77,9 +77,12 @@ struct ImageView {
 
 class IntegralImage {
  public:
-  // Rebuild over `roi` (clipped to the frame). Reuses the buffer when the size allows.
-  // Throws std::invalid_argument for an empty image, an unsupported channel count or an
-  // ROI that does not meet the frame.
+  // Rebuild over `roi` (clipped to the frame). Throws std::invalid_argument for an empty
+  // image, an unsupported channel count or an ROI that does not meet the frame.
+  // Strong exception guarantee (for compute_channels() too): the new table is built in a
+  // new buffer and swapped in when complete, so a throw (std::bad_alloc included) leaves
+  // the object unchanged. Not safe against concurrent readers of the same object: see
+  // SharedIntegralImage (shared.hpp) for an object that threads may share.
   void compute(const ImageView& image, Rect roi);
 
   // Rebuild over `roi` with one plane per entry of `channels` (Channel ids; repeats
@@ -88,6 +91,12 @@ class IntegralImage {
   // (kOppRG, kOppYB) on a 1-channel frame. Cost: one pass over the ROI (plus a one-pixel
   // border for the gradient channels), independent of the frame's size.
   void compute_channels(const ImageView& image, Rect roi, const std::vector<int>& channels);
+
+  // False until a compute() or compute_channels() succeeded: the table is empty then and
+  // nothing may be read from it (sum(), plane(), data()).
+  bool computed() const { return !data_.empty(); }
+
+  void swap(IntegralImage& other) noexcept;
 
   int x0() const { return x0_; }
   int y0() const { return y0_; }
@@ -107,10 +116,11 @@ class IntegralImage {
   // Plane k; the caller guarantees 0 <= k < num_channels().
   const double* plane(int k) const { return data_.data() + k * plane_size(); }
 
-  // True when the frame rectangle lies inside the region the table covers. The far edges
+  // True when the frame rectangle lies inside the region the table covers (never before the
+  // first compute). The far edges
   // are computed in 64 bits: x + w of two large ints must not wrap around and pass.
   bool covers(const Rect& r) const {
-    return r.x >= x0_ && r.y >= y0_ && r.w >= 0 && r.h >= 0 &&
+    return computed() && r.x >= x0_ && r.y >= y0_ && r.w >= 0 && r.h >= 0 &&
            static_cast<std::int64_t>(r.x) + r.w <= static_cast<std::int64_t>(x0_) + width_ &&
            static_cast<std::int64_t>(r.y) + r.h <= static_cast<std::int64_t>(y0_) + height_;
   }
@@ -124,6 +134,9 @@ class IntegralImage {
   }
 
  private:
+  // The table-building loops, run on a fresh object by compute() / compute_channels().
+  void build_channels(const ImageView& image, Rect roi, const std::vector<int>& channels);
+
   int x0_ = 0;
   int y0_ = 0;
   int width_ = 0;

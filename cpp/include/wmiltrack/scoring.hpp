@@ -20,7 +20,9 @@ class WeakGaussians {
 
   int size() const { return static_cast<int>(mu1_.size()); }
 
-  // out[i] (+)= h_k(x[i]) for i < n; `scratch` needs 2n doubles.
+  // out[i] (+)= h_k(x[i]) for i < n. Each h_k(x[i]) depends on x[i] alone (not on n, the
+  // other values or the buffers' alignment): the same value gives the same bits here and in
+  // score_grid. `scratch` is unused (kept for the signature).
   void log_ratio(int k, const double* x, int n, double* out, bool accumulate,
                  double* scratch) const;
 

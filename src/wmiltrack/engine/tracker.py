@@ -7,8 +7,10 @@ coarse and fine candidate scoring (C++) -> new box -> positive and negative bags
 
 from __future__ import annotations
 
+import functools
 import math
-from typing import Any
+import threading
+from typing import Any, Callable, TypeVar
 
 import numpy as np
 
@@ -24,6 +26,24 @@ from .selection import milboost_select, wmil_select
 
 class NotInitializedError(ValueError):
     """``update`` was called before ``init``."""
+
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _one_thread_at_a_time(method: _F) -> _F:
+    """RuntimeError when another thread is inside a guarded method of the same tracker."""
+    @functools.wraps(method)
+    def guarded(self: Tracker, *args: Any, **kwargs: Any) -> Any:
+        if not self._busy.acquire(blocking=False):
+            raise RuntimeError(
+                "this Tracker is in use by another thread: a Tracker may be used by one thread "
+                "at a time (use one Tracker per thread)")
+        try:
+            return method(self, *args, **kwargs)
+        finally:
+            self._busy.release()
+    return guarded  # type: ignore[return-value]
 
 
 def _sigmoid(z: float) -> float:
@@ -67,6 +87,11 @@ class Tracker:
     **overrides
         Any :class:`~wmiltrack.Params` field, e.g. ``num_selected=30``.
 
+    Threads: a Tracker holds one target's state, so it may be used by one thread at a time;
+    ``init``/``update`` called while another thread is inside one of them raise
+    ``RuntimeError`` (nothing is changed). Different trackers may run in different threads
+    at once (the compiled core releases the GIL and shares no state between them).
+
     Examples
     --------
     >>> t = Tracker("rcwmil", seed=0)            # doctest: +SKIP
@@ -85,6 +110,7 @@ class Tracker:
         self._params = params
         self._seed = int(seed)
         self._ii = _core.IntegralImage()
+        self._busy = threading.Lock()
         self._initialized = False
         self._frame_wh = (0, 0)
         self._box: IntBox = (0, 0, 0, 0)
@@ -115,6 +141,7 @@ class Tracker:
         x, y, w, h = self._box
         return float(x), float(y), float(w), float(h)
 
+    @_one_thread_at_a_time
     def init(self, frame: np.ndarray, box: Any) -> None:
         """Start tracking the object in ``box = (x, y, w, h)`` of ``frame``.
 
@@ -144,6 +171,7 @@ class Tracker:
 
     reinit = init
 
+    @_one_thread_at_a_time
     def update(self, frame: np.ndarray) -> TrackResult:
         """Locate the target in the next frame and learn from it.
 
