@@ -41,7 +41,7 @@ import numpy as np
 import numpy.typing as npt
 
 OPENCV = ("MIL", "KCF", "CSRT", "MOSSE", "MedianFlow", "TLD", "Boosting")
-VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
+VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
 Frame = npt.NDArray[np.uint8]
 
 
