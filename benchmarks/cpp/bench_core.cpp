@@ -139,6 +139,48 @@ void bench_integral(int reps_cap, double budget, std::mt19937& rng) {
   }
 }
 
+// compute_channels: the same ROI with 1, 4 and 8 planes (and compute() for comparison).
+// Throughput counts pixel-channels (ROI pixels x planes) per second.
+void bench_channels(int reps_cap, double budget, std::mt19937& rng) {
+  const Image img = random_image(720, 1280, rng);
+  const int sizes[][2] = {{160, 190}, {320, 240}, {640, 480}};
+  struct Set {
+    const char* name;
+    std::vector<int> channels;
+  };
+  const Set sets[] = {
+      {"luma", {kLuma}},
+      {"luma+grad+opp", {kLuma, kGrad, kOppRG, kOppYB}},
+      {"grad", {kGrad}},
+      {"opp_rg+opp_yb", {kOppRG, kOppYB}},
+      {"4 orient", {kOrient0, kOrient1, kOrient2, kOrient3}},
+      {"all 8", {kLuma, kGrad, kOppRG, kOppYB, kOrient0, kOrient1, kOrient2, kOrient3}},
+  };
+  IntegralImage ii;
+  for (const auto& s : sizes) {
+    const Rect roi{(1280 - s[0]) / 2, (720 - s[1]) / 2, s[0], s[1]};
+    const std::string size = std::to_string(s[0]) + "x" + std::to_string(s[1]);
+    {
+      auto f = [&] {
+        ii.compute(img.view(), roi);
+        g_sink = g_sink + ii.data()[ii.plane_size() - 1];
+      };
+      const int reps = calibrate(f, budget, reps_cap);
+      row("channels", size + " compute() luma", reps, time_it(reps, f),
+          static_cast<double>(s[0]) * s[1], "pxch");
+    }
+    for (const Set& set : sets) {
+      auto f = [&] {
+        ii.compute_channels(img.view(), roi, set.channels);
+        g_sink = g_sink + ii.data()[ii.plane_size() - 1];
+      };
+      const int reps = calibrate(f, budget, reps_cap);
+      row("channels", size + " " + set.name, reps, time_it(reps, f),
+          static_cast<double>(s[0]) * s[1] * static_cast<double>(set.channels.size()), "pxch");
+    }
+  }
+}
+
 void bench_project(int reps_cap, double budget, std::mt19937& rng) {
   const int box = 48;
   const Image img = random_image(480, 640, rng);
@@ -229,10 +271,11 @@ int main(int argc, char** argv) {
   std::printf("| Benchmark  | Configuration                    | Reps   | Min us     | Median us  | Throughput (min)   |\n");
   std::printf("|------------|----------------------------------|--------|------------|------------|--------------------|\n");
   bench_integral(reps_cap, budget, rng);
+  bench_channels(reps_cap, budget, rng);
   bench_project(reps_cap, budget, rng);
   bench_score(reps_cap, budget, rng);
   std::printf("\nintegral: pixels of the ROI converted to luma and summed per second; project: "
-              "feature values per second; score: candidate boxes scored per second (each "
+              "feature values per second; channels: ROI pixels x planes per second; score: candidate boxes scored per second (each "
               "evaluates K=50 features and their Gaussian log-ratios).\n");
   return g_sink == 12345.678 ? 1 : 0;
 }

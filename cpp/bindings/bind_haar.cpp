@@ -8,7 +8,7 @@ namespace wmiltrack::bindings {
 namespace {
 
 FeatureBank make_bank(const CArray<std::int32_t>& starts, const CArray<std::int32_t>& rects,
-                      const CArray<double>& weights) {
+                      const CArray<double>& weights, const py::object& channels) {
   require(starts.ndim() == 1, "starts must be 1-D");
   require(rects.ndim() == 2 && rects.shape(1) == 4, "rects must be R x 4 (x, y, w, h)");
   require(weights.ndim() == 1 && weights.shape(0) == rects.shape(0),
@@ -18,7 +18,14 @@ FeatureBank make_bank(const CArray<std::int32_t>& starts, const CArray<std::int3
   auto rv = rects.unchecked<2>();
   for (py::ssize_t i = 0; i < rects.shape(0); ++i) r[i] = Rect{rv(i, 0), rv(i, 1), rv(i, 2), rv(i, 3)};
   std::vector<double> w(weights.data(), weights.data() + weights.size());
-  return FeatureBank(std::move(s), std::move(r), std::move(w));
+  std::vector<std::int32_t> planes;
+  if (!channels.is_none()) {
+    const auto p = channels.cast<CArray<std::int32_t>>();
+    require(p.ndim() == 1 && p.shape(0) == rects.shape(0),
+            "channels must be 1-D with one plane index per rect");
+    planes.assign(p.data(), p.data() + p.size());
+  }
+  return FeatureBank(std::move(s), std::move(r), std::move(w), std::move(planes));
 }
 
 }  // namespace
@@ -26,9 +33,20 @@ FeatureBank make_bank(const CArray<std::int32_t>& starts, const CArray<std::int3
 void bind_haar(py::module_& m) {
   py::class_<FeatureBank>(m, "FeatureBank",
                           "Haar-like features: weighted rectangle sums at offsets from a box corner.")
-      .def(py::init(&make_bank), py::arg("starts"), py::arg("rects"), py::arg("weights"))
+      .def(py::init(&make_bank), py::arg("starts"), py::arg("rects"), py::arg("weights"),
+           py::arg("channels") = py::none())
       .def_property_readonly("size", &FeatureBank::size)
       .def_property_readonly("num_rects", &FeatureBank::num_rects)
+      .def_property_readonly(
+          "channels",
+          [](const FeatureBank& b) {
+            CArray<std::int32_t> out(static_cast<py::ssize_t>(b.planes().size()));
+            std::copy(b.planes().begin(), b.planes().end(), out.mutable_data());
+            return out;
+          },
+          "Integral-image plane of each rectangle (a copy; zeros for a bank built without).")
+      .def_property_readonly("planes_needed", &FeatureBank::planes_needed,
+                             "Planes an integral image needs for this bank: 1 + the largest.")
       .def_property_readonly("extent", [](const FeatureBank& b) {
         const Rect& e = b.extent();
         return py::make_tuple(e.x, e.y, e.w, e.h);
@@ -40,6 +58,7 @@ void bind_haar(py::module_& m) {
          const CArray<std::int32_t>& ys, const py::object& features) {
         require(xs.ndim() == 1 && ys.ndim() == 1 && xs.shape(0) == ys.shape(0),
                 "xs and ys must be 1-D of equal length");
+        require_planes(ii, bank);
         CArray<std::int32_t> idx;
         const std::int32_t* idx_ptr = nullptr;
         int n_feat = bank.size();

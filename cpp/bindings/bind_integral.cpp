@@ -1,4 +1,7 @@
+#include <pybind11/stl.h>
+
 #include <tuple>
+#include <vector>
 
 #include "common.hpp"
 
@@ -27,7 +30,28 @@ ImageView image_view(const py::array& frame) {
   return v;
 }
 
+namespace {
+
+void require_plane(const IntegralImage& self, int plane) {
+  if (plane < 0 || plane >= self.num_channels()) {
+    throw py::index_error("plane " + std::to_string(plane) + " outside the integral image's " +
+                          std::to_string(self.num_channels()) + " plane(s)");
+  }
+}
+
+}  // namespace
+
 void bind_integral(py::module_& m) {
+  m.attr("CH_LUMA") = static_cast<int>(kLuma);
+  m.attr("CH_GRAD") = static_cast<int>(kGrad);
+  m.attr("CH_OPP_RG") = static_cast<int>(kOppRG);
+  m.attr("CH_OPP_YB") = static_cast<int>(kOppYB);
+  m.attr("CH_ORIENT0") = static_cast<int>(kOrient0);
+  m.attr("CH_ORIENT1") = static_cast<int>(kOrient1);
+  m.attr("CH_ORIENT2") = static_cast<int>(kOrient2);
+  m.attr("CH_ORIENT3") = static_cast<int>(kOrient3);
+  m.attr("NUM_CHANNEL_KINDS") = kNumChannelKinds;
+
   py::class_<IntegralImage>(m, "IntegralImage",
                             "Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY.")
       .def(py::init<>())
@@ -41,27 +65,52 @@ void bind_integral(py::module_& m) {
           },
           py::arg("frame"), py::arg("roi"),
           "Rebuild over roi = (x, y, w, h), clipped to the frame.")
+      .def(
+          "compute_channels",
+          [](IntegralImage& self, const py::array& frame, std::tuple<int, int, int, int> roi,
+             const std::vector<int>& channels) {
+            const ImageView view = image_view(frame);
+            const auto [x, y, w, h] = roi;
+            py::gil_scoped_release release;
+            self.compute_channels(view, Rect{x, y, w, h}, channels);
+          },
+          py::arg("frame"), py::arg("roi"), py::arg("channels"),
+          "Rebuild over roi = (x, y, w, h), clipped to the frame, with plane k holding channel\n"
+          "channels[k] (CH_* ids). ValueError for an unknown id, no channels, or a colour\n"
+          "channel on a gray frame.")
+      .def_property_readonly("num_channels", &IntegralImage::num_channels)
+      .def_property_readonly(
+          "channels",
+          [](const IntegralImage& self) {
+            py::tuple t(self.channels().size());
+            for (std::size_t k = 0; k < self.channels().size(); ++k) t[k] = self.channels()[k];
+            return t;
+          },
+          "The channel id of each plane.")
       .def_property_readonly("x0", &IntegralImage::x0)
       .def_property_readonly("y0", &IntegralImage::y0)
       .def_property_readonly("width", &IntegralImage::width)
       .def_property_readonly("height", &IntegralImage::height)
       .def(
           "table",
-          [](const IntegralImage& self) {
+          [](const IntegralImage& self, int plane) {
+            require_plane(self, plane);
             CArray<double> out({self.height() + 1, self.width() + 1});
-            std::copy(self.data(), self.data() + out.size(), out.mutable_data());
+            std::copy(self.plane(plane), self.plane(plane) + out.size(), out.mutable_data());
             return out;
           },
-          "A copy of the (height + 1) x (width + 1) table; row and column 0 are zero.")
+          py::arg("plane") = 0,
+          "A copy of plane `plane`'s (height + 1) x (width + 1) table; row and column 0 are zero.")
       .def(
           "rect_sum",
-          [](const IntegralImage& self, int x, int y, int w, int h) {
+          [](const IntegralImage& self, int x, int y, int w, int h, int plane) {
             const Rect r{x, y, w, h};
             if (!self.covers(r)) throw py::index_error("rectangle outside the integral image");
-            return self.sum(r);
+            require_plane(self, plane);
+            return self.sum(r, plane);
           },
-          py::arg("x"), py::arg("y"), py::arg("w"), py::arg("h"),
-          "Exact pixel sum over columns [x, x+w) and rows [y, y+h), in frame coordinates.");
+          py::arg("x"), py::arg("y"), py::arg("w"), py::arg("h"), py::arg("plane") = 0,
+          "Exact sum over columns [x, x+w) and rows [y, y+h), in frame coordinates, on a plane.");
 }
 
 }  // namespace wmiltrack::bindings

@@ -54,6 +54,7 @@ void bind_scoring(py::module_& m) {
          double guard, std::tuple<int, int, int, int> box, int radius, int step,
          std::tuple<int, int> frame_size, bool return_scores) -> py::tuple {
         require(selected.ndim() == 1 && selected.shape(0) > 0, "selected must be a non-empty 1-D array");
+        require_planes(ii, bank);
         const WeakGaussians weak = make_weak({mu1, sigma1, mu0, sigma0}, selected.shape(0), guard);
         const auto [x, y, w, h] = box;
         const auto [fw, fh] = frame_size;

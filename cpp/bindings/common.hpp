@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 
+#include "wmiltrack/haar.hpp"
 #include "wmiltrack/integral.hpp"
 
 namespace wmiltrack::bindings {
@@ -26,6 +27,17 @@ void bind_scoring(py::module_& m);
 
 inline void require(bool ok, const std::string& message) {
   if (!ok) throw py::value_error(message);
+}
+
+// ValueError when the bank sums over planes the integral image does not have (the core
+// would refuse them too, with std::out_of_range -> IndexError; this names the mismatch).
+inline void require_planes(const IntegralImage& ii, const FeatureBank& bank) {
+  if (bank.planes_needed() > ii.num_channels()) {
+    throw py::value_error("the feature bank sums over " + std::to_string(bank.planes_needed()) +
+                          " plane(s) but the integral image has " +
+                          std::to_string(ii.num_channels()) +
+                          " (build it with compute_channels)");
+  }
 }
 
 }  // namespace wmiltrack::bindings

@@ -8,14 +8,26 @@
 namespace wmiltrack {
 
 FeatureBank::FeatureBank(std::vector<std::int32_t> starts, std::vector<Rect> rects,
-                         std::vector<double> weights)
-    : starts_(std::move(starts)), rects_(std::move(rects)), weights_(std::move(weights)) {
+                         std::vector<double> weights, std::vector<std::int32_t> planes)
+    : starts_(std::move(starts)),
+      rects_(std::move(rects)),
+      weights_(std::move(weights)),
+      planes_(std::move(planes)) {
   if (starts_.size() < 2 || starts_.front() != 0) {
     throw std::invalid_argument("feature bank: starts must begin with 0 and hold >= 1 feature");
   }
   if (rects_.size() != weights_.size() ||
       static_cast<std::size_t>(starts_.back()) != rects_.size()) {
     throw std::invalid_argument("feature bank: starts, rects and weights disagree in length");
+  }
+  if (planes_.empty()) {
+    planes_.assign(rects_.size(), 0);
+  } else if (planes_.size() != rects_.size()) {
+    throw std::invalid_argument("feature bank: planes must have one entry per rectangle");
+  }
+  for (std::int32_t p : planes_) {
+    if (p < 0) throw std::invalid_argument("feature bank: plane indices must be >= 0");
+    planes_needed_ = std::max(planes_needed_, p + 1);
   }
   for (std::size_t f = 0; f + 1 < starts_.size(); ++f) {
     if (starts_[f + 1] <= starts_[f]) {
@@ -40,7 +52,8 @@ FeatureBank::FeatureBank(std::vector<std::int32_t> starts, std::vector<Rect> rec
 }
 
 CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* features,
-                                   int n_features, std::ptrdiff_t stride) {
+                                   int n_features, std::ptrdiff_t stride,
+                                   std::ptrdiff_t plane_size, int num_planes) {
   const bool all = features == nullptr;
   const int n = all ? bank.size() : n_features;
   starts_.reserve(static_cast<std::size_t>(n) + 1);
@@ -53,8 +66,14 @@ CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* 
     }
     for (int r = bank.starts()[f]; r < bank.starts()[f + 1]; ++r) {
       const Rect& q = bank.rects()[r];
-      const std::ptrdiff_t top = q.y * stride + q.x;
-      const std::ptrdiff_t bottom = (q.y + q.h) * stride + q.x;
+      const std::int32_t p = bank.planes()[r];
+      if (p >= num_planes) {
+        throw std::out_of_range("feature " + std::to_string(f) + " sums over plane " +
+                                std::to_string(p) + " but the integral image has " +
+                                std::to_string(num_planes) + " plane(s)");
+      }
+      const std::ptrdiff_t top = p * plane_size + q.y * stride + q.x;
+      const std::ptrdiff_t bottom = top + q.h * stride;
       corners_.push_back(Corners{top, top + q.w, bottom, bottom + q.w, bank.weights()[r]});
     }
     starts_.push_back(static_cast<std::int32_t>(corners_.size()));
@@ -63,6 +82,11 @@ CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* 
 
 void check_boxes_covered(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* xs,
                          const std::int32_t* ys, int n_boxes) {
+  if (bank.planes_needed() > ii.num_channels()) {
+    throw std::out_of_range("the feature bank uses " + std::to_string(bank.planes_needed()) +
+                            " plane(s) but the integral image has " +
+                            std::to_string(ii.num_channels()));
+  }
   const Rect& e = bank.extent();
   constexpr std::int64_t kIntMax = std::numeric_limits<int>::max();
   for (int n = 0; n < n_boxes; ++n) {
@@ -81,7 +105,7 @@ void project(const IntegralImage& ii, const FeatureBank& bank, const std::int32_
              int n_features, const std::int32_t* xs, const std::int32_t* ys, int n_boxes,
              double* out) {
   check_boxes_covered(ii, bank, xs, ys, n_boxes);
-  const CompiledFeatures compiled(bank, features, n_features, ii.stride());
+  const CompiledFeatures compiled(bank, features, n_features, ii);
   const int n_out = compiled.size();
   const std::ptrdiff_t s = ii.stride();
   for (int n = 0; n < n_boxes; ++n) {

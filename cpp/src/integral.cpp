@@ -1,11 +1,23 @@
 #include "wmiltrack/integral.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
+#include <string>
+
+// SSE2 (every x86-64) for the running row sums; WMILTRACK_NO_SIMD forces the scalar loops.
+#if (defined(__SSE2__) || defined(_M_X64)) && !defined(WMILTRACK_NO_SIMD)
+#define WMILTRACK_SSE2_SCAN 1
+#include <emmintrin.h>
+#endif
 
 namespace wmiltrack {
 
-void IntegralImage::compute(const ImageView& image, Rect roi) {
+namespace {
+
+// The ROI clipped to the frame; throws for an empty frame, a bad channel count or an ROI
+// that misses the frame.
+Rect clip_roi(const ImageView& image, const Rect& roi) {
   if (image.data == nullptr || image.rows <= 0 || image.cols <= 0) {
     throw std::invalid_argument("integral image: the frame is empty");
   }
@@ -22,31 +34,261 @@ void IntegralImage::compute(const ImageView& image, Rect roi) {
   if (x_end <= x_begin || y_end <= y_begin) {
     throw std::invalid_argument("integral image: the region does not meet the frame");
   }
-  x0_ = x_begin;
-  y0_ = y_begin;
-  width_ = x_end - x_begin;
-  height_ = y_end - y_begin;
+  return Rect{x_begin, y_begin, x_end - x_begin, y_end - y_begin};
+}
+
+// Per-pixel loops over a row of `n` pixels starting at `src`, with the column stride fixed
+// at compile time for the common contiguous layouts (gray 1, BGR 3, BGRA 4; channel stride
+// 1) so that the compiler can vectorise them, and a run-time stride otherwise (kCols = 0).
+template <int kCols, class F>
+void for_pixels(const ImageView& image, const std::uint8_t* src, int n, F&& f) {
+  const std::ptrdiff_t cols = kCols > 0 ? kCols : image.col_stride;
+  const std::ptrdiff_t cs = kCols > 0 ? 1 : image.channel_stride;
+  for (int c = 0; c < n; ++c) f(c, src + c * cols, cs);
+}
+
+template <class F>
+void dispatch_pixels(const ImageView& image, const std::uint8_t* src, int n, F&& f) {
+  if (image.channel_stride == 1 || image.channels == 1) {
+    switch (image.col_stride) {
+      case 1:
+        if (image.channels == 1) return for_pixels<1>(image, src, n, f);
+        break;
+      case 3:
+        if (image.channels == 3) return for_pixels<3>(image, src, n, f);
+        break;
+      case 4:
+        if (image.channels == 4) return for_pixels<4>(image, src, n, f);
+        break;
+      default:
+        break;
+    }
+  }
+  for_pixels<0>(image, src, n, f);
+}
+
+// Luma of frame row y, columns [xa, xb), into out[0 .. xb - xa).
+void luma_row(const ImageView& image, int y, int xa, int xb, std::uint8_t* out) {
+  const std::uint8_t* src = image.data + y * image.row_stride + xa * image.col_stride;
+  if (image.channels == 1) {
+    dispatch_pixels(image, src, xb - xa,
+                    [out](int c, const std::uint8_t* p, std::ptrdiff_t) { out[c] = p[0]; });
+  } else {
+    dispatch_pixels(image, src, xb - xa, [out](int c, const std::uint8_t* p, std::ptrdiff_t cs) {
+      out[c] = bgr_to_gray(p[0], p[cs], p[2 * cs]);
+    });
+  }
+}
+
+// Luma of frame row y over the ROI's columns plus one on each side: ext[j] is the luma at
+// column x0 - 1 + j (j = 0 .. w + 1), the frame's edge column replicated outside the frame.
+void luma_row_ext(const ImageView& image, int y, int x0, int w, std::uint8_t* ext) {
+  const int xa = std::max(x0 - 1, 0);
+  const int xb = std::min(x0 + w + 1, image.cols);
+  luma_row(image, y, xa, xb, ext + (xa - (x0 - 1)));
+  if (xa == x0) ext[0] = ext[1];
+  if (xb == x0 + w) ext[w + 1] = ext[w];
+}
+
+// Widest ROI whose row sums of 0..255 values fit in an int32.
+constexpr int kMaxInt32RowWidth = 2147483647 / 255;
+
+// One table row from one row of channel values: out[c + 1] = prev[c + 1] + sum(v[0..c]).
+// Every partial sum is an integer below 2^53, so the doubles are exact, and the result is the
+// same whichever loop computes it. With SSE2 the row sums are an in-register prefix scan of
+// 4 int32 lanes (16 pixels per step); otherwise a scalar scan into `scan` and a second loop
+// (conversion plus the row above) that the compiler vectorises.
+void accumulate_row(const std::uint8_t* v, int w, const double* prev, double* out,
+                    std::int32_t* scan) {
+  out[0] = 0.0;
+  if (w > kMaxInt32RowWidth) {  // never for a real frame; exact in 64 bits
+    std::int64_t row_sum = 0;
+    for (int c = 0; c < w; ++c) {
+      row_sum += v[c];
+      out[c + 1] = prev[c + 1] + static_cast<double>(row_sum);
+    }
+    return;
+  }
+  int c = 0;
+  std::int32_t row_sum = 0;
+#ifdef WMILTRACK_SSE2_SCAN
+  const __m128i zero = _mm_setzero_si128();
+  __m128i carry = zero;  // the running sum, in every lane
+  for (; c + 16 <= w; c += 16) {
+    const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(v + c));
+    const __m128i lo = _mm_unpacklo_epi8(bytes, zero), hi = _mm_unpackhi_epi8(bytes, zero);
+    const __m128i quads[4] = {_mm_unpacklo_epi16(lo, zero), _mm_unpackhi_epi16(lo, zero),
+                              _mm_unpacklo_epi16(hi, zero), _mm_unpackhi_epi16(hi, zero)};
+    for (int j = 0; j < 4; ++j) {
+      __m128i x = quads[j];
+      x = _mm_add_epi32(x, _mm_slli_si128(x, 4));
+      x = _mm_add_epi32(x, _mm_slli_si128(x, 8));
+      x = _mm_add_epi32(x, carry);
+      carry = _mm_shuffle_epi32(x, 0xFF);
+      const double* p = prev + c + 4 * j + 1;
+      double* o = out + c + 4 * j + 1;
+      _mm_storeu_pd(o, _mm_add_pd(_mm_loadu_pd(p), _mm_cvtepi32_pd(x)));
+      _mm_storeu_pd(o + 2, _mm_add_pd(_mm_loadu_pd(p + 2),
+                                      _mm_cvtepi32_pd(_mm_unpackhi_epi64(x, x))));
+    }
+  }
+  row_sum = _mm_cvtsi128_si32(carry);
+  for (; c < w; ++c) {
+    row_sum += v[c];
+    out[c + 1] = prev[c + 1] + static_cast<double>(row_sum);
+  }
+  (void)scan;
+#else
+  for (; c < w; ++c) {
+    row_sum += v[c];
+    scan[c] = row_sum;
+  }
+  for (c = 0; c < w; ++c) out[c + 1] = prev[c + 1] + static_cast<double>(scan[c]);
+#endif
+}
+
+}  // namespace
+
+// The luma table alone. The same exact integer sums as the plain running-sum loop this
+// replaced, so the same doubles, through the vectorised row code of compute_channels.
+void IntegralImage::compute(const ImageView& image, Rect roi) {
+  compute_channels(image, roi, {kLuma});
+}
+
+void IntegralImage::compute_channels(const ImageView& image, Rect roi,
+                                     const std::vector<int>& channels) {
+  if (channels.empty()) throw std::invalid_argument("integral image: no channels requested");
+  bool need_luma = false, need_grad = false, need_orient = false, need_colour = false;
+  for (int ch : channels) {
+    if (ch < 0 || ch >= kNumChannelKinds) {
+      throw std::invalid_argument("integral image: unknown channel id " + std::to_string(ch) +
+                                  " (valid: 0 .. " + std::to_string(kNumChannelKinds - 1) + ")");
+    }
+    need_luma = need_luma || ch == kLuma;
+    need_grad = need_grad || ch == kGrad;
+    need_orient = need_orient || ch >= kOrient0;
+    need_colour = need_colour || ch == kOppRG || ch == kOppYB;
+  }
+  const Rect r0 = clip_roi(image, roi);
+  if (need_colour && image.channels == 1) {
+    throw std::invalid_argument(
+        "integral image: colour channels (OPP_RG, OPP_YB) need a BGR or BGRA frame, got a "
+        "1-channel (gray) frame");
+  }
+  x0_ = r0.x;
+  y0_ = r0.y;
+  width_ = r0.w;
+  height_ = r0.h;
+  channels_ = channels;
+  const int w = width_;
+  const int n_planes = static_cast<int>(channels.size());
   const std::ptrdiff_t s = stride();
-  data_.assign(static_cast<std::size_t>(s) * static_cast<std::size_t>(height_ + 1), 0.0);
-  std::vector<std::int64_t> column(static_cast<std::size_t>(width_) + 1, 0);  // exact running sums
+  const std::ptrdiff_t ps = plane_size();
+  // Every entry but row 0 is written below: no need to clear the whole buffer.
+  data_.resize(static_cast<std::size_t>(ps) * static_cast<std::size_t>(n_planes));
+  for (int k = 0; k < n_planes; ++k) std::fill_n(data_.data() + k * ps, s, 0.0);
+
+  const bool gradients = need_grad || need_orient;
+  const std::size_t ext = static_cast<std::size_t>(w) + 2;
+  const std::size_t wz = static_cast<std::size_t>(w);
+  // Three luma rows (above, at, below the current row) with one extra column on each side.
+  std::vector<std::uint8_t> lum(3 * ext);
+  std::uint8_t* above = lum.data();
+  std::uint8_t* here = above + ext;
+  std::uint8_t* below = here + ext;
+  // Rows of channel values: gradient, 4 orientations, 2 opponent colours.
+  std::vector<std::uint8_t> rows(7 * wz);
+  std::uint8_t* grad = rows.data();
+  std::uint8_t* orient[4] = {grad + wz, grad + 2 * wz, grad + 3 * wz, grad + 4 * wz};
+  std::uint8_t* opp_rg = grad + 5 * wz;
+  std::uint8_t* opp_yb = grad + 6 * wz;
+  std::vector<std::int32_t> scan(wz);
+  const int last_row = image.rows - 1;
+  if (gradients) {
+    luma_row_ext(image, std::max(y0_ - 1, 0), x0_, w, above);
+    luma_row_ext(image, std::min(y0_ + 1, last_row), x0_, w, below);
+  }
+  bool want_rg = false, want_yb = false;
+  for (int ch : channels) {
+    want_rg = want_rg || ch == kOppRG;
+    want_yb = want_yb || ch == kOppYB;
+  }
 
   for (int r = 0; r < height_; ++r) {
-    const std::uint8_t* src = image.data + (y0_ + r) * image.row_stride + x0_ * image.col_stride;
-    double* out = data_.data() + (r + 1) * s;
-    std::int64_t row_sum = 0;
-    if (image.channels == 1) {
-      for (int c = 0; c < width_; ++c, src += image.col_stride) {
-        row_sum += *src;
-        column[c + 1] += row_sum;
-        out[c + 1] = static_cast<double>(column[c + 1]);
+    const int y = y0_ + r;
+    if (gradients) {
+      if (r > 0) {
+        std::swap(above, here);  // the old current row is now above
+        std::swap(here, below);  // the old lower row is now current
+        luma_row_ext(image, std::min(y + 1, last_row), x0_, w, below);
+      } else {
+        luma_row_ext(image, y, x0_, w, here);
       }
-    } else {
-      const std::ptrdiff_t cs = image.channel_stride;
-      for (int c = 0; c < width_; ++c, src += image.col_stride) {
-        row_sum += bgr_to_gray(src[0], src[cs], src[2 * cs]);
-        column[c + 1] += row_sum;
-        out[c + 1] = static_cast<double>(column[c + 1]);
+      const std::uint8_t* __restrict l_up = above + 1;
+      const std::uint8_t* __restrict l_mid = here;
+      const std::uint8_t* __restrict l_down = below + 1;
+      std::uint8_t* __restrict g_out = grad;
+      if (need_orient) {
+        // orientation_bin without branches (the same exact tests; int32 is wide enough for
+        // |g| <= 255) so that the loop vectorises. A zero gradient has magnitude 0 in every
+        // bin. b0 and b2 exclude each other: a < (sqrt 2 - 1) x versus a > (sqrt 2 + 1) x.
+        std::uint8_t* __restrict o0 = orient[0];
+        std::uint8_t* __restrict o1 = orient[1];
+        std::uint8_t* __restrict o2 = orient[2];
+        std::uint8_t* __restrict o3 = orient[3];
+        for (int c = 0; c < w; ++c) {
+          const int gx = l_mid[c + 2] - l_mid[c];
+          const int gy = l_down[c] - l_up[c];
+          const int x = std::abs(gx), a = std::abs(gy);
+          const int mag = (x + a) >> 1;
+          const int t = 2 * x * x;
+          const int b0 = static_cast<int>((a + x) * (a + x) < t);
+          const int b2 = static_cast<int>(a > x) & static_cast<int>((a - x) * (a - x) > t);
+          const int diagonal = 1 - b0 - b2;
+          const int same_sign = static_cast<int>(gx * gy > 0);
+          g_out[c] = static_cast<std::uint8_t>(mag);
+          o0[c] = static_cast<std::uint8_t>(mag & -b0);
+          o1[c] = static_cast<std::uint8_t>(mag & -(diagonal & same_sign));
+          o2[c] = static_cast<std::uint8_t>(mag & -b2);
+          o3[c] = static_cast<std::uint8_t>(mag & -(diagonal & (1 - same_sign)));
+        }
+      } else {
+        for (int c = 0; c < w; ++c) {
+          const int gx = l_mid[c + 2] - l_mid[c];
+          const int gy = l_down[c] - l_up[c];
+          g_out[c] = static_cast<std::uint8_t>((std::abs(gx) + std::abs(gy)) >> 1);
+        }
       }
+    } else if (need_luma) {
+      luma_row(image, y, x0_, x0_ + w, here + 1);
+    }
+    if (want_rg || want_yb) {
+      const std::uint8_t* px = image.data + y * image.row_stride + x0_ * image.col_stride;
+      if (want_rg && want_yb) {
+        dispatch_pixels(image, px, w, [=](int c, const std::uint8_t* p, std::ptrdiff_t cs) {
+          const int b = p[0], g = p[cs], rr = p[2 * cs];
+          opp_rg[c] = static_cast<std::uint8_t>((rr - g + 255) >> 1);
+          opp_yb[c] = static_cast<std::uint8_t>((rr + g - 2 * b + 510) >> 2);
+        });
+      } else if (want_rg) {
+        dispatch_pixels(image, px, w, [=](int c, const std::uint8_t* p, std::ptrdiff_t cs) {
+          opp_rg[c] = static_cast<std::uint8_t>((p[2 * cs] - p[cs] + 255) >> 1);
+        });
+      } else {
+        dispatch_pixels(image, px, w, [=](int c, const std::uint8_t* p, std::ptrdiff_t cs) {
+          opp_yb[c] = static_cast<std::uint8_t>((p[2 * cs] + p[cs] - 2 * p[0] + 510) >> 2);
+        });
+      }
+    }
+    for (int k = 0; k < n_planes; ++k) {
+      const int ch = channels[static_cast<std::size_t>(k)];
+      const std::uint8_t* v = ch == kLuma    ? here + 1
+                              : ch == kGrad  ? grad
+                              : ch == kOppRG ? opp_rg
+                              : ch == kOppYB ? opp_yb
+                                             : orient[ch - kOrient0];
+      double* plane_k = data_.data() + k * ps;
+      accumulate_row(v, w, plane_k + r * s, plane_k + (r + 1) * s, scan.data());
     }
   }
 }

@@ -68,6 +68,9 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   const int side = 2 * n + 1;
   const long r2 = static_cast<long>(radius) * radius;
   const Rect& e = bank.extent();
+  // Compiled first: a feature index outside the bank or a rectangle on a plane the integral
+  // image lacks is an error even when no candidate fits in the frame.
+  const CompiledFeatures compiled(bank, selected, n_selected, ii);
 
   // Gather the candidates that fit in the frame, in row-major order, as runs of
   // consecutive grid columns within one grid row (equally spaced in the table).
@@ -117,7 +120,6 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
 
   // Feature values, one feature at a time over all candidates (rectangle by rectangle, run
   // by run, so the inner loop walks the table with a fixed stride), then the log ratios.
-  const CompiledFeatures compiled(bank, selected, n_selected, ii.stride());
   std::vector<double> values(static_cast<std::size_t>(c)), total(static_cast<std::size_t>(c), 0.0),
       scratch(2 * static_cast<std::size_t>(c));
   const double* table = ii.data();

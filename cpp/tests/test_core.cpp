@@ -1,4 +1,5 @@
 // Plain C++ checks of the core against naive computations; run by ctest and .ci/run.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -218,6 +219,195 @@ void test_overflow_guards(std::mt19937& rng) {
   std::vector<double> none_out;
   weak.log_ratio(0, none_out.data(), 0, none_out.data(), true, none_out.data());
 }
+
+constexpr double kDegPerRad = 57.29577951308232;  // 180 / pi
+
+// Channel c of the frame at (r, c0), from the definitions in integral.hpp: luma, gradients
+// with the frame's edge replicated, opponent colours, and the orientation bin from atan2.
+int naive_channel(const Frame& f, int ch, int r, int c) {
+  if (ch == kOppRG || ch == kOppYB) {
+    const std::uint8_t* p = &f.pixels[(static_cast<std::size_t>(r) * f.cols + c) * f.channels];
+    const int b = p[0], g = p[1], rr = p[2];
+    return ch == kOppRG ? (rr - g + 255) / 2 : (rr + g - 2 * b + 510) / 4;
+  }
+  if (ch == kLuma) return f.gray(r, c);
+  const auto at = [&](int y, int x) {
+    return f.gray(std::min(std::max(y, 0), f.rows - 1), std::min(std::max(x, 0), f.cols - 1));
+  };
+  const int gx = at(r, c + 1) - at(r, c - 1), gy = at(r + 1, c) - at(r - 1, c);
+  const int mag = (std::abs(gx) + std::abs(gy)) / 2;
+  if (ch == kGrad) return mag;
+  if (gx == 0 && gy == 0) return ch == kOrient0 ? mag : 0;
+  double deg = std::atan2(static_cast<double>(gy), static_cast<double>(gx)) * kDegPerRad;
+  if (deg < 0) deg += 180.0;
+  const int bin = static_cast<int>(std::floor((deg + 22.5) / 45.0)) % 4;
+  return bin == ch - kOrient0 ? mag : 0;
+}
+
+long naive_channel_sum(const Frame& f, int ch, int x, int y, int w, int h) {
+  long s = 0;
+  for (int r = y; r < y + h; ++r)
+    for (int c = x; c < x + w; ++c) s += naive_channel(f, ch, r, c);
+  return s;
+}
+
+void test_orientation_bin() {
+  // Every integer gradient of the gradient range against atan2 (no bin border is hit).
+  int counts[4] = {0, 0, 0, 0};
+  bool all_match = true;
+  for (int gx = -255; gx <= 255; gx += 3) {
+    for (int gy = -255; gy <= 255; gy += 2) {
+      const int b = orientation_bin(gx, gy);
+      ++counts[b];
+      if (gx == 0 && gy == 0) {
+        all_match = all_match && b == 0;
+        continue;
+      }
+      double deg = std::atan2(static_cast<double>(gy), static_cast<double>(gx)) * kDegPerRad;
+      if (deg < 0) deg += 180.0;
+      all_match = all_match && b == static_cast<int>(std::floor((deg + 22.5) / 45.0)) % 4;
+    }
+  }
+  CHECK(all_match);
+  CHECK(counts[0] > 0 && counts[1] > 0 && counts[2] > 0 && counts[3] > 0);
+  CHECK(orientation_bin(5, 0) == 0 && orientation_bin(-5, 0) == 0);
+  CHECK(orientation_bin(0, 5) == 2 && orientation_bin(0, -5) == 2);
+  CHECK(orientation_bin(5, 5) == 1 && orientation_bin(-5, -5) == 1);
+  CHECK(orientation_bin(5, -5) == 3 && orientation_bin(-5, 5) == 3);
+}
+
+void test_channels(std::mt19937& rng) {
+  const std::vector<int> all{kLuma, kGrad, kOppRG, kOppYB, kOrient0, kOrient1, kOrient2, kOrient3};
+  const std::vector<int> gray_ok{kOrient3, kGrad, kLuma, kOrient0, kOrient1, kOrient2};
+  const Rect rois[] = {{0, 0, 53, 37}, {7, 5, 30, 20}, {-3, -2, 10, 9}, {45, 30, 20, 20},
+                       {0, 10, 53, 1}, {20, 0, 1, 37}, {52, 36, 1, 1}, {4, 4, 2, 2},
+                       {5, 3, 32, 16}};  // a width of whole SIMD steps
+  for (int channels : {1, 3, 4}) {
+    const Frame f = random_frame(37, 53, channels, rng);
+    const std::vector<int>& chans = channels == 1 ? gray_ok : all;
+    for (const Rect& roi : rois) {
+      IntegralImage ii;
+      ii.compute_channels(f.view(), roi, chans);
+      CHECK(ii.num_channels() == static_cast<int>(chans.size()));
+      CHECK(ii.plane_size() == (ii.width() + 1) * (ii.height() + 1));
+      bool exact = true;
+      for (int k = 0; k < ii.num_channels(); ++k) {
+        // Every 1x1, every row and the whole region, on every plane.
+        for (int y = ii.y0(); y < ii.y0() + ii.height(); ++y) {
+          for (int x = ii.x0(); x < ii.x0() + ii.width(); ++x) {
+            exact = exact && ii.sum(Rect{x, y, 1, 1}, k) == naive_channel(f, chans[k], y, x);
+          }
+          exact = exact && ii.sum(Rect{ii.x0(), y, ii.width(), 1}, k) ==
+                               naive_channel_sum(f, chans[k], ii.x0(), y, ii.width(), 1);
+        }
+        exact = exact && ii.sum(Rect{ii.x0(), ii.y0(), ii.width(), ii.height()}, k) ==
+                             naive_channel_sum(f, chans[k], ii.x0(), ii.y0(), ii.width(), ii.height());
+        const double* p = ii.plane(k);
+        for (int c = 0; c <= ii.width(); ++c) exact = exact && p[c] == 0.0;
+        for (int r = 0; r <= ii.height(); ++r) exact = exact && p[r * ii.stride()] == 0.0;
+      }
+      CHECK(exact);
+    }
+    // The luma plane is bit-identical to compute().
+    IntegralImage a, b;
+    a.compute(f.view(), Rect{3, 2, 40, 30});
+    b.compute_channels(f.view(), Rect{3, 2, 40, 30}, {kGrad, kLuma});
+    CHECK(a.num_channels() == 1 && b.num_channels() == 2);
+    CHECK(std::equal(a.data(), a.data() + a.plane_size(), b.plane(1)));
+    // Reusing a larger buffer for a smaller table leaves nothing stale behind.
+    b.compute_channels(f.view(), Rect{0, 0, 53, 37}, chans);
+    b.compute_channels(f.view(), Rect{10, 10, 5, 4}, {kLuma});
+    CHECK(std::equal(b.data(), b.data() + b.plane_size(),
+                     [&] { IntegralImage c; c.compute(f.view(), Rect{10, 10, 5, 4}); return c; }().data()));
+  }
+  const auto throws_invalid = [&](const Frame& f, std::vector<int> chans) {
+    try {
+      IntegralImage t;
+      t.compute_channels(f.view(), Rect{0, 0, 5, 5}, chans);
+    } catch (const std::invalid_argument&) {
+      return true;
+    }
+    return false;
+  };
+  const Frame gray = random_frame(10, 10, 1, rng), bgr = random_frame(10, 10, 3, rng);
+  CHECK(throws_invalid(gray, {kLuma, kOppRG}));
+  CHECK(throws_invalid(gray, {kOppYB}));
+  CHECK(!throws_invalid(bgr, {kOppRG, kOppYB}));
+  CHECK(throws_invalid(bgr, {}));
+  CHECK(throws_invalid(bgr, {kNumChannelKinds}));
+  CHECK(throws_invalid(bgr, {-1}));
+
+  // Features on planes: project against naive sums of each plane's channel.
+  const Frame f = random_frame(60, 70, 3, rng);
+  const std::vector<int> chans{kOppYB, kLuma, kGrad};
+  IntegralImage ii;
+  ii.compute_channels(f.view(), Rect{0, 0, 70, 60}, chans);
+  FeatureBank bank({0, 1, 3}, {Rect{1, 2, 5, 4}, Rect{0, 0, 3, 3}, Rect{4, 4, 6, 2}},
+                   {1.0, 0.5, -2.0}, {2, 0, 1});
+  CHECK(bank.planes_needed() == 3);
+  std::vector<std::int32_t> xs{0, 10, 60}, ys{0, 20, 54};
+  std::vector<double> out(6);
+  project(ii, bank, nullptr, 0, xs.data(), ys.data(), 3, out.data());
+  for (int n = 0; n < 3; ++n) {
+    const double a = naive_channel_sum(f, kGrad, xs[n] + 1, ys[n] + 2, 5, 4);
+    const double b = 0.5 * naive_channel_sum(f, kOppYB, xs[n], ys[n], 3, 3) -
+                     2.0 * naive_channel_sum(f, kLuma, xs[n] + 4, ys[n] + 4, 6, 2);
+    CHECK(out[n] == a);
+    CHECK(std::abs(out[3 + n] - b) < 1e-9);
+  }
+  // A plane the integral image lacks is refused (project, score_grid, CompiledFeatures).
+  const auto throws_range = [](auto&& fn) {
+    try {
+      fn();
+    } catch (const std::out_of_range&) {
+      return true;
+    }
+    return false;
+  };
+  IntegralImage two;
+  two.compute_channels(f.view(), Rect{0, 0, 70, 60}, {kLuma, kGrad});
+  CHECK(throws_range([&] { project(two, bank, nullptr, 0, xs.data(), ys.data(), 3, out.data()); }));
+  const std::int32_t only_plane2[] = {0};
+  CHECK(throws_range([&] { CompiledFeatures(bank, only_plane2, 1, two); }));
+  const std::int32_t only_planes01[] = {1};
+  CHECK(!throws_range([&] { CompiledFeatures(bank, only_planes01, 1, two); }));
+  const double mu1[] = {10.0}, s1[] = {5.0}, mu0[] = {0.0}, s0[] = {5.0};
+  const WeakGaussians weak(mu1, s1, mu0, s0, 1, 1e-30);
+  CHECK(throws_range([&] { score_grid(two, bank, only_plane2, 1, weak, Rect{20, 20, 10, 10}, 5, 1, 70, 60, nullptr); }));
+  // ... even when no candidate fits in the frame.
+  CHECK(throws_range([&] { score_grid(two, bank, only_plane2, 1, weak, Rect{0, 0, 100, 10}, 5, 1, 70, 60, nullptr); }));
+  bool threw = false;
+  try {
+    FeatureBank bad({0, 1}, {Rect{0, 0, 2, 2}}, {1.0}, {-1});
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+  threw = false;
+  try {
+    FeatureBank bad({0, 1}, {Rect{0, 0, 2, 2}}, {1.0}, {0, 1});
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+
+  // A bank without planes and one with all zeros give bit-identical results on plane 0 of
+  // a stacked table and on a luma-only table.
+  FeatureBank plain({0, 1, 3}, {Rect{1, 2, 5, 4}, Rect{0, 0, 3, 3}, Rect{4, 4, 6, 2}}, {1.0, 0.5, -2.0});
+  FeatureBank zeros({0, 1, 3}, {Rect{1, 2, 5, 4}, Rect{0, 0, 3, 3}, Rect{4, 4, 6, 2}}, {1.0, 0.5, -2.0},
+                    {0, 0, 0});
+  IntegralImage luma, stacked;
+  luma.compute(f.view(), Rect{0, 0, 70, 60});
+  stacked.compute_channels(f.view(), Rect{0, 0, 70, 60}, {kLuma, kOppRG});
+  std::vector<double> ref(6), got(6);
+  project(luma, plain, nullptr, 0, xs.data(), ys.data(), 3, ref.data());
+  project(stacked, zeros, nullptr, 0, xs.data(), ys.data(), 3, got.data());
+  CHECK(ref == got);
+  const std::int32_t sel[] = {1};
+  const GridResult g1 = score_grid(luma, plain, sel, 1, weak, Rect{30, 30, 10, 8}, 6, 1, 70, 60, nullptr);
+  const GridResult g2 = score_grid(stacked, zeros, sel, 1, weak, Rect{30, 30, 10, 8}, 6, 1, 70, 60, nullptr);
+  CHECK(g1.dx == g2.dx && g1.dy == g2.dy && g1.score == g2.score && g1.candidates == g2.candidates);
+}
 }  // namespace
 
 int main() {
@@ -225,6 +415,8 @@ int main() {
   test_integral(rng);
   test_projection_and_scoring(rng);
   test_overflow_guards(rng);
+  test_orientation_bin();
+  test_channels(rng);
   if (failures == 0) {
     std::printf("test_core: all checks passed\n");
     return EXIT_SUCCESS;

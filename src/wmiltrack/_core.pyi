@@ -1,6 +1,7 @@
 """Type stubs of wmiltrack's C++/Eigen core (pybind11 module ``wmiltrack._core``)."""
 
-from typing import overload
+from collections.abc import Sequence
+from typing import Final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -8,12 +9,35 @@ import numpy.typing as npt
 _F64 = npt.NDArray[np.float64]
 _I32 = npt.ArrayLike
 
+# Channel ids of IntegralImage.compute_channels; every channel is an integer in 0..255.
+# gx, gy: central differences of the luma (neighbours outside the ROI used when the frame
+# has them, the frame's edge replicated), y growing downwards.
+CH_LUMA: Final[int]  # 0: OpenCV BGR2GRAY, as compute()
+CH_GRAD: Final[int]  # 1: (|gx| + |gy|) // 2
+CH_OPP_RG: Final[int]  # 2: (R - G + 255) // 2, colour frames only
+CH_OPP_YB: Final[int]  # 3: (R + G - 2B + 510) // 4, colour frames only
+CH_ORIENT0: Final[int]  # 4: CH_GRAD where the unsigned gradient angle is nearest 0 deg, else 0
+CH_ORIENT1: Final[int]  # 5: ... nearest 45 deg (from +x towards +y)
+CH_ORIENT2: Final[int]  # 6: ... nearest 90 deg
+CH_ORIENT3: Final[int]  # 7: ... nearest 135 deg
+NUM_CHANNEL_KINDS: Final[int]  # 8
+
 class IntegralImage:
     """Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY."""
 
     def __init__(self) -> None: ...
     def compute(self, frame: npt.NDArray[np.uint8], roi: tuple[int, int, int, int]) -> None:
         """Rebuild over roi = (x, y, w, h), clipped to the frame."""
+    def compute_channels(self, frame: npt.NDArray[np.uint8], roi: tuple[int, int, int, int],
+                         channels: Sequence[int]) -> None:
+        """Rebuild over roi = (x, y, w, h), clipped to the frame, with plane k holding channel
+        channels[k] (CH_* ids). ValueError for an unknown id, no channels, or a colour
+        channel on a gray frame."""
+    @property
+    def num_channels(self) -> int: ...
+    @property
+    def channels(self) -> tuple[int, ...]:
+        """The channel id of each plane."""
     @property
     def x0(self) -> int: ...
     @property
@@ -22,19 +46,27 @@ class IntegralImage:
     def width(self) -> int: ...
     @property
     def height(self) -> int: ...
-    def table(self) -> _F64:
-        """A copy of the (height + 1) x (width + 1) table; row and column 0 are zero."""
-    def rect_sum(self, x: int, y: int, w: int, h: int) -> float:
-        """Exact pixel sum over columns [x, x+w) and rows [y, y+h), in frame coordinates."""
+    def table(self, plane: int = 0) -> _F64:
+        """A copy of plane `plane`'s (height + 1) x (width + 1) table; row and column 0 are zero."""
+    def rect_sum(self, x: int, y: int, w: int, h: int, plane: int = 0) -> float:
+        """Exact sum over columns [x, x+w) and rows [y, y+h), in frame coordinates, on a plane."""
 
 class FeatureBank:
     """Haar-like features: weighted rectangle sums at offsets from a box corner."""
 
-    def __init__(self, starts: _I32, rects: _I32, weights: npt.ArrayLike) -> None: ...
+    def __init__(self, starts: _I32, rects: _I32, weights: npt.ArrayLike,
+                 channels: _I32 | None = None) -> None:
+        """channels: (R,) integral-image plane of each rectangle (None: all on plane 0)."""
     @property
     def size(self) -> int: ...
     @property
     def num_rects(self) -> int: ...
+    @property
+    def channels(self) -> npt.NDArray[np.int32]:
+        """Integral-image plane of each rectangle (a copy; zeros for a bank built without)."""
+    @property
+    def planes_needed(self) -> int:
+        """Planes an integral image needs for this bank: 1 + the largest."""
     @property
     def extent(self) -> tuple[int, int, int, int]: ...
 

@@ -13,14 +13,20 @@ class FeatureBank {
  public:
   // `starts` has one entry per feature plus a final one: feature f owns rectangles
   // starts[f] .. starts[f+1]-1. Rectangles are relative to the box's top-left corner.
+  // `planes` (empty = all 0) gives each rectangle the integral-image plane it sums over
+  // (IntegralImage::compute_channels); plane indices must be >= 0.
   FeatureBank(std::vector<std::int32_t> starts, std::vector<Rect> rects,
-              std::vector<double> weights);
+              std::vector<double> weights, std::vector<std::int32_t> planes = {});
 
   int size() const { return static_cast<int>(starts_.size()) - 1; }
   int num_rects() const { return static_cast<int>(rects_.size()); }
   const std::vector<std::int32_t>& starts() const { return starts_; }
   const std::vector<Rect>& rects() const { return rects_; }
   const std::vector<double>& weights() const { return weights_; }
+  // Plane of each rectangle (one entry per rectangle, 0 when none were given).
+  const std::vector<std::int32_t>& planes() const { return planes_; }
+  // 1 + the largest plane any rectangle uses: the planes an integral image needs.
+  int planes_needed() const { return planes_needed_; }
   // The smallest rectangle, relative to the box corner, that holds every feature's rectangles.
   const Rect& extent() const { return extent_; }
 
@@ -28,16 +34,26 @@ class FeatureBank {
   std::vector<std::int32_t> starts_;
   std::vector<Rect> rects_;
   std::vector<double> weights_;
+  std::vector<std::int32_t> planes_;
+  int planes_needed_ = 1;
   Rect extent_;
 };
 
 // The rectangles of a chosen subset of features, turned into flat offsets into one integral
-// image, so that evaluating a feature at a box is four loads per rectangle from a base pointer.
+// image, so that evaluating a feature at a box is four loads per rectangle from a base pointer
+// (the base pointing into plane 0; a rectangle on plane p carries p * plane_size in its offsets).
 class CompiledFeatures {
  public:
-  // `features` indexes the bank (nullptr/0 = every feature, in order).
+  // `features` indexes the bank (nullptr/0 = every feature, in order). Throws
+  // std::out_of_range for a feature index outside the bank or a rectangle on a plane
+  // >= num_planes.
   CompiledFeatures(const FeatureBank& bank, const std::int32_t* features, int n_features,
-                   std::ptrdiff_t stride);
+                   std::ptrdiff_t stride, std::ptrdiff_t plane_size = 0, int num_planes = 1);
+  // The same for the layout of `ii` (its stride, plane size and number of planes).
+  CompiledFeatures(const FeatureBank& bank, const std::int32_t* features, int n_features,
+                   const IntegralImage& ii)
+      : CompiledFeatures(bank, features, n_features, ii.stride(), ii.plane_size(),
+                         ii.num_channels()) {}
 
   int size() const { return static_cast<int>(starts_.size()) - 1; }
 
@@ -65,7 +81,8 @@ class CompiledFeatures {
   std::vector<Corners> corners_;
 };
 
-// Checks that features at every box lie inside the integral image; throws std::out_of_range.
+// Checks that features at every box lie inside the integral image's region and that the
+// image has every plane the bank uses; throws std::out_of_range.
 void check_boxes_covered(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* xs,
                          const std::int32_t* ys, int n_boxes);
 

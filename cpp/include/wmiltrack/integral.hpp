@@ -4,9 +4,14 @@
 // annulus), so the integral image is built over that rectangle alone, converting BGR(A)
 // to luma on the fly with the same fixed-point weights as cv::COLOR_BGR2GRAY.
 //
-// Sums are accumulated in 64-bit integers and stored as doubles: every value is an integer
-// below 255 * rows * cols, exact in a double for any frame under 3.5e13 pixels, and doubles
-// let the scoring loops vectorise (SSE2 has no int64 -> double conversion).
+// Sums are stored as doubles: every value is an integer below 255 * rows * cols, exact in a
+// double for any frame under 3.5e13 pixels, and doubles let the scoring loops vectorise
+// (SSE2 has no int64 -> double conversion). Each table row is the row above plus the row's
+// running sums (int32, or int64 for a row wider than 8.4 million pixels), all exact.
+//
+// compute_channels() builds several channels over the same ROI at once, one table per
+// channel ("plane"), stacked in one buffer: plane k starts at k * plane_size(). Every channel
+// is integer-valued in 0..255, so the tables stay exact like the luma one.
 #pragma once
 
 #include <cstddef>
@@ -14,6 +19,42 @@
 #include <vector>
 
 namespace wmiltrack {
+
+// Channel ids of IntegralImage::compute_channels. Every channel is an integer in 0..255 per
+// pixel. L is the luma (kLuma); gx = L(x+1, y) - L(x-1, y), gy = L(x, y+1) - L(x, y-1) are
+// central differences in frame coordinates (y grows downwards), taken with the neighbours
+// outside the ROI when the frame has them and with the edge pixel replicated at the frame's
+// border, so a pixel's value never depends on the ROI.
+enum Channel : int {
+  kLuma = 0,     // OpenCV BGR2GRAY fixed point (the frame itself for 1-channel frames)
+  kGrad = 1,     // (|gx| + |gy|) / 2, rounded down: L1 gradient magnitude halved into 0..255
+  kOppRG = 2,    // (R - G + 255) / 2, rounded down (colour frames only)
+  kOppYB = 3,    // (R + G - 2B + 510) / 4, rounded down (colour frames only)
+  kOrient0 = 4,  // kGrad where the gradient's unsigned orientation is nearest 0 deg, else 0
+  kOrient1 = 5,  //   ... nearest 45 deg (gx, gy of equal sign; angle from +x towards +y)
+  kOrient2 = 6,  //   ... nearest 90 deg
+  kOrient3 = 7,  //   ... nearest 135 deg
+};
+constexpr int kNumChannelKinds = 8;
+
+// Orientation bin (0..3) of the gradient (gx, gy): the unsigned angle atan2(gy, gx) mod 180
+// rounded to the nearest multiple of 45 degrees, decided in exact integer arithmetic (the
+// bin borders at 22.5 + 45k degrees have irrational slopes, so no integer gradient lies on
+// one). A zero gradient is bin 0 (its magnitude is 0 anyway).
+inline int orientation_bin(int gx, int gy) {
+  if (gx < 0 || (gx == 0 && gy < 0)) {
+    gx = -gx;
+    gy = -gy;
+  }
+  // Now gx >= 0 and the angle lies in (-90, 90].
+  const std::int64_t x = gx, a = gy < 0 ? -gy : gy;
+  if (x == 0 && a == 0) return 0;
+  // |angle| < 22.5 deg  <=>  a < (sqrt(2) - 1) x  <=>  (a + x)^2 < 2 x^2
+  if ((a + x) * (a + x) < 2 * x * x) return 0;
+  // |angle| > 67.5 deg  <=>  a > (sqrt(2) + 1) x  <=>  a > x and (a - x)^2 > 2 x^2
+  if (a > x && (a - x) * (a - x) > 2 * x * x) return 2;
+  return gy > 0 ? 1 : 3;
+}
 
 // A rectangle in frame pixel coordinates: columns [x, x + w), rows [y, y + h).
 struct Rect {
@@ -41,13 +82,30 @@ class IntegralImage {
   // ROI that does not meet the frame.
   void compute(const ImageView& image, Rect roi);
 
+  // Rebuild over `roi` with one plane per entry of `channels` (Channel ids; repeats
+  // allowed): plane k holds channel channels[k]. Same ROI rules and errors as compute(),
+  // plus std::invalid_argument for no channels, an unknown id, or a colour channel
+  // (kOppRG, kOppYB) on a 1-channel frame. Cost: one pass over the ROI (plus a one-pixel
+  // border for the gradient channels), independent of the frame's size.
+  void compute_channels(const ImageView& image, Rect roi, const std::vector<int>& channels);
+
   int x0() const { return x0_; }
   int y0() const { return y0_; }
   int width() const { return width_; }
   int height() const { return height_; }
   // Elements between consecutive rows of the (height + 1) x (width + 1) table.
   std::ptrdiff_t stride() const { return static_cast<std::ptrdiff_t>(width_) + 1; }
+  // Elements between consecutive planes: (height + 1) * (width + 1).
+  std::ptrdiff_t plane_size() const {
+    return stride() * (static_cast<std::ptrdiff_t>(height_) + 1);
+  }
+  // Planes in the table (1 after compute()) and the channel each holds.
+  int num_channels() const { return static_cast<int>(channels_.size()); }
+  const std::vector<int>& channels() const { return channels_; }
+  // Plane 0 (plane k starts at data() + k * plane_size()).
   const double* data() const { return data_.data(); }
+  // Plane k; the caller guarantees 0 <= k < num_channels().
+  const double* plane(int k) const { return data_.data() + k * plane_size(); }
 
   // True when the frame rectangle lies inside the region the table covers. The far edges
   // are computed in 64 bits: x + w of two large ints must not wrap around and pass.
@@ -57,9 +115,10 @@ class IntegralImage {
            static_cast<std::int64_t>(r.y) + r.h <= static_cast<std::int64_t>(y0_) + height_;
   }
 
-  // Exact pixel sum over a frame rectangle; the caller guarantees covers(r).
-  double sum(const Rect& r) const {
-    const double* top = data_.data() + (r.y - y0_) * stride() + (r.x - x0_);
+  // Exact pixel sum over a frame rectangle on plane k; the caller guarantees covers(r) and
+  // 0 <= k < num_channels().
+  double sum(const Rect& r, int k = 0) const {
+    const double* top = plane(k) + (r.y - y0_) * stride() + (r.x - x0_);
     const double* bottom = top + r.h * stride();
     return bottom[r.w] - bottom[0] - top[r.w] + top[0];
   }
@@ -69,6 +128,7 @@ class IntegralImage {
   int y0_ = 0;
   int width_ = 0;
   int height_ = 0;
+  std::vector<int> channels_;
   std::vector<double> data_;
 };
 

@@ -1,0 +1,132 @@
+"""A colour likelihood of the target, to merge with the Haar classifier's score (Staple-style).
+
+The Haar weak classifiers see local contrasts of intensity; they say little about *which
+colours* the target is made of, and they drift when a similar texture passes by. A colour
+model is the cue that complements them best among the fast trackers (Staple: +0.058 AUC over
+DSST on OTB at 80 fps): keep two colour histograms, of the target (the box, shrunk a little so
+that its border's background stays out) and of the background around it, and give every pixel
+the probability ``P(target | colour) = f / (f + b)`` of the two normalised histograms. The mean
+of that probability over a candidate box, read from an integral image in four loads, is the
+box's colour score in [0, 1].
+
+The tracker merges it with its own confidence: ``(1 - weight) * logistic(raw / K - offset) +
+weight * colour``, and takes the first maximum in the search grid's row-major order.
+
+Gray input, and colour frames whose three channels are equal (grayscale video saved as BGR), have
+no colour to model: :meth:`ColourModel.usable` says so and the tracker then uses its own score
+alone.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = ["ColourModel", "is_colour"]
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def is_colour(frame: np.ndarray) -> bool:
+    """Whether ``frame`` carries colour: 3 or 4 channels that are not all equal."""
+    if frame.ndim != 3 or frame.shape[2] < 3:
+        return False
+    b, g, r = frame[..., 0], frame[..., 1], frame[..., 2]
+    return not (np.array_equal(b, g) and np.array_equal(g, r))
+
+
+class ColourModel:
+    """Foreground and background colour histograms, updated online.
+
+    Parameters
+    ----------
+    bits : int
+        Bits kept per BGR channel (5: 32 levels, 32 768 bins, as Staple).
+    learning_rate : float
+        Weight of the new frame's histograms (Staple: 0.04).
+    pad : float
+        The background region extends the box by ``pad * (w + h) / 2`` on every side.
+    shrink : float
+        The foreground region is the box less ``shrink`` of its width/height on every side.
+    """
+
+    def __init__(self, bits: int = 5, learning_rate: float = 0.04, pad: float = 0.5,
+                 shrink: float = 0.1) -> None:
+        if not 1 <= bits <= 8:
+            raise ValueError(f"bits must be in 1..8, got {bits}")
+        if not 0.0 < learning_rate <= 1.0:
+            raise ValueError(f"learning_rate must be in (0, 1], got {learning_rate}")
+        self.bits = bits
+        self.learning_rate = learning_rate
+        self.pad = pad
+        self.shrink = shrink
+        self._fg: FloatArray | None = None
+        self._bg: FloatArray | None = None
+
+    @staticmethod
+    def usable(frame: np.ndarray) -> bool:
+        """Whether the model has colour to work with on frames like ``frame``."""
+        return is_colour(frame)
+
+    def _index(self, patch: np.ndarray) -> npt.NDArray[np.intp]:
+        s = 8 - self.bits
+        b = patch[..., 0].astype(np.intp) >> s
+        g = patch[..., 1].astype(np.intp) >> s
+        r = patch[..., 2].astype(np.intp) >> s
+        idx: npt.NDArray[np.intp] = (b << (2 * self.bits)) | (g << self.bits) | r
+        return idx
+
+    def learn(self, frame: np.ndarray, box: tuple[int, int, int, int]) -> None:
+        """Fold in the histograms of ``box`` (target) and its surroundings (background)."""
+        fh, fw = frame.shape[:2]
+        x, y, w, h = box
+        pad = int(round(self.pad * (w + h) / 2))
+        x0, y0 = max(0, x - pad), max(0, y - pad)
+        x1, y1 = min(fw, x + w + pad), min(fh, y + h + pad)
+        idx = self._index(frame[y0:y1, x0:x1])
+        inside = np.zeros(idx.shape, dtype=bool)
+        inside[max(0, y - y0):max(0, y - y0 + h), max(0, x - x0):max(0, x - x0 + w)] = True
+        core = np.zeros(idx.shape, dtype=bool)
+        sx, sy = max(1, int(self.shrink * w)), max(1, int(self.shrink * h))
+        core[max(0, y - y0 + sy):max(0, y - y0 + h - sy), max(0, x - x0 + sx):max(0, x - x0 + w - sx)] = True
+        nb = 1 << (3 * self.bits)
+        fg = np.bincount(idx[core], minlength=nb).astype(np.float64)
+        bg = np.bincount(idx[~inside], minlength=nb).astype(np.float64)
+        fg /= max(fg.sum(), 1.0)
+        bg /= max(bg.sum(), 1.0)
+        if self._fg is None or self._bg is None:
+            self._fg, self._bg = fg, bg
+        else:
+            a = self.learning_rate
+            self._fg = (1.0 - a) * self._fg + a * fg
+            self._bg = (1.0 - a) * self._bg + a * bg
+
+    def integral(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> tuple[FloatArray, int, int]:
+        """Integral image of ``P(target | colour)`` over ``roi = (x0, y0, x1, y1)`` (clipped to the
+        frame): ``(table, x0, y0)``, the table ``(y1 - y0 + 1) x (x1 - x0 + 1)`` with a zero
+        first row and column."""
+        if self._fg is None or self._bg is None:
+            raise ValueError("call learn() before integral()")
+        fh, fw = frame.shape[:2]
+        x0, y0 = max(0, roi[0]), max(0, roi[1])
+        x1, y1 = min(fw, roi[2]), min(fh, roi[3])
+        idx = self._index(frame[y0:y1, x0:x1])
+        f = self._fg[idx]
+        b = self._bg[idx]
+        total = f + b
+        p = np.divide(f, total, out=np.full(f.shape, 0.5), where=total > 0)
+        table = np.zeros((p.shape[0] + 1, p.shape[1] + 1))
+        np.cumsum(p, axis=0, out=table[1:, 1:])
+        np.cumsum(table[1:, 1:], axis=1, out=table[1:, 1:])
+        return table, x0, y0
+
+    @staticmethod
+    def box_means(table: FloatArray, x0: int, y0: int, xs: npt.NDArray[np.integer],
+                  ys: npt.NDArray[np.integer], w: int, h: int) -> FloatArray:
+        """Mean probability over the ``w x h`` boxes with top-left corners ``(xs, ys)`` (frame
+        coordinates; every box must lie inside the table's region)."""
+        cx = np.asarray(xs, dtype=np.intp) - x0
+        cy = np.asarray(ys, dtype=np.intp) - y0
+        s = table[cy + h, cx + w] - table[cy, cx + w] - table[cy + h, cx] + table[cy, cx]
+        out: FloatArray = s / float(w * h)
+        return out

@@ -1,0 +1,82 @@
+"""engine.colour: the colour likelihood that rcwmil-plus merges with its classifier score."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wmiltrack.engine.colour import ColourModel, is_colour
+
+
+def scene(rng: np.random.Generator) -> np.ndarray:
+    """Blue-green noisy background with a red-ish 20x16 target at (30, 20)."""
+    img = np.empty((80, 100, 3), np.uint8)
+    img[..., 0] = rng.integers(150, 250, (80, 100))   # B
+    img[..., 1] = rng.integers(80, 180, (80, 100))    # G
+    img[..., 2] = rng.integers(0, 60, (80, 100))      # R
+    img[20:36, 30:50, 0] = rng.integers(0, 60, (16, 20))
+    img[20:36, 30:50, 1] = rng.integers(0, 60, (16, 20))
+    img[20:36, 30:50, 2] = rng.integers(180, 255, (16, 20))
+    return img
+
+
+def test_is_colour() -> None:
+    rng = np.random.default_rng(0)
+    g = rng.integers(0, 256, (10, 12), dtype=np.uint8)
+    assert not is_colour(g)
+    assert not is_colour(np.dstack([g, g, g]))           # gray video saved as BGR
+    assert is_colour(scene(rng))
+    assert is_colour(np.dstack([g, g, g, g * 0 + 3])) is False
+
+
+def test_target_scores_high_background_low() -> None:
+    rng = np.random.default_rng(1)
+    img = scene(rng)
+    cm = ColourModel(bits=3)  # 512 bins: every colour of this scene is seen while learning
+    cm.learn(img, (30, 20, 20, 16))
+    table, x0, y0 = cm.integral(img, (0, 0, 100, 80))
+    means = ColourModel.box_means(table, x0, y0, np.array([30, 60, 5]), np.array([20, 50, 5]), 20, 16)
+    assert means[0] > 0.95 and means[1] < 0.05 and means[2] < 0.05
+    # a box half on the target scores about half
+    half = ColourModel.box_means(table, x0, y0, np.array([40]), np.array([20]), 20, 16)[0]
+    assert 0.4 < half < 0.6
+
+
+def test_integral_matches_brute_force_and_is_clipped() -> None:
+    rng = np.random.default_rng(2)
+    img = scene(rng)
+    cm = ColourModel(bits=4)
+    cm.learn(img, (30, 20, 20, 16))
+    table, x0, y0 = cm.integral(img, (-10, 5, 70, 200))       # clipped to the frame
+    assert (x0, y0) == (0, 5) and table.shape == (80 - 5 + 1, 70 + 1)
+    s = 8 - cm.bits
+    idx = ((img[5:, :70, 0] >> s).astype(int) << 8) | ((img[5:, :70, 1] >> s).astype(int) << 4) | (
+        img[5:, :70, 2] >> s).astype(int)
+    f, b = cm._fg[idx], cm._bg[idx]  # noqa: SLF001 (white-box check of the formula)
+    p = np.where(f + b > 0, f / np.where(f + b > 0, f + b, 1), 0.5)
+    got = ColourModel.box_means(table, x0, y0, np.array([3]), np.array([9]), 11, 7)[0]
+    assert got == pytest.approx(p[4:11, 3:14].mean(), rel=1e-12)
+
+
+def test_learning_rate_blends_histograms() -> None:
+    rng = np.random.default_rng(3)
+    a = scene(rng)
+    b = a.copy()
+    b[20:36, 30:50] = (0, 200, 0)  # the target turns green
+    cm = ColourModel(learning_rate=0.5)
+    cm.learn(a, (30, 20, 20, 16))
+    table, x0, y0 = cm.integral(b, (0, 0, 100, 80))
+    before = ColourModel.box_means(table, x0, y0, np.array([30]), np.array([20]), 20, 16)[0]
+    cm.learn(b, (30, 20, 20, 16))
+    table, x0, y0 = cm.integral(b, (0, 0, 100, 80))
+    after = ColourModel.box_means(table, x0, y0, np.array([30]), np.array([20]), 20, 16)[0]
+    assert after > before + 0.3
+
+
+def test_errors() -> None:
+    with pytest.raises(ValueError, match="bits"):
+        ColourModel(bits=0)
+    with pytest.raises(ValueError, match="learning_rate"):
+        ColourModel(learning_rate=0.0)
+    with pytest.raises(ValueError, match="learn"):
+        ColourModel().integral(np.zeros((4, 4, 3), np.uint8), (0, 0, 4, 4))
