@@ -48,6 +48,8 @@ def variant_table() -> str:
                 parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} ({p.scale_model})")
             if p.channels:
                 parts.append("channels " + "+".join(p.channels))
+            if p.colour_weight > 0:
+                parts.append(f"colour {p.colour_weight:g}")
             if p.motion != "none":
                 parts.append(f"motion {p.motion}")
             if p.gate_threshold > 0 or p.gate_drop > 0:

@@ -127,6 +127,24 @@ class ChannelImages:
 
         ``mu1`` .. ``sigma0`` hold one entry per selected feature (as for the core).
         """
+        total = self.grid(bank, selected, mu1, sigma1, mu0, sigma0, guard, box, radius, step)
+        if total is None:
+            return 0, 0, -np.inf, 0
+        finite = np.isfinite(total)
+        n = int(np.count_nonzero(finite))
+        if n == 0:
+            return 0, 0, -np.inf, 0
+        flat = np.where(finite, total, -np.inf).ravel()
+        best = int(np.argmax(flat))  # the first maximum in row-major order, as the core
+        side = total.shape[0]
+        half = (side - 1) // 2
+        row, col = divmod(best, side)
+        return (col - half) * step, (row - half) * step, float(flat[best]), n
+
+    def grid(self, bank: ChannelBank, selected: np.ndarray, mu1: np.ndarray, sigma1: np.ndarray,
+             mu0: np.ndarray, sigma0: np.ndarray, guard: float, box: tuple[int, int, int, int],
+             radius: int, step: int) -> np.ndarray | None:
+        """The summed raw-score grid (``-inf``: not a candidate); ``None`` if nothing is scored."""
         total: np.ndarray | None = None
         local_box = self._local_box(box)
         for c, ii in enumerate(self._ii):
@@ -140,18 +158,7 @@ class ChannelImages:
                                    self.size, True)
             grid = cast(tuple[int, int, float, int, np.ndarray], out)[4]
             total = grid if total is None else total + grid
-        if total is None:
-            return 0, 0, -np.inf, 0
-        finite = np.isfinite(total)
-        n = int(np.count_nonzero(finite))
-        if n == 0:
-            return 0, 0, -np.inf, 0
-        flat = np.where(finite, total, -np.inf).ravel()
-        best = int(np.argmax(flat))  # the first maximum in row-major order, as the core
-        side = total.shape[0]
-        half = (side - 1) // 2
-        row, col = divmod(best, side)
-        return (col - half) * step, (row - half) * step, float(flat[best]), n
+        return total
 
     def project(self, bank: ChannelBank, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
         """Feature values ``(M, n)`` of the boxes with top-left corners ``(xs, ys)``."""

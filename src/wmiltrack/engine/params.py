@@ -172,6 +172,11 @@ class Params:
         Weight of the old velocity in the exponential velocity estimate, in [0, 1).
     motion_max : float
         The predicted displacement is clipped to this many pixels per frame.
+    colour_weight : float
+        Weight of a colour likelihood (``engine.colour``: foreground/background colour
+        histograms, the mean P(target | colour) over a candidate box) merged into every
+        translation search stage: ``(1 - w) * confidence + w * colour`` per candidate (0: off;
+        also off for gray frames and BGR frames whose three channels are equal).
     gate_threshold : float
         Learn only from frames whose confidence is at least this (0: always learn).
     gate_drop : float
@@ -241,6 +246,7 @@ class Params:
     motion: MotionModel = "none"
     motion_smoothing: float = 0.5
     motion_max: float = 30.0
+    colour_weight: float = 0.0
     gate_threshold: float = 0.0
     gate_drop: float = 0.0
     gate_learning_rate: float | None = None
@@ -332,7 +338,8 @@ class Params:
              f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
         need(self.min_box_size >= 2, f"min_box_size must be >= 2, got {self.min_box_size}")
         for name in ("confidence_offset", "scale_factor", "scale_penalty", "scale_min", "scale_max",
-                     "motion_smoothing", "motion_max", "gate_threshold", "gate_drop", "scale_mix"):
+                     "motion_smoothing", "motion_max", "gate_threshold", "gate_drop", "scale_mix",
+                     "colour_weight"):
             v = getattr(self, name)
             need(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
                  f"{name} must be a finite number, got {v!r}")
@@ -360,6 +367,8 @@ class Params:
              f"motion_smoothing must be in [0, 1), got {self.motion_smoothing}")
         need(0.0 <= self.motion_max <= MAX_SEARCH_RADIUS,
              f"motion_max must be in [0, {MAX_SEARCH_RADIUS}], got {self.motion_max}")
+        need(0.0 <= self.colour_weight <= 1.0,
+             f"colour_weight must be in [0, 1], got {self.colour_weight}")
         need(self.gate_drop >= 0.0, f"gate_drop must be >= 0, got {self.gate_drop}")
         need(0.0 <= self.gate_threshold <= 1.0,
              f"gate_threshold must be in [0, 1], got {self.gate_threshold}")
@@ -453,12 +462,12 @@ VARIANTS: dict[str, Params] = {
         "sub-region features, MIL selection without instance weights, CT's exhaustive search.",
     ),
     "rcwmil-plus": Params(
-        variant="rcwmil-plus", neg_outer=40.0, neg_count=100, scale_steps=1, scale_factor=1.03,
-        scale_model="both", scale_mix=3.0, scale_penalty=0.05, motion="velocity",
-        description="rcwmil plus what fast CPU trackers add: scale search by scaled Haar "
+        variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
+        scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
+        description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into "
+        "the search (0.7), a constant-velocity search centre, and scale search by scaled Haar "
         "rectangles (1.03^-1, 1, 1.03^+1; classifier score plus a slow target likelihood, "
-        "penalised away from the current scale), a constant-velocity search centre and a "
-        "wider negative annulus (8..40, 100).",
+        "penalised away from the current scale).",
     ),
 }
 

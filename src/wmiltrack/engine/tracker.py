@@ -15,6 +15,7 @@ import numpy as np
 from .. import _core
 from .channels import ChannelBank, ChannelImages, available_channels
 from .classifier import GaussianPool
+from .colour import ColourModel
 from .features import BankArrays, check_box_size, make_bank, min_box_size, scale_bank
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .params import Params
@@ -162,6 +163,11 @@ class Tracker:
         self._selected = np.arange(p.num_selected, dtype=np.int32)
         self._frame_wh = (fw, fh)
         self._box = b
+        self._colour: ColourModel | None = None
+        if p.colour_weight > 0 and ColourModel.usable(img):
+            self._colour = ColourModel()
+            self._colour.learn(img, b)
+        self._colour_table: tuple[np.ndarray, int, int] | None = None
         self._compute_integral(img, b, self._first.reach)
         self._learn(self._first)
         self._search_origins: list[IntBox] = []
@@ -192,7 +198,12 @@ class Tracker:
         p = self._params
         previous = self._box
         origin, coarse = self._search_origin()
-        self._compute_integral(img, origin, p.search_reach + self._track.reach + self._scale_margin())
+        margin = p.search_reach + self._track.reach + self._scale_margin()
+        self._compute_integral(img, origin, margin)
+        if self._colour is not None:
+            x, y, w, h = origin
+            m = margin + 1
+            self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
         self._box = origin
         raw = self._detect(coarse)
         score = confidence(raw, len(self._selected), p.confidence_offset)
@@ -205,6 +216,8 @@ class Tracker:
             empty = np.zeros((0, 2), dtype=np.int32)
             self._bags = (empty, empty)
         self._score = score
+        if self._colour is not None:
+            self._colour.learn(img, self._box)
         self._follow(previous, tracked)
         x, y, w, h = self._box
         return TrackResult((float(x), float(y), float(w), float(h)), self._score, tracked)
@@ -280,6 +293,44 @@ class Tracker:
         dx, dy, score, n = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, guard,
                                             box, radius, step, self._frame_wh)
         return int(dx), int(dy), float(score), int(n)
+
+    def _raw_grid(self, index: int, sel: np.ndarray, weak: Weak, box: IntBox, radius: int,
+                  step: int) -> np.ndarray | None:
+        """The full grid of raw scores around ``box`` (``-inf``: not a candidate)."""
+        if self._chan is not None:
+            return self._chan.grid(self._chan_bank_at(index), sel, *weak, self._params.guard, box,
+                                   radius, step)
+        out = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, self._params.guard,
+                               box, radius, step, self._frame_wh, True)
+        grid: np.ndarray = out[4]  # type: ignore[misc]
+        return grid
+
+    def _colour_stage(self, sel: np.ndarray, weak: Weak, radius: int,
+                      step: int) -> tuple[int, int, float, int]:
+        """One search stage choosing by ``(1 - w) * confidence + w * colour`` per candidate."""
+        p = self._params
+        assert self._colour_table is not None
+        grid = self._raw_grid(self._scale_index, sel, weak, self._box, radius, step)
+        if grid is None:
+            return 0, 0, -math.inf, 0
+        valid = np.isfinite(grid)
+        n = int(np.count_nonzero(valid))
+        if n == 0:
+            return 0, 0, -math.inf, 0
+        side = grid.shape[0]
+        half = (side - 1) // 2
+        rows, cols = np.nonzero(valid)  # row-major order
+        raw = grid[rows, cols]
+        k = max(len(sel), 1)
+        conf = 0.5 * (1.0 + np.tanh(0.5 * (raw / k - p.confidence_offset)))
+        x, y, w, h = self._box
+        xs = x + (cols - half) * step
+        ys = y + (rows - half) * step
+        table, x0, y0 = self._colour_table
+        colour = ColourModel.box_means(table, x0, y0, xs, ys, w, h)
+        total = (1.0 - p.colour_weight) * conf + p.colour_weight * colour
+        best = int(np.argmax(total))
+        return int((cols[best] - half) * step), int((rows[best] - half) * step), float(raw[best]), n
 
     def _project(self, index: int, corners: np.ndarray) -> np.ndarray:
         """Feature values ``(M, n)`` of the boxes at scale ``index`` with these top-left corners."""
@@ -398,7 +449,11 @@ class Tracker:
         self._search_stages = stages
         for radius, step in stages:
             self._search_origins.append(self._box)
-            dx, dy, score, n = self._score_grid(self._scale_index, sel, weak, self._box, radius, step)
+            if self._colour_table is not None:
+                dx, dy, score, n = self._colour_stage(sel, weak, radius, step)
+            else:
+                dx, dy, score, n = self._score_grid(self._scale_index, sel, weak, self._box, radius,
+                                                    step)
             if n > 0:
                 x, y, w, h = self._box
                 self._box = (x + dx, y + dy, w, h)
