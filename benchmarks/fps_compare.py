@@ -45,7 +45,7 @@ except ImportError:  # a checkout that was not installed
 
 from wmiltrack.eval.peers import OPENCV_TRACKERS, available_opencv_trackers, installed_opencv
 
-VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
+VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
 REFERENCE = "opencv:MIL"
 
 

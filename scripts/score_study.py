@@ -6,7 +6,7 @@ candidate confidence signals and the IoU with the ground truth, and prints for e
 the ROC AUC of "target tracked" (IoU > 0) against "lost" (IoU == 0, or target not visible)
 and the score distributions.
 
-    python scripts/score_study.py [--otb ../shared/data/otb] [--variants rcwmil,ct] [--json out.json]
+    python scripts/score_study.py [--otb ../shared/data/otb] [--variants rcwmil,rcwmil-plus] [--json out.json]
 
 Signals (all computed from what one update already has):
 
@@ -77,16 +77,19 @@ def fit_logistic(x: np.ndarray, y: np.ndarray, iters: int = 200) -> tuple[float,
 class Probe(wmiltrack.Tracker):
     """A tracker that also records the grid statistics of each update (for this study)."""
 
-    def _detect(self) -> float:
-        p = self._params
-        sel = self._selected
-        pool = self._pool
-        weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
-        _, _, _, n, grid = _core.score_grid(self._ii, self._bank, sel, *weak, p.guard, self._box,
-                                            p.coarse_radius, p.coarse_step, self._frame_wh, True)
-        g = grid[np.isfinite(grid)]
-        self.grid_mean = float(g.mean()) if g.size else math.nan
-        self.raw_best = super()._detect()
+    def _detect(self, coarse: tuple[int, int]) -> float:
+        self.grid_mean = math.nan
+        if self._chan is None:  # the margin signal is only probed on the luma-only path
+            p = self._params
+            sel = self._selected
+            pool = self._pool
+            weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
+            bank = self._bank_at(self._scale_index)[0]
+            _, _, _, n, grid = _core.score_grid(self._ii, bank, sel, *weak, p.guard, self._box,
+                                                coarse[0], coarse[1], self._frame_wh, True)
+            g = grid[np.isfinite(grid)]
+            self.grid_mean = float(g.mean()) if g.size else math.nan
+        self.raw_best = super()._detect(coarse)
         return self.raw_best
 
 
@@ -176,7 +179,7 @@ def main() -> None:
             for key, v in rows.items():
                 acc[group].setdefault(key, []).append(v)
             ok = rows["iou"] > 0
-            print(f"{variant:7s} {name:18s} frames {len(ok):4d} lost(IoU=0) {np.sum(~ok):4d} "
+            print(f"{variant:11s} {name:18s} frames {len(ok):4d} lost(IoU=0) {np.sum(~ok):4d} "
                   + " ".join(f"{s}={roc_auc(rows[s][ok], rows[s][~ok]):.2f}" for s in signals))
         for group in ("otb", "synthetic", "all"):
             if group == "all":
@@ -213,8 +216,9 @@ def main() -> None:
             v = cat["score"]
             best = max(((0.5 * (np.mean(v[tracked] >= th) + np.mean(v[lost] < th)), th)
                         for th in np.linspace(0.0, 1.0, 101)), default=(math.nan, math.nan))
-            at = 0.5 * (np.mean(v[tracked] >= 0.5) + np.mean(v[lost] < 0.5))
-            print(f"   score: balanced accuracy at 0.5: {at:.3f}")
+            thr = wmiltrack.Params.for_variant(variant).lost_threshold
+            at = 0.5 * (np.mean(v[tracked] >= thr) + np.mean(v[lost] < thr))
+            print(f"   score: balanced accuracy at lost_threshold {thr:.2f}: {at:.3f}")
             entry["score_best_threshold"] = {"balanced_accuracy": best[0], "threshold": best[1]}
             print(f"   score: best threshold {best[1]:.2f} (balanced accuracy {best[0]:.3f})")
     if args.json:

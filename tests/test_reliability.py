@@ -101,7 +101,8 @@ def track_checked(tracker: wmiltrack.Tracker, frames: Sequence[Frame], box: Any)
     boxes : list of (x, y, w, h)
         The box after init and after each update.
     problem : str or None
-        What was wrong (a box leaving the frame, a size change, a non-finite or out-of-range
+        What was wrong (a box leaving the frame, a size change (for variants without scale
+        search; outside the scale limits for those with it), a non-finite or out-of-range
         score), or ``None``.
     """
     fh, fw = frames[0].shape[:2]
@@ -116,8 +117,12 @@ def track_checked(tracker: wmiltrack.Tracker, frames: Sequence[Frame], box: Any)
             return boxes, f"frame {i}: non-finite box {r.box}"
         if x < 0 or y < 0 or x + w > fw or y + h > fh:
             return boxes, f"frame {i}: box {r.box} outside the {fw}x{fh} frame"
-        if (w, h) != (w0, h0):
+        if tracker.params.scale_steps == 0 and (w, h) != (w0, h0):
             return boxes, f"frame {i}: box size changed from {(w0, h0)} to {(w, h)}"
+        if tracker.params.scale_steps > 0 and not (
+                tracker.params.scale_min * 0.9 <= w / w0 <= tracker.params.scale_max * 1.1
+                and w >= 1 and h >= 1):
+            return boxes, f"frame {i}: box size {(w, h)} outside the scale limits of {(w0, h0)}"
         if not (math.isfinite(r.score) and 0.0 <= r.score <= 1.0):
             return boxes, f"frame {i}: score {r.score} not in [0, 1]"
         if r.ok != (r.score >= tracker.params.lost_threshold):

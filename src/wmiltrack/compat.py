@@ -10,8 +10,9 @@ from .integrations.opencv import (
     TrackerMILBoost,
     TrackerOSIL,
     TrackerRCWMIL,
+    TrackerRCWMILPlus,
     TrackerWMIL,
 )
 
 __all__ = ["TrackerCT", "TrackerCompat", "TrackerFCT", "TrackerMILBoost", "TrackerOSIL",
-           "TrackerRCWMIL", "TrackerWMIL"]
+           "TrackerRCWMIL", "TrackerRCWMILPlus", "TrackerWMIL"]

@@ -71,7 +71,9 @@ def draw_samples(frame: np.ndarray, samples: dict[str, Any], *, scale: int = 3,
     numpy.ndarray
         BGR image: box centres of the positive bag (green), the negative bag (red), the
         coarse search grid (blue, around the previous box) and the fine grid (yellow, around
-        the coarse winner); the final box in white; a legend at the bottom.
+        the coarse winner); the boxes of the other scales searched (magenta, when the
+        tracker searches scales: ``samples["scales"]``); the final box in white; a legend
+        at the bottom.
     """
     img: np.ndarray[Any, Any] = np.array(frame, dtype=np.uint8, copy=True)
     if img.ndim == 2:
@@ -87,6 +89,7 @@ def draw_samples(frame: np.ndarray, samples: dict[str, Any], *, scale: int = 3,
         layers.append((pts, colors[min(k, 1)], 1))
     layers.append((np.asarray(samples["negative"]), (0, 0, 255), 2))
     layers.append((np.asarray(samples["positive"]), (0, 200, 0), 1))
+    scale_boxes = [tuple(int(v) for v in b) for b in samples.get("scales", [])]
     allpts = np.concatenate([p for p, _, _ in layers] + [np.array([[x, y]])], axis=0)
     x0 = int(max(allpts[:, 0].min() + cx - margin, 0))
     y0 = int(max(allpts[:, 1].min() + cy - margin, 0))
@@ -94,6 +97,9 @@ def draw_samples(frame: np.ndarray, samples: dict[str, Any], *, scale: int = 3,
     y1 = int(min(allpts[:, 1].max() + cy + margin, img.shape[0]))
     x0, y0 = min(x0, int(x)), min(y0, int(y))
     x1, y1 = max(x1, min(int(x + w) + 1, img.shape[1])), max(y1, min(int(y + h) + 1, img.shape[0]))
+    for bx, by, bw, bh in scale_boxes:
+        x0, y0 = max(min(x0, bx), 0), max(min(y0, by), 0)
+        x1, y1 = min(max(x1, bx + bw + 1), img.shape[1]), min(max(y1, by + bh + 1), img.shape[0])
     crop = cv2.resize(img[y0:y1, x0:x1], None, fx=scale, fy=scale, interpolation=cv2.INTER_NEAREST)
     crop = (crop.astype(np.float32) * 0.75).astype(np.uint8)  # dim so the marks stand out
 
@@ -103,9 +109,14 @@ def draw_samples(frame: np.ndarray, samples: dict[str, Any], *, scale: int = 3,
     for pts, color, radius in layers:
         for px, py in pts:
             cv2.circle(crop, at(px + cx, py + cy), radius, color, -1, cv2.LINE_AA)
+    magenta = (255, 0, 255)
+    for bx, by, bw, bh in scale_boxes:
+        cv2.rectangle(crop, at(bx, by), at(bx + bw - 1, by + bh - 1), magenta, 1, cv2.LINE_AA)
     cv2.rectangle(crop, at(x, y), at(x + w - 1, y + h - 1), (255, 255, 255), 1, cv2.LINE_AA)
     legend = [("positive bag", (0, 200, 0)), ("negative bag", (0, 0, 255)),
               ("coarse grid", colors[0]), ("fine grid", colors[1])]
+    if scale_boxes:
+        legend.append(("scales", magenta))
     bar = np.full((22, crop.shape[1], 3), 32, np.uint8)
     xpos = 6
     for text, color in legend:

@@ -40,8 +40,9 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     if not cv2.imwrite(str(args.output), img, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
         raise SystemExit(f"wmiltrack: cannot write {args.output}")
     s = t.samples()
+    scales = f", {len(s['scales'])} other scales" if s["scales"] else ""
     print(f"frame {args.frame}: {len(s['positive'])} positives, {len(s['negative'])} negatives, "
-          f"search stages {[(r, st) for _, r, st in s['search']]} -> {args.output}")
+          f"search stages {[(r, st) for _, r, st in s['search']]}{scales} -> {args.output}")
     return 0
 
 
@@ -57,7 +58,8 @@ def add_inspect(sub: Any) -> None:
         "inspect", help="draw the positive/negative bags and the search grid of one frame as a PNG",
         description="Track INPUT up to --frame and draw, on a crop around the target, the positive "
         "bag (green), the negative bag (red), the coarse search grid around the previous box (blue) "
-        "and the fine grid around the coarse winner (yellow) of that frame's update.")
+        "and the fine grid around the coarse winner (yellow) of that frame's update, and the boxes of "
+        "the other scales searched (magenta; rcwmil-plus).")
     p.add_argument("input", type=Path, help="video file, image folder or OTB sequence folder")
     p.add_argument("-o", "--output", type=Path, default=Path("samples.png"), help="PNG to write")
     p.add_argument("--frame", type=int, default=1, help="frame index to draw (default 1)")

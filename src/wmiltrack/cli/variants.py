@@ -12,7 +12,7 @@ VARIANT_COLUMNS = [
     ("features", "features"), ("M", "num_features"), ("K", "num_selected"), ("rects", "rects"),
     ("rect weights", "weights"), ("lambda", "learning_rate"), ("positives", "pos_radius"),
     ("negatives", "negatives"), ("selection", "selection"), ("instance weights", "instance_weights"),
-    ("search", "search"),
+    ("search", "search"), ("additions (rcwmil-plus)", "plus"),
 ]
 
 
@@ -42,6 +42,21 @@ def variant_table() -> str:
         if key == "instance_weights":
             return "-" if p.selection != "wmil" else {"exp": "exp(-d)/sum", "exp_sq": "exp(-d^2)",
                                                       "uniform": "equal"}[p.instance_weights]
+        if key == "plus":
+            parts = []
+            if p.scale_steps:
+                parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} ({p.scale_model})")
+            if p.channels:
+                parts.append("channels " + "+".join(p.channels))
+            if p.colour_weight > 0:
+                parts.append(f"colour {p.colour_weight:g}")
+            if p.motion != "none":
+                parts.append(f"motion {p.motion}")
+            if p.gate_threshold > 0 or p.gate_drop > 0:
+                parts.append("gated update")
+            if p.recovery_radius:
+                parts.append(f"recovery {p.recovery_radius}/{p.recovery_step}")
+            return ", ".join(parts) or "-"
         if key == "search":
             s = f"{p.coarse_radius}/{p.coarse_step}"
             return s + (f" then {p.fine_radius}/{p.fine_step}" if p.fine_radius > 0 else "")

@@ -24,17 +24,21 @@ class GaussianPool:
         self.sigma0 = np.ones(m)
         self._seen = [False, False]  # has class 0 / 1 been updated yet
 
-    def update(self, positives: np.ndarray, negatives: np.ndarray) -> None:
-        """Fold in the feature values (M x n) of one frame's positive and negative samples."""
-        self.mu1, self.sigma1 = self._update_class(1, self.mu1, self.sigma1, positives)
-        self.mu0, self.sigma0 = self._update_class(0, self.mu0, self.sigma0, negatives)
+    def update(self, positives: np.ndarray, negatives: np.ndarray,
+               learning_rate: float | None = None) -> None:
+        """Fold in the feature values (M x n) of one frame's positive and negative samples.
+
+        ``learning_rate`` (lambda, the old model's weight) defaults to the parameters'.
+        """
+        lam = self.params.learning_rate if learning_rate is None else learning_rate
+        self.mu1, self.sigma1 = self._update_class(1, self.mu1, self.sigma1, positives, lam)
+        self.mu0, self.sigma0 = self._update_class(0, self.mu0, self.sigma0, negatives, lam)
 
     def _update_class(self, cls: int, mu: np.ndarray, sigma: np.ndarray,
-                      values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                      values: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
         if values.shape[1] == 0:  # no sample of this class in this frame: keep the model
             return mu, sigma
         p = self.params
-        lam = p.learning_rate
         first = not self._seen[cls]
         self._seen[cls] = True
         mean = values.mean(axis=1)

@@ -19,6 +19,7 @@ alone.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -69,10 +70,10 @@ class ColourModel:
         return is_colour(frame)
 
     def _index(self, patch: np.ndarray) -> npt.NDArray[np.intp]:
-        s = 8 - self.bits
-        b = patch[..., 0].astype(np.intp) >> s
-        g = patch[..., 1].astype(np.intp) >> s
-        r = patch[..., 2].astype(np.intp) >> s
+        s = 8 - self.bits  # shift the uint8 values first, widen to 32 bits once
+        b = (patch[..., 0] >> s).astype(np.uint32)
+        g = (patch[..., 1] >> s).astype(np.uint32)
+        r = (patch[..., 2] >> s).astype(np.uint32)
         idx: npt.NDArray[np.intp] = (b << (2 * self.bits)) | (g << self.bits) | r
         return idx
 
@@ -111,13 +112,10 @@ class ColourModel:
         x0, y0 = max(0, roi[0]), max(0, roi[1])
         x1, y1 = min(fw, roi[2]), min(fh, roi[3])
         idx = self._index(frame[y0:y1, x0:x1])
-        f = self._fg[idx]
-        b = self._bg[idx]
-        total = f + b
-        p = np.divide(f, total, out=np.full(f.shape, 0.5), where=total > 0)
-        table = np.zeros((p.shape[0] + 1, p.shape[1] + 1))
-        np.cumsum(p, axis=0, out=table[1:, 1:])
-        np.cumsum(table[1:, 1:], axis=1, out=table[1:, 1:])
+        total = self._fg + self._bg
+        likelihood = np.divide(self._fg, total, out=np.full(total.shape, 0.5), where=total > 0)
+        p = likelihood[idx]
+        table: FloatArray = cv2.integral(p, sdepth=cv2.CV_64F)
         return table, x0, y0
 
     @staticmethod

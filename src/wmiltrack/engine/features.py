@@ -129,3 +129,28 @@ def make_bank(params: Params, w: int, h: int, rng: np.random.Generator) -> BankA
     # Every rectangle must stay inside the box.
     assert np.all(rects[:, 0] + rects[:, 2] <= w) and np.all(rects[:, 1] + rects[:, 3] <= h)
     return BankArrays(starts=starts, rects=rects, weights=weights, subregion=subregion)
+
+
+def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int) -> BankArrays:
+    """The bank drawn for a ``base_w x base_h`` box, stretched to a ``w x h`` box.
+
+    Each rectangle's edges are scaled and rounded (sides at least 1 pixel, kept inside the
+    box) and its weight is multiplied by ``old area / new area``: an area-normalised feature
+    stays a signed sum of mean intensities, so the learnt Gaussians remain valid at every
+    scale (and raw-sum features keep their expected value).
+    """
+    if (w, h) == (base_w, base_h):
+        return base
+    sx, sy = w / base_w, h / base_h
+    r = base.rects.astype(np.float64)
+    x0 = np.rint(r[:, 0] * sx)
+    y0 = np.rint(r[:, 1] * sy)
+    rw = np.maximum(np.rint((r[:, 0] + r[:, 2]) * sx) - x0, 1.0)
+    rh = np.maximum(np.rint((r[:, 1] + r[:, 3]) * sy) - y0, 1.0)
+    rw = np.minimum(rw, float(w))
+    rh = np.minimum(rh, float(h))
+    x0 = np.clip(x0, 0.0, w - rw)
+    y0 = np.clip(y0, 0.0, h - rh)
+    rects = np.stack([x0, y0, rw, rh], axis=1).astype(np.int32)
+    weights = base.weights * (r[:, 2] * r[:, 3]) / (rw * rh)
+    return BankArrays(starts=base.starts, rects=rects, weights=weights, subregion=base.subregion)

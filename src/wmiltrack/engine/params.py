@@ -21,6 +21,8 @@ SelectionKind = Literal["wmil", "milboost", "none"]
 InstanceWeights = Literal["exp", "exp_sq", "uniform"]
 GradientForm = Literal["paper", "code"]
 SubregionMode = Literal["grid", "random"]
+MotionModel = Literal["none", "velocity"]
+ScaleModel = Literal["ratio", "likelihood", "both"]
 
 _CHOICES: dict[str, tuple[str, ...]] = {
     "feature_kind": ("subregion", "random"),
@@ -32,6 +34,8 @@ _CHOICES: dict[str, tuple[str, ...]] = {
     "instance_weights": ("exp", "exp_sq", "uniform"),
     "gradient": ("paper", "code"),
     "subregion_mode": ("grid", "random"),
+    "motion": ("none", "velocity"),
+    "scale_model": ("ratio", "likelihood", "both"),
 }
 
 
@@ -119,6 +123,74 @@ class Params:
         ``TrackResult.ok`` is False when the confidence falls below this.
     min_box_size : int
         Smallest box side accepted (after clipping to the frame).
+    confidence_offset : float
+        Offset of the confidence ``logistic(raw / K - offset)`` (see
+        :func:`wmiltrack.engine.tracker.confidence`).
+
+    The fields below are the ``rcwmil-plus`` components; their defaults switch each one off,
+    so the paper presets run the paper's code path.
+
+    channels : tuple of str
+        Image channels the features are drawn on, each feature on one: any of ``"luma"``,
+        ``"grad"`` (gradient magnitude), ``"opp_rg"``, ``"opp_yb"`` (colour opponents; they
+        drop out for gray frames). Empty (the paper): luma only, one integral image.
+    scale_steps : int
+        Scale search: after the translation search, also try the box scaled by
+        ``scale_factor ** j`` for ``j = -scale_steps..scale_steps`` (0: the box keeps its
+        first size). The Haar rectangles are scaled, not the image.
+    scale_factor : float
+        Ratio between neighbouring scales (> 1).
+    scale_model : {"ratio", "likelihood"}
+        How scales are compared: ``ratio``, the strong classifier's mean log ratio (best of a
+        ``scale_radius`` translation search at each scale); ``likelihood``, how well all M
+        features of the box at each scale fit the target's Gaussians: minus the mean of
+        ``log(1 + z^2)`` with ``z = (value - mu1) / sigma1`` (a generative template over the
+        whole pool, which the background model cannot bias), with a target model of its
+        own updated at ``scale_learning_rate``; ``both``: the sum of the two, the
+        likelihood weighted by ``scale_mix`` (the classifier alone favours smaller boxes,
+        the likelihood alone larger ones).
+    scale_mix : float
+        Weight of the likelihood term for ``scale_model="both"``.
+    scale_learning_rate : float
+        lambda of the ``likelihood`` scale model (slow, as DSST's 0.025 update: 0.975).
+    scale_penalty : float
+        Subtracted from a scale's mean weak-classifier log ratio per step away from the
+        current scale (favours the current scale, as KCF's 0.95 factor does).
+    scale_radius : int
+        Translation search radius (step 1) at each tried scale other than the current one.
+    scale_min, scale_max : float
+        Limits of the scale relative to the first box.
+    scale_negatives : int
+        Also learn, as negatives, the box centred on the target but scaled by
+        ``scale_factor ** +-scale_negatives`` (so the classifier learns what a wrong size
+        looks like; 0: none).
+    motion : {"none", "velocity"}
+        Centre the search on the last box (``none``) or on a constant-velocity prediction
+        of the box centre (``velocity``; falls back to the last box when the last frame's
+        confidence was below ``lost_threshold``).
+    motion_smoothing : float
+        Weight of the old velocity in the exponential velocity estimate, in [0, 1).
+    motion_max : float
+        The predicted displacement is clipped to this many pixels per frame.
+    colour_weight : float
+        Weight of a colour likelihood (``engine.colour``: foreground/background colour
+        histograms, the mean P(target | colour) over a candidate box) merged into every
+        translation search stage: ``(1 - w) * confidence + w * colour`` per candidate (0: off;
+        also off for gray frames and BGR frames whose three channels are equal).
+    gate_threshold : float
+        Learn only from frames whose confidence is at least this (0: always learn).
+    gate_drop : float
+        Also learn only when the best candidate's mean log ratio is no more than this below
+        its running mean over the frames learnt from (a drop relative to the sequence's own
+        level, which differs between targets; 0: off).
+    gate_learning_rate : float or None
+        The learning rate (lambda) used for frames whose confidence is at least
+        ``gate_threshold`` but below ``lost_threshold`` (slow learning); ``None``: the same
+        ``learning_rate`` as for confidently tracked frames.
+    recovery_radius, recovery_step : int
+        While lost (confidence below ``lost_threshold``), the coarse search is centred on
+        the last confidently tracked box with this radius and step (``recovery_radius=0``:
+        no recovery search).
     """
 
     variant: str = "rcwmil"
@@ -159,6 +231,27 @@ class Params:
     fine_step: int = 1
     lost_threshold: float = 0.5
     min_box_size: int = 4
+    confidence_offset: float = 1.4
+    channels: tuple[str, ...] = ()
+    scale_steps: int = 0
+    scale_factor: float = 1.03
+    scale_model: ScaleModel = "ratio"
+    scale_learning_rate: float = 0.975
+    scale_mix: float = 1.0
+    scale_penalty: float = 0.0
+    scale_radius: int = 2
+    scale_min: float = 0.2
+    scale_max: float = 5.0
+    scale_negatives: int = 0
+    motion: MotionModel = "none"
+    motion_smoothing: float = 0.5
+    motion_max: float = 30.0
+    colour_weight: float = 0.0
+    gate_threshold: float = 0.0
+    gate_drop: float = 0.0
+    gate_learning_rate: float | None = None
+    recovery_radius: int = 0
+    recovery_step: int = 4
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -176,7 +269,8 @@ class Params:
 
         for name in ("num_features", "num_selected", "rects_min", "rects_max", "num_subregions",
                      "rect_min_size", "neg_count", "coarse_radius", "coarse_step",
-                     "fine_radius", "fine_step", "min_box_size"):
+                     "fine_radius", "fine_step", "min_box_size", "scale_steps", "scale_radius",
+                     "scale_negatives", "recovery_radius", "recovery_step"):
             need(is_int(getattr(self, name)), f"{name} must be an int, got {getattr(self, name)!r}")
         need(self.num_features >= 1, f"num_features must be >= 1, got {self.num_features}")
         need(1 <= self.num_selected <= self.num_features,
@@ -243,14 +337,59 @@ class Params:
         need(0.0 <= self.lost_threshold <= 1.0,
              f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
         need(self.min_box_size >= 2, f"min_box_size must be >= 2, got {self.min_box_size}")
+        for name in ("confidence_offset", "scale_factor", "scale_penalty", "scale_min", "scale_max",
+                     "motion_smoothing", "motion_max", "gate_threshold", "gate_drop", "scale_mix",
+                     "colour_weight"):
+            v = getattr(self, name)
+            need(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
+                 f"{name} must be a finite number, got {v!r}")
+        known = ("luma", "grad", "opp_rg", "opp_yb")
+        need(isinstance(self.channels, tuple) and all(c in known for c in self.channels)
+             and len(set(self.channels)) == len(self.channels),
+             f"channels must be a tuple of distinct names from {', '.join(known)}; got {self.channels!r}")
+        need(self.channels == () or any(c in ("luma", "grad") for c in self.channels),
+             "channels needs luma or grad (the colour channels drop out for gray frames)")
+        need(0 <= self.scale_steps <= 10, f"scale_steps must be in 0..10, got {self.scale_steps}")
+        need(isinstance(self.scale_learning_rate, (int, float))
+             and not isinstance(self.scale_learning_rate, bool)
+             and 0.0 <= self.scale_learning_rate < 1.0,
+             f"scale_learning_rate must be in [0, 1), got {self.scale_learning_rate}")
+        need(0 <= self.scale_negatives <= 20,
+             f"scale_negatives must be in 0..20, got {self.scale_negatives}")
+        need(self.scale_negatives == 0 or self.scale_steps > 0,
+             "scale_negatives needs the scale search (scale_steps > 0)")
+        need(1.0 < self.scale_factor <= 2.0, f"scale_factor must be in (1, 2], got {self.scale_factor}")
+        need(self.scale_penalty >= 0, f"scale_penalty must be >= 0, got {self.scale_penalty}")
+        need(1 <= self.scale_radius <= 50, f"scale_radius must be in 1..50, got {self.scale_radius}")
+        need(0 < self.scale_min <= 1.0 <= self.scale_max <= 100.0,
+             f"need 0 < scale_min <= 1 <= scale_max <= 100, got {self.scale_min}, {self.scale_max}")
+        need(0.0 <= self.motion_smoothing < 1.0,
+             f"motion_smoothing must be in [0, 1), got {self.motion_smoothing}")
+        need(0.0 <= self.motion_max <= MAX_SEARCH_RADIUS,
+             f"motion_max must be in [0, {MAX_SEARCH_RADIUS}], got {self.motion_max}")
+        need(0.0 <= self.colour_weight <= 1.0,
+             f"colour_weight must be in [0, 1], got {self.colour_weight}")
+        need(self.gate_drop >= 0.0, f"gate_drop must be >= 0, got {self.gate_drop}")
+        need(0.0 <= self.gate_threshold <= 1.0,
+             f"gate_threshold must be in [0, 1], got {self.gate_threshold}")
+        need(self.gate_learning_rate is None
+             or (isinstance(self.gate_learning_rate, (int, float))
+                 and not isinstance(self.gate_learning_rate, bool)
+                 and 0.0 <= self.gate_learning_rate < 1.0),
+             f"gate_learning_rate must be in [0, 1), got {self.gate_learning_rate}")
+        need(0 <= self.recovery_radius <= MAX_SEARCH_RADIUS and self.recovery_step >= 1,
+             f"recovery_radius must be in 0..{MAX_SEARCH_RADIUS} and recovery_step >= 1, got "
+             f"{self.recovery_radius}, {self.recovery_step}")
 
     # -- derived values ---------------------------------------------------------------------
     @property
     def search_reach(self) -> int:
-        """Largest distance in pixels that one update can move the box."""
-        reach = self.coarse_radius - 1
+        """Largest distance in pixels that one update can move the box from the search origin."""
+        reach = max(self.coarse_radius, self.recovery_radius) - 1
         if self.fine_radius > 0:
             reach += self.fine_radius - 1
+        if self.scale_steps > 0:
+            reach += self.scale_radius - 1
         return reach
 
     def replace(self, **changes: Any) -> Params:
@@ -321,6 +460,14 @@ VARIANTS: dict[str, Params] = {
         coarse_step=1, fine_radius=0,
         description="Online sparse instance learning (Yan et al.) as the paper describes it: "
         "sub-region features, MIL selection without instance weights, CT's exhaustive search.",
+    ),
+    "rcwmil-plus": Params(
+        variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
+        scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
+        description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into "
+        "the search (0.7), a constant-velocity search centre, and scale search by scaled Haar "
+        "rectangles (1.03^-1, 1, 1.03^+1; classifier score plus a slow target likelihood, "
+        "penalised away from the current scale).",
     ),
 }
 

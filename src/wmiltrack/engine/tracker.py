@@ -15,13 +15,18 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 
 from .. import _core
+from .channels import ChannelBank, ChannelImages, available_channels
 from .classifier import GaussianPool
-from .features import BankArrays, check_box_size, make_bank
+from .colour import ColourModel
+from .features import BankArrays, check_box_size, make_bank, min_box_size, scale_bank
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .params import Params
 from .result import TrackResult
 from .sampling import BagSampler, instance_weights
 from .selection import milboost_select, wmil_select
+
+Weak = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""mu1, sigma1, mu0, sigma0 of the selected features."""
 
 
 class NotInitializedError(ValueError):
@@ -60,15 +65,16 @@ def _sigmoid(z: float) -> float:
 CONFIDENCE_OFFSET = 1.4
 
 
-def confidence(raw: float, k: int) -> float:
+def confidence(raw: float, k: int, offset: float = CONFIDENCE_OFFSET) -> float:
     """Confidence in [0, 1] of a frame from its best candidate's summed log ratio ``raw``.
 
-    ``logistic(raw / k - CONFIDENCE_OFFSET)``: 0.5 at the point where, on the benchmark
-    sequences, tracked and lost frames were equally likely; 0 when no candidate was scored.
+    ``logistic(raw / k - offset)`` (``offset``: ``Params.confidence_offset``, by default
+    :data:`CONFIDENCE_OFFSET`): 0.5 at the point where, on the benchmark sequences, tracked
+    and lost frames were equally likely; 0 when no candidate was scored.
     """
     if not math.isfinite(raw):
         return 0.0
-    return _sigmoid(raw / max(k, 1) - CONFIDENCE_OFFSET)
+    return _sigmoid(raw / max(k, 1) - offset)
 
 
 class Tracker:
@@ -159,13 +165,40 @@ class Tracker:
         self._bank_arrays: BankArrays = make_bank(p, b[2], b[3], self._rng)
         self._bank = _core.FeatureBank(self._bank_arrays.starts, self._bank_arrays.rects,
                                        self._bank_arrays.weights)
+        # Scale state (rcwmil-plus): the box is the first box scaled by scale_factor ** index.
+        self._base_wh = (b[2], b[3])
+        self._scale_index = 0
+        self._banks: dict[int, tuple[_core.FeatureBank, BankArrays]] = {
+            0: (self._bank, self._bank_arrays)}
+        # Channels (rcwmil-plus): each feature on one channel, drawn from its own stream.
+        self._chan: ChannelImages | None = None
+        self._chan_banks: dict[int, ChannelBank] = {}
+        if p.channels:
+            names = available_channels(p.channels, img)
+            chan_rng = np.random.default_rng([self._seed, 1])
+            self._feature_channel = chan_rng.integers(0, len(names), size=self._bank_arrays.size)
+            self._chan = ChannelImages(names)
+        # Motion and recovery state (rcwmil-plus).
+        self._velocity = (0.0, 0.0)
+        self._last_good: IntBox = b
+        self._lost = False
+        self._level = math.nan  # running mean of raw / K over the frames learnt from
+        self._scale_boxes: list[IntBox] = []
         self._pool = GaussianPool(p)
+        self._scale_pool = (GaussianPool(p.replace(learning_rate=p.scale_learning_rate))
+                            if p.scale_steps > 0 and p.scale_model != "ratio" else None)
         self._selected = np.arange(p.num_selected, dtype=np.int32)
         self._frame_wh = (fw, fh)
         self._box = b
+        self._colour: ColourModel | None = None
+        if p.colour_weight > 0 and ColourModel.usable(img):
+            self._colour = ColourModel()
+            self._colour.learn(img, b)
+        self._colour_table: tuple[np.ndarray, int, int] | None = None
         self._compute_integral(img, b, self._first.reach)
         self._learn(self._first)
         self._search_origins: list[IntBox] = []
+        self._search_stages: list[tuple[int, int]] = []
         self._score = 1.0
         self._initialized = True
 
@@ -191,13 +224,31 @@ class Tracker:
                 "call init() to restart on frames of the new size"
             )
         p = self._params
-        self._compute_integral(img, self._box, p.search_reach + self._track.reach)
-        raw = self._detect()
-        self._learn(self._track)
-        self._score = confidence(raw, len(self._selected))
+        previous = self._box
+        origin, coarse = self._search_origin()
+        margin = p.search_reach + self._track.reach + self._scale_margin()
+        self._compute_integral(img, origin, margin)
+        if self._colour is not None:
+            x, y, w, h = origin
+            m = margin + 1
+            self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
+        self._box = origin
+        raw = self._detect(coarse)
+        score = confidence(raw, len(self._selected), p.confidence_offset)
+        tracked = score >= p.lost_threshold
+        k = max(len(self._selected), 1)
+        if score >= p.gate_threshold and self._level_ok(raw / k):
+            slow = not tracked and p.gate_learning_rate is not None
+            self._learn(self._track, p.gate_learning_rate if slow else None)
+        else:
+            empty = np.zeros((0, 2), dtype=np.int32)
+            self._bags = (empty, empty)
+        self._score = score
+        if self._colour is not None:
+            self._colour.learn(img, self._box)
+        self._follow(previous, tracked)
         x, y, w, h = self._box
-        return TrackResult((float(x), float(y), float(w), float(h)), self._score,
-                           self._score >= p.lost_threshold)
+        return TrackResult((float(x), float(y), float(w), float(h)), self._score, tracked)
 
     def track(self, frames: Any, box: Any) -> np.ndarray:
         """Run over an iterable of frames starting with ``box`` on the first; (n, 4) boxes."""
@@ -217,24 +268,26 @@ class Tracker:
         -------
         dict
             ``"positive"``, ``"negative"``: top-left corners ``(n, 2)`` of the bags learnt
-            from; ``"search"``: one ``(origin_box, radius, step)`` per search stage of the
-            last ``update`` (coarse, then fine; empty after ``init``); ``"box"``: the box.
+            from (empty when the update was gated off); ``"search"``: one
+            ``(origin_box, radius, step)`` per search stage of the last ``update`` (coarse,
+            then fine; empty after ``init``); ``"scales"``: the boxes searched at the other
+            scales (empty without scale search); ``"box"``: the box.
         """
         self._require_init()
         pos, neg = self._bags
         return {
             "positive": pos.copy(),
             "negative": neg.copy(),
-            "search": [
-                (origin, r, s)
-                for origin, (r, s) in zip(
-                    self._search_origins,
-                    [(self._params.coarse_radius, self._params.coarse_step),
-                     (self._params.fine_radius, self._params.fine_step)],
-                )
-            ],
+            "search": [(origin, r, s) for origin, (r, s) in zip(self._search_origins, self._search_stages)],
+            "scales": list(self._scale_boxes),
             "box": self._box,
         }
+
+    @property
+    def scale(self) -> float:
+        """The current box size relative to the first box (1.0 without scale search)."""
+        self._require_init()
+        return float(self._params.scale_factor ** self._scale_index)
 
     def __repr__(self) -> str:
         state = f"box={self._box}" if self._initialized else "not initialised"
@@ -248,40 +301,290 @@ class Tracker:
     def _compute_integral(self, img: np.ndarray, box: IntBox, margin: int) -> None:
         x, y, w, h = box
         m = margin + 1
-        self._ii.compute(img, (x - m, y - m, w + 2 * m, h + 2 * m))
+        roi = (x - m, y - m, w + 2 * m, h + 2 * m)
+        if self._chan is not None:
+            if img.ndim == 2 or img.shape[2] == 1:
+                if available_channels(self._chan.names, img) != self._chan.names:
+                    raise ValueError("this tracker was started on a colour frame and uses colour "
+                                     "channels; call init() to restart on gray frames")
+            self._chan.compute(img, roi)
+        else:
+            self._ii.compute(img, roi)
 
-    def _detect(self) -> float:
-        """Coarse then fine search; moves ``self._box``; returns the best raw score."""
+    def _score_grid(self, index: int, sel: np.ndarray, weak: Weak, box: IntBox,
+                    radius: int, step: int) -> tuple[int, int, float, int]:
+        """Best offset, its raw score and the candidate count of a grid around ``box``."""
+        guard = self._params.guard
+        if self._chan is not None:
+            return self._chan.score_grid(self._chan_bank_at(index), sel, *weak, guard, box,
+                                         radius, step)
+        dx, dy, score, n = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, guard,
+                                            box, radius, step, self._frame_wh)
+        return int(dx), int(dy), float(score), int(n)
+
+    def _raw_grid(self, index: int, sel: np.ndarray, weak: Weak, box: IntBox, radius: int,
+                  step: int) -> np.ndarray | None:
+        """The full grid of raw scores around ``box`` (``-inf``: not a candidate)."""
+        if self._chan is not None:
+            return self._chan.grid(self._chan_bank_at(index), sel, *weak, self._params.guard, box,
+                                   radius, step)
+        out = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, self._params.guard,
+                               box, radius, step, self._frame_wh, True)
+        grid: np.ndarray = out[4]  # type: ignore[misc]
+        return grid
+
+    def _colour_stage(self, sel: np.ndarray, weak: Weak, radius: int,
+                      step: int) -> tuple[int, int, float, int]:
+        """One search stage choosing by ``(1 - w) * confidence + w * colour`` per candidate."""
+        p = self._params
+        assert self._colour_table is not None
+        grid = self._raw_grid(self._scale_index, sel, weak, self._box, radius, step)
+        if grid is None:
+            return 0, 0, -math.inf, 0
+        valid = np.isfinite(grid)
+        n = int(np.count_nonzero(valid))
+        if n == 0:
+            return 0, 0, -math.inf, 0
+        side = grid.shape[0]
+        half = (side - 1) // 2
+        rows, cols = np.nonzero(valid)  # row-major order
+        raw = grid[rows, cols]
+        k = max(len(sel), 1)
+        conf = 0.5 * (1.0 + np.tanh(0.5 * (raw / k - p.confidence_offset)))
+        x, y, w, h = self._box
+        xs = x + (cols - half) * step
+        ys = y + (rows - half) * step
+        table, x0, y0 = self._colour_table
+        colour = ColourModel.box_means(table, x0, y0, xs, ys, w, h)
+        total = (1.0 - p.colour_weight) * conf + p.colour_weight * colour
+        best = int(np.argmax(total))
+        return int((cols[best] - half) * step), int((rows[best] - half) * step), float(raw[best]), n
+
+    def _project(self, index: int, corners: np.ndarray) -> np.ndarray:
+        """Feature values ``(M, n)`` of the boxes at scale ``index`` with these top-left corners."""
+        if self._chan is not None:
+            return self._chan.project(self._chan_bank_at(index), corners[:, 0], corners[:, 1])
+        values: np.ndarray = _core.project(self._ii, self._bank_at(index)[0], corners[:, 0],
+                                           corners[:, 1])
+        return values
+
+    def _chan_bank_at(self, index: int) -> ChannelBank:
+        cached = self._chan_banks.get(index)
+        if cached is None:
+            assert self._chan is not None
+            cached = ChannelBank.build(self._bank_at(index)[1], self._feature_channel,
+                                       len(self._chan.names))
+            self._chan_banks[index] = cached
+        return cached
+
+    def _scale_margin(self) -> int:
+        """Extra integral-image margin for the largest scale searched around the box."""
+        p = self._params
+        if p.scale_steps == 0:
+            return 0
+        w, h = self._box_size(self._scale_index + max(p.scale_steps, p.scale_negatives) + p.scale_steps)
+        return (max(w - self._box[2], h - self._box[3]) + 1) // 2 + 1
+
+    def _box_size(self, index: int) -> tuple[int, int]:
+        s = self._params.scale_factor ** index
+        return max(1, round(self._base_wh[0] * s)), max(1, round(self._base_wh[1] * s))
+
+    def _bank_at(self, index: int) -> tuple[_core.FeatureBank, BankArrays]:
+        """The feature bank stretched to the box size of scale ``index`` (cached)."""
+        cached = self._banks.get(index)
+        if cached is None:
+            w, h = self._box_size(index)
+            arrays = scale_bank(self._bank_arrays, self._base_wh[0], self._base_wh[1], w, h)
+            cached = (_core.FeatureBank(arrays.starts, arrays.rects, arrays.weights), arrays)
+            self._banks[index] = cached
+        return cached
+
+    def _scale_allowed(self, index: int) -> bool:
+        p = self._params
+        s = p.scale_factor ** index
+        if not (p.scale_min - 1e-9 <= s <= p.scale_max + 1e-9):
+            return False
+        w, h = self._box_size(index)
+        mw, mh = min_box_size(p)
+        return mw <= w <= self._frame_wh[0] and mh <= h <= self._frame_wh[1]
+
+    @staticmethod
+    def _centred(box: IntBox, w: int, h: int, dx: float = 0.0, dy: float = 0.0) -> IntBox:
+        """A ``w x h`` box with the centre of ``box`` moved by ``(dx, dy)``."""
+        cx = box[0] + box[2] / 2.0 + dx
+        cy = box[1] + box[3] / 2.0 + dy
+        return int(math.floor(cx - w / 2.0 + 0.5)), int(math.floor(cy - h / 2.0 + 0.5)), w, h
+
+    def _search_origin(self) -> tuple[IntBox, tuple[int, int]]:
+        """Where the coarse search is centred, and its (radius, step)."""
+        p = self._params
+        coarse = (p.coarse_radius, p.coarse_step)
+        if self._lost and p.recovery_radius > 0:
+            x, y, w, h = self._box
+            return self._centred(self._last_good, w, h), (p.recovery_radius, p.recovery_step)
+        if p.motion == "velocity" and not self._lost:
+            vx, vy = self._velocity
+            x, y, w, h = self._box
+            return self._centred(self._box, w, h, vx, vy), coarse
+        return self._box, coarse
+
+    def _level_ok(self, mean_k: float) -> bool:
+        """Whether a frame's mean log ratio passes the relative gate (and track the level)."""
+        drop = self._params.gate_drop
+        if drop <= 0.0:
+            return True
+        if not math.isfinite(mean_k):
+            return False
+        if math.isfinite(self._level) and mean_k < self._level - drop:
+            return False
+        self._level = mean_k if not math.isfinite(self._level) else 0.9 * self._level + 0.1 * mean_k
+        return True
+
+    def _follow(self, previous: IntBox, tracked: bool) -> None:
+        """Update the velocity estimate and the lost / last-confident state after a frame."""
+        p = self._params
+        self._lost = not tracked
+        if tracked:
+            self._last_good = self._box
+        if p.motion != "velocity":
+            return
+        if not tracked:
+            self._velocity = (0.0, 0.0)
+            return
+        px = previous[0] + previous[2] / 2.0
+        py = previous[1] + previous[3] / 2.0
+        mx = self._box[0] + self._box[2] / 2.0 - px
+        my = self._box[1] + self._box[3] / 2.0 - py
+        a = p.motion_smoothing
+        vx = a * self._velocity[0] + (1.0 - a) * mx
+        vy = a * self._velocity[1] + (1.0 - a) * my
+        speed = math.hypot(vx, vy)
+        if speed > p.motion_max:
+            vx, vy = vx * p.motion_max / speed, vy * p.motion_max / speed
+        self._velocity = (vx, vy)
+
+    def _detect(self, coarse: tuple[int, int]) -> float:
+        """Coarse, fine, then scale search from ``self._box``; moves it; returns the best raw score."""
         p = self._params
         sel = self._selected
         pool = self._pool
-        weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
+        weak: Weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
         best = -math.inf
-        stages = [(p.coarse_radius, p.coarse_step)]
+        stages = [coarse]
         if p.fine_radius > 0:
             stages.append((p.fine_radius, p.fine_step))
         self._search_origins = []
+        self._search_stages = stages
         for radius, step in stages:
             self._search_origins.append(self._box)
-            dx, dy, score, n = _core.score_grid(self._ii, self._bank, sel, *weak, p.guard, self._box,
-                                                radius, step, self._frame_wh)
+            if self._colour_table is not None:
+                dx, dy, score, n = self._colour_stage(sel, weak, radius, step)
+            else:
+                dx, dy, score, n = self._score_grid(self._scale_index, sel, weak, self._box, radius,
+                                                    step)
             if n > 0:
                 x, y, w, h = self._box
                 self._box = (x + dx, y + dy, w, h)
                 best = score
+        self._scale_boxes = []
+        if p.scale_steps > 0 and math.isfinite(best):
+            if p.scale_model == "likelihood":
+                self._scale_by_likelihood()
+            else:
+                best = self._scale_by_ratio(best, sel, weak)
         return best
 
-    def _learn(self, sampler: BagSampler) -> None:
+    def _likelihood(self, index: int, box: IntBox) -> float:
+        """Minus the mean log(1 + z^2) of all M features of ``box`` under the scale model."""
+        pool = self._scale_pool
+        assert pool is not None
+        v = self._project(index, np.array([[box[0], box[1]]], dtype=np.int32))[:, 0]
+        z = (v - pool.mu1) / pool.sigma1
+        return -float(np.mean(np.log1p(z * z)))
+
+    def _scale_by_ratio(self, best: float, sel: np.ndarray, weak: Weak) -> float:
+        """Try the other scales with the strong classifier; returns the chosen raw score."""
+        p = self._params
+        k = max(len(sel), 1)
+        mix = p.scale_mix if p.scale_model == "both" else 0.0
+        best_value = best / k
+        if mix:
+            best_value += mix * self._likelihood(self._scale_index, self._box)
+        best_index, best_box = self._scale_index, self._box
+        for j in range(-p.scale_steps, p.scale_steps + 1):
+            index = self._scale_index + j
+            if j == 0 or not self._scale_allowed(index):
+                continue
+            w, h = self._box_size(index)
+            candidate = self._centred(self._box, w, h)
+            self._scale_boxes.append(candidate)
+            dx, dy, score, n = self._score_grid(index, sel, weak, candidate, p.scale_radius, 1)
+            if n == 0:
+                continue
+            moved = (candidate[0] + dx, candidate[1] + dy, w, h)
+            value = score / k - p.scale_penalty * abs(j)
+            if mix:
+                value += mix * self._likelihood(index, moved)
+            if value > best_value:
+                best_value = value
+                best = score
+                best_index = index
+                best_box = moved
+        self._scale_index, self._box = best_index, best_box
+        return best
+
+    def _scale_by_likelihood(self) -> None:
+        """Pick the scale whose box best fits the target model over all M features."""
+        p = self._params
+        fw, fh = self._frame_wh
+        best_value = -math.inf
+        best_index, best_box = self._scale_index, self._box
+        for j in range(-p.scale_steps, p.scale_steps + 1):
+            index = self._scale_index + j
+            if j != 0 and not self._scale_allowed(index):
+                continue
+            w, h = self._box_size(index)
+            candidate = self._box if j == 0 else self._centred(self._box, w, h)
+            x, y = candidate[0], candidate[1]
+            if x < 0 or y < 0 or x + w > fw or y + h > fh:
+                continue
+            if j != 0:
+                self._scale_boxes.append(candidate)
+            value = self._likelihood(index, candidate) - p.scale_penalty * abs(j)
+            if value > best_value:
+                best_value, best_index, best_box = value, index, candidate
+        self._scale_index, self._box = best_index, best_box
+
+    def _wrong_scale_values(self) -> list[np.ndarray]:
+        """Feature values of the target's box shrunk and grown by ``scale_negatives`` steps."""
+        p = self._params
+        out = []
+        for j in (-p.scale_negatives, p.scale_negatives):
+            index = self._scale_index + j
+            if not self._scale_allowed(index):
+                continue
+            w, h = self._box_size(index)
+            x, y, _, _ = self._centred(self._box, w, h)
+            if x < 0 or y < 0 or x + w > self._frame_wh[0] or y + h > self._frame_wh[1]:
+                continue
+            out.append(self._project(index, np.array([[x, y]], dtype=np.int32)))
+        return out
+
+    def _learn(self, sampler: BagSampler, learning_rate: float | None = None) -> None:
         """Sample the bags around the current box, update the Gaussians, reselect features."""
         p = self._params
         fw, fh = self._frame_wh
         pos, dist = sampler.positives(self._box, fw, fh)
         neg = sampler.negatives(self._box, fw, fh, self._rng)
         self._bags = (pos, neg)
-        v_pos = _core.project(self._ii, self._bank, pos[:, 0], pos[:, 1])
-        v_neg = _core.project(self._ii, self._bank, neg[:, 0], neg[:, 1])
+        v_pos = self._project(self._scale_index, pos)
+        v_neg = self._project(self._scale_index, neg)
+        if p.scale_negatives > 0:
+            v_neg = np.concatenate([v_neg, *self._wrong_scale_values()], axis=1)
         pool = self._pool
-        pool.update(v_pos, v_neg)
+        pool.update(v_pos, v_neg, learning_rate)
+        if self._scale_pool is not None:
+            self._scale_pool.update(v_pos, v_neg[:, :0])
         if p.selection == "none" or pos.shape[0] == 0:
             return
         h_pos = _core.log_ratio(v_pos, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard)

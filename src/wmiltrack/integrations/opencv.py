@@ -31,6 +31,7 @@ __all__ = [
     "TrackerMILBoost",
     "TrackerOSIL",
     "TrackerRCWMIL",
+    "TrackerRCWMILPlus",
     "TrackerWMIL",
 ]
 
@@ -176,3 +177,10 @@ class TrackerOSIL(TrackerCompat):
     """OpenCV-shaped online sparse instance learning tracker: ``TrackerOSIL.create()``."""
 
     VARIANT = "osil"
+
+
+class TrackerRCWMILPlus(TrackerCompat):
+    """OpenCV-shaped ``rcwmil-plus`` (the paper's tracker plus scale, channels, motion and
+    occlusion-aware update): ``TrackerRCWMILPlus.create()``."""
+
+    VARIANT = "rcwmil-plus"

@@ -1,0 +1,184 @@
+"""rcwmil-plus: its components, each switchable, and the box following a growing and shrinking target."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+import wmiltrack
+from wmiltrack.eval.metrics import iou
+
+
+def zoom_sequence(n: int = 120, seed: int = 0) -> tuple[list[np.ndarray], np.ndarray]:
+    """A textured target on a textured background that grows to 1.6x and shrinks back to 0.7x.
+
+    The target is a fixed texture resized (area interpolation) to each frame's size and pasted
+    at a centre drifting slowly; ground truth is the pasted box.
+    """
+    rng = np.random.default_rng(seed)
+    h, w = 240, 320
+    bg = cv2.resize(rng.integers(0, 256, (h // 8, w // 8, 3), dtype=np.uint8), (w, h),
+                    interpolation=cv2.INTER_CUBIC)
+    tex = cv2.resize(rng.integers(0, 256, (8, 6, 3), dtype=np.uint8), (120, 160),
+                     interpolation=cv2.INTER_CUBIC)
+    cv2.rectangle(tex, (20, 30), (90, 60), (250, 250, 250), -1)
+    cv2.circle(tex, (60, 115), 25, (10, 10, 10), -1)
+    frames, gt = [], []
+    for i in range(n):
+        u = i / (n - 1)
+        s = 1.0 + 0.6 * math.sin(math.pi * min(u / 0.5, 1.0)) if u < 0.5 else 1.0 - 0.3 * math.sin(
+            math.pi * (u - 0.5) / 0.5)
+        tw, th = int(round(30 * s)), int(round(40 * s))
+        cx, cy = 160 + 20 * math.sin(2 * math.pi * u), 120 + 10 * math.cos(2 * math.pi * u)
+        x, y = int(round(cx - tw / 2)), int(round(cy - th / 2))
+        f = bg.copy()
+        f[y:y + th, x:x + tw] = cv2.resize(tex, (tw, th), interpolation=cv2.INTER_AREA)
+        noise = rng.normal(0, 3, f.shape)
+        frames.append(np.clip(f + noise, 0, 255).astype(np.uint8))
+        gt.append((x, y, tw, th))
+    return frames, np.array(gt, dtype=np.float64)
+
+
+@pytest.fixture(scope="module")
+def zoom() -> tuple[list[np.ndarray], np.ndarray]:
+    return zoom_sequence()
+
+
+def _run(frames: list[np.ndarray], gt: np.ndarray, variant: str, **overrides: object) -> np.ndarray:
+    return wmiltrack.Tracker(variant, seed=0, **overrides).track(frames, gt[0])
+
+
+def test_box_follows_growing_and_shrinking_target(zoom) -> None:
+    frames, gt = zoom
+    boxes = _run(frames, gt, "rcwmil-plus")
+    ov = iou(boxes, gt)
+    areas = boxes[:, 2] * boxes[:, 3]
+    gt_areas = gt[:, 2] * gt[:, 3]
+    peak = int(np.argmax(gt_areas))
+    low = int(np.argmin(gt_areas[peak:])) + peak
+    # the box grows with the target (2.56x its first area at the peak), then shrinks below its
+    # first size (0.49x); measured for seed 0: 1.6x and 0.44x
+    assert areas[peak] > 1.3 * areas[0]
+    assert areas[low] < 0.85 * areas[0]
+    assert np.mean(ov) > 0.6
+    # the fixed-size paper tracker cannot do this
+    fixed = _run(frames, gt, "rcwmil")
+    assert np.all(fixed[:, 2:] == fixed[0, 2:])
+    assert np.mean(ov) > np.mean(iou(fixed, gt)) + 0.1
+
+
+PAPER = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
+#: Each rcwmil-plus component's field and the value that switches it off.
+OFF = {"scale_steps": 0, "scale_negatives": 0, "channels": (), "motion": "none",
+       "gate_threshold": 0.0, "gate_drop": 0.0, "recovery_radius": 0, "colour_weight": 0.0}
+
+
+@pytest.mark.parametrize("variant", PAPER)
+def test_paper_presets_switch_every_plus_component_off(variant: str) -> None:
+    p = wmiltrack.Params.for_variant(variant)
+    for name, off in OFF.items():
+        assert getattr(p, name) == off, (variant, name)
+    assert p.confidence_offset == 1.4
+
+
+@pytest.fixture(scope="module")
+def demo() -> tuple[list[np.ndarray], np.ndarray]:
+    from wmiltrack.data.synthetic import make_preset
+
+    seq = make_preset("all", seed=2, n_frames=40)
+    return seq.load(), np.asarray(seq.groundtruth)
+
+
+@pytest.mark.parametrize("overrides", [
+    {"scale_steps": 0}, {"scale_model": "ratio"}, {"scale_model": "likelihood"},
+    {"scale_negatives": 4}, {"colour_weight": 0.0}, {"colour_weight": 1.0}, {"channels": ("luma", "grad", "opp_rg", "opp_yb")},
+    {"channels": ("luma", "grad")}, {"motion": "velocity"}, {"gate_threshold": 0.4},
+    {"gate_drop": 1.0, "gate_learning_rate": 0.97}, {"recovery_radius": 40, "recovery_step": 5},
+])
+def test_each_component_switches_and_tracks(demo, overrides: dict[str, object]) -> None:
+    frames, gt = demo
+    boxes = _run(frames, gt, "rcwmil-plus", **overrides)
+    assert boxes.shape == (len(frames), 4) and np.all(np.isfinite(boxes))
+    assert np.mean(iou(boxes, gt)) > 0.3, overrides
+
+
+def test_luma_channel_path_equals_the_single_integral_image(demo) -> None:
+    frames, gt = demo
+    a = _run(frames, gt, "rcwmil")
+    b = _run(frames, gt, "rcwmil", channels=("luma",))
+    np.testing.assert_array_equal(a, b)
+
+
+def test_colour_channels_drop_out_for_gray_frames(demo) -> None:
+    frames, gt = demo
+    gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, channels=("luma", "grad", "opp_rg", "opp_yb"))
+    t.init(gray[0], gt[0])
+    assert t._chan is not None and t._chan.names == ("luma", "grad")
+    for f in gray[1:]:
+        t.update(f)
+    c = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    c.init(gray[0], gt[0])
+    assert c._colour is None  # no colour likelihood on gray frames either
+    c.init(frames[0], gt[0])
+    assert c._colour is not None
+    t.init(frames[0], gt[0])  # colour frames: all four
+    assert t._chan is not None and t._chan.names == ("luma", "grad", "opp_rg", "opp_yb")
+    with pytest.raises(ValueError, match="gray"):
+        t.update(gray[1])
+
+
+def test_scaled_bank_keeps_area_normalised_features() -> None:
+    """On an image whose every pixel is the same, every feature has the same value at every scale."""
+    from wmiltrack import _core
+    from wmiltrack.engine.features import make_bank, scale_bank
+
+    p = wmiltrack.Params.for_variant("rcwmil-plus")
+    base = make_bank(p, 30, 40, np.random.default_rng(0))
+    img = np.full((200, 200), 77, np.uint8)
+    ii = _core.IntegralImage()
+    ii.compute(img, (0, 0, 200, 200))
+    ref = _core.project(ii, _core.FeatureBank(base.starts, base.rects, base.weights),
+                        np.array([50], np.int32), np.array([50], np.int32))
+    for w, h in ((27, 36), (33, 44), (45, 60), (10, 13)):
+        b = scale_bank(base, 30, 40, w, h)
+        assert np.all(b.rects[:, 0] + b.rects[:, 2] <= w) and np.all(b.rects[:, 1] + b.rects[:, 3] <= h)
+        assert np.all(b.rects[:, 2:] >= 1)
+        v = _core.project(ii, _core.FeatureBank(b.starts, b.rects, b.weights),
+                          np.array([50], np.int32), np.array([50], np.int32))
+        np.testing.assert_allclose(v, ref, rtol=1e-12, atol=1e-9)
+
+
+def test_samples_report_the_scales_searched(demo) -> None:
+    frames, gt = demo
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    t.init(frames[0], gt[0])
+    assert t.samples()["scales"] == []
+    t.update(frames[1])
+    s = t.samples()
+    assert len(s["scales"]) == 2  # 1.03^-1 and 1.03^+1 around the current scale
+    small, large = (b[2] * b[3] for b in s["scales"])
+    assert small < large
+    plain = wmiltrack.Tracker("rcwmil", seed=0)
+    plain.init(frames[0], gt[0])
+    plain.update(frames[1])
+    assert plain.samples()["scales"] == []
+
+
+def test_lost_target_gives_ok_false_and_recovery_searches_wider() -> None:
+    """A target that vanishes (the scene is replaced by noise) is reported lost, not learnt."""
+    frames, gt = zoom_sequence(60, seed=1)
+    rng = np.random.default_rng(5)
+    blank = [rng.integers(0, 256, frames[0].shape, dtype=np.uint8) for _ in range(10)]
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, gate_threshold=0.3, recovery_radius=40,
+                          recovery_step=5)
+    t.init(frames[0], gt[0])
+    for f in frames[1:30]:
+        t.update(f)
+    results = [t.update(f) for f in blank]
+    assert not any(r.ok for r in results[2:])
+    assert t.samples()["search"][0][1] == 40
+    assert t.samples()["positive"].shape[0] == 0  # gated: nothing learnt from the noise
