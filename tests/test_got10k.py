@@ -22,11 +22,12 @@ from wmiltrack.integrations.got10k import GOT10kTracker, local_otb_experiment  #
 SEQUENCES = ("Crossing", "Couple")
 
 
-def test_experiment_otb_matches_wmiltrack_metrics(otb_root: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize("variant", ["rcwmil", "rcwmil-plus"])
+def test_experiment_otb_matches_wmiltrack_metrics(otb_root: Path, tmp_path: Path, variant: str) -> None:
     e = local_otb_experiment(otb_root, SEQUENCES, result_dir=tmp_path / "results",
                              report_dir=tmp_path / "reports")
     assert sorted(e.dataset.seq_names) == sorted(SEQUENCES)
-    tracker = GOT10kTracker("rcwmil", seed=0)
+    tracker = GOT10kTracker(variant, seed=0)
     e.run(tracker)
     perf = e.report([tracker.name])[tracker.name]
     assert (Path(e.report_dir) / tracker.name / "success_plots.png").is_file()
@@ -45,7 +46,7 @@ def test_experiment_otb_matches_wmiltrack_metrics(otb_root: Path, tmp_path: Path
         # same boxes as wmiltrack run directly on OpenCV-decoded frames (RGB PIL -> BGR)
         import wmiltrack
 
-        direct = wmiltrack.Tracker("rcwmil", seed=0).track(seq, gt[0])
+        direct = wmiltrack.Tracker(variant, seed=0).track(seq, gt[0])
         np.testing.assert_array_equal(direct[1:], boxes[1:])
     assert perf["overall"]["success_score"] == pytest.approx(float(np.mean(aucs)), abs=1e-9)
     assert perf["overall"]["success_score"] > 0.3

@@ -182,3 +182,20 @@ def test_lost_target_gives_ok_false_and_recovery_searches_wider() -> None:
     assert not any(r.ok for r in results[2:])
     assert t.samples()["search"][0][1] == 40
     assert t.samples()["positive"].shape[0] == 0  # gated: nothing learnt from the noise
+
+
+def test_inspect_drawing_shows_the_scales(demo) -> None:
+    from wmiltrack.visualize import draw_samples
+
+    frames, gt = demo
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    t.init(frames[0], gt[0])
+    t.update(frames[1])
+    s = t.samples()
+    with_scales = draw_samples(frames[1], s)
+    without = draw_samples(frames[1], {**s, "scales": []})
+    def magenta(img: np.ndarray) -> int:
+        b, g, r = (img[..., i].astype(int) for i in range(3))
+        return int(np.count_nonzero((b > 200) & (r > 200) & (g < 80)))
+
+    assert magenta(with_scales) > 50 and magenta(without) == 0

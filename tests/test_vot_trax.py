@@ -27,18 +27,20 @@ def _serve(tmp_path: Path, *args: str) -> subprocess.Popen[bytes]:
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, env=env, cwd=tmp_path)
 
 
-@pytest.mark.parametrize("polygon", [False, True])
-def test_trax_session_matches_direct_tracking(otb_root: Path, tmp_path: Path, polygon: bool) -> None:
+@pytest.mark.parametrize(("polygon", "variant"),
+                         [(False, "rcwmil"), (True, "rcwmil"), (False, "rcwmil-plus")])
+def test_trax_session_matches_direct_tracking(otb_root: Path, tmp_path: Path, polygon: bool,
+                                              variant: str) -> None:
     seq = load_otb_sequence(otb_root / "Crossing")
     gt = np.asarray(seq.groundtruth)
     n = 25
-    proc = _serve(tmp_path, "--variant", "rcwmil")
+    proc = _serve(tmp_path, "--variant", variant)
     assert proc.stdin is not None and proc.stdout is not None
     try:
         # vot-trax 4.0.2's Client needs a logger (log=None fails in ctypes)
         client = Client(stream=(proc.stdin.fileno(), proc.stdout.fileno()), timeout=30,
                         log=lambda text: None)
-        assert client.tracker_name == "wmiltrack-rcwmil"
+        assert client.tracker_name == f"wmiltrack-{variant}"
         x, y, w, h = (float(v) for v in gt[0])
         region = (trax.Polygon.create([(x, y), (x + w, y), (x + w, y + h), (x, y + h)]) if polygon
                   else trax.Rectangle.create(x, y, w, h))
@@ -59,7 +61,7 @@ def test_trax_session_matches_direct_tracking(otb_root: Path, tmp_path: Path, po
             proc.wait()
         proc.stdin.close()
         proc.stdout.close()
-    direct = wmiltrack.Tracker("rcwmil", seed=0)
+    direct = wmiltrack.Tracker(variant, seed=0)
     direct.init(seq.frame(0) if hasattr(seq, "frame") else next(iter(seq)), gt[0])
     expect = [direct.box]
     for i, frame in enumerate(seq):
