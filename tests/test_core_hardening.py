@@ -298,10 +298,10 @@ def test_tracker_refuses_concurrent_use() -> None:
     inside, release = threading.Event(), threading.Event()
     orig = t._detect
 
-    def slow_detect() -> float:
+    def slow_detect(*args: object) -> float:
         inside.set()
         release.wait(10)
-        return orig()
+        return orig(*args)
 
     t._detect = slow_detect  # type: ignore[method-assign]
     errors: list[BaseException] = []
