@@ -79,16 +79,15 @@ class Probe(wmiltrack.Tracker):
 
     def _detect(self, coarse: tuple[int, int]) -> float:
         self.grid_mean = math.nan
-        if self._chan is None:  # the margin signal is only probed on the luma-only path
-            p = self._params
-            sel = self._selected
-            pool = self._pool
-            weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
-            bank = self._bank_at(self._scale_index)[0]
-            _, _, _, n, grid = _core.score_grid(self._ii, bank, sel, *weak, p.guard, self._box,
-                                                coarse[0], coarse[1], self._frame_wh, True)
-            g = grid[np.isfinite(grid)]
-            self.grid_mean = float(g.mean()) if g.size else math.nan
+        p = self._params  # one core call for the luma and the multi-channel paths alike
+        sel = self._selected
+        pool = self._pool
+        weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
+        bank = self._bank_at(self._scale_index)[0]
+        _, _, _, n, grid = _core.score_grid(self._ii, bank, sel, *weak, p.guard, self._box,
+                                            coarse[0], coarse[1], self._frame_wh, True)
+        g = grid[np.isfinite(grid)]
+        self.grid_mean = float(g.mean()) if g.size else math.nan
         self.raw_best = super()._detect(coarse)
         return self.raw_best
 

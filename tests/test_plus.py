@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import wmiltrack
+from wmiltrack import _core
 from wmiltrack.eval.metrics import iou
 
 
@@ -117,18 +118,67 @@ def test_colour_channels_drop_out_for_gray_frames(demo) -> None:
     gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
     t = wmiltrack.Tracker("rcwmil-plus", seed=0, channels=("luma", "grad", "opp_rg", "opp_yb"))
     t.init(gray[0], gt[0])
-    assert t._chan is not None and t._chan.names == ("luma", "grad")
+    assert t._chan_names == ("luma", "grad")
     for f in gray[1:]:
         t.update(f)
+    assert t._ii.channels == (_core.CH_LUMA, _core.CH_GRAD)
     c = wmiltrack.Tracker("rcwmil-plus", seed=0)
     c.init(gray[0], gt[0])
     assert c._colour is None  # no colour likelihood on gray frames either
     c.init(frames[0], gt[0])
     assert c._colour is not None
     t.init(frames[0], gt[0])  # colour frames: all four
-    assert t._chan is not None and t._chan.names == ("luma", "grad", "opp_rg", "opp_yb")
+    assert t._chan_names == ("luma", "grad", "opp_rg", "opp_yb")
     with pytest.raises(ValueError, match="gray"):
         t.update(gray[1])
+
+
+def _box_sums(table: np.ndarray, x: np.ndarray, y: np.ndarray, w: np.ndarray,
+              h: np.ndarray) -> np.ndarray:
+    """Sums over ``[x, x + w) x [y, y + h)`` of the image of an integral table (table coordinates)."""
+    return table[y + h, x + w] - table[y, x + w] - table[y + h, x] + table[y, x]
+
+
+@pytest.mark.parametrize("index", [0, 1, -1])
+def test_channel_features_are_sums_over_their_own_core_plane(demo, index: int) -> None:
+    """Each feature of a ``channels=`` tracker reads its own channel's plane of the core's table."""
+    frames, gt = demo
+    names = ("luma", "grad", "opp_rg", "opp_yb")
+    t = wmiltrack.Tracker("rcwmil", seed=3, channels=names)
+    t.init(frames[0], gt[0])
+    t.update(frames[1])
+    ii = t._ii
+    # plane k holds channel names[k], built by the core over the search region
+    assert ii.channels == (_core.CH_LUMA, _core.CH_GRAD, _core.CH_OPP_RG, _core.CH_OPP_YB)
+    fresh = _core.IntegralImage()
+    fresh.compute_channels(frames[1], (ii.x0, ii.y0, ii.width, ii.height), list(ii.channels))
+    tables = [fresh.table(k) for k in range(4)]
+    for a, b in zip(tables, tables[1:]):
+        assert not np.array_equal(a, b)  # the planes differ, so a wrong plane would show
+    chan = t._feature_channel
+    assert set(chan.tolist()) == {0, 1, 2, 3}
+    bank, arrays = t._bank_at(index)
+    np.testing.assert_array_equal(bank.channels, np.repeat(chan, np.diff(arrays.starts)))
+    bw, bh = t._box_size(index)
+    rng = np.random.default_rng(0)
+    xs = rng.integers(ii.x0, ii.x0 + ii.width - bw + 1, size=7).astype(np.int32)
+    ys = rng.integers(ii.y0, ii.y0 + ii.height - bh + 1, size=7).astype(np.int32)
+    got = t._project(index, np.stack([xs, ys], axis=1))
+    want = np.zeros((arrays.size, xs.size))
+    for f in range(arrays.size):
+        for r in range(arrays.starts[f], arrays.starts[f + 1]):
+            rx, ry, rw, rh = arrays.rects[r]
+            want[f] += arrays.weights[r] * _box_sums(tables[chan[f]], xs - ii.x0 + rx,
+                                                     ys - ii.y0 + ry, rw, rh)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-9)
+    # on luma only, the same bank gives other values: the planes are really used
+    luma = np.zeros_like(want)
+    for f in range(arrays.size):
+        for r in range(arrays.starts[f], arrays.starts[f + 1]):
+            rx, ry, rw, rh = arrays.rects[r]
+            luma[f] += arrays.weights[r] * _box_sums(tables[0], xs - ii.x0 + rx, ys - ii.y0 + ry,
+                                                     rw, rh)
+    assert not np.allclose(got[chan != 0], luma[chan != 0])
 
 
 def test_scaled_bank_keeps_area_normalised_features() -> None:

@@ -11,7 +11,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _core
 from .params import Params
+
+#: Channel names (``Params.channels``) and their ids in ``_core.IntegralImage.compute_channels``.
+CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "opp_rg": _core.CH_OPP_RG,
+               "opp_yb": _core.CH_OPP_YB}
+#: Channels that need a colour (3- or 4-channel) frame.
+COLOUR_CHANNELS = frozenset({"opp_rg", "opp_yb"})
+
+
+def available_channels(wanted: tuple[str, ...], frame: np.ndarray) -> tuple[str, ...]:
+    """The channels of ``wanted`` that ``frame`` can give (colour ones drop out for gray frames)."""
+    colour = frame.ndim == 3 and frame.shape[2] in (3, 4)
+    return tuple(c for c in wanted if colour or c not in COLOUR_CHANNELS)
+
+
+def rect_planes(arrays: BankArrays, feature_plane: np.ndarray) -> np.ndarray:
+    """The integral-image plane of each rectangle: every rectangle on its feature's plane."""
+    counts = np.diff(arrays.starts)
+    return np.repeat(np.asarray(feature_plane, dtype=np.int32), counts)
 
 
 @dataclass(frozen=True)

@@ -15,10 +15,18 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 
 from .. import _core
-from .channels import ChannelBank, ChannelImages, available_channels
 from .classifier import GaussianPool
 from .colour import ColourModel
-from .features import BankArrays, check_box_size, make_bank, min_box_size, scale_bank
+from .features import (
+    CHANNEL_IDS,
+    BankArrays,
+    available_channels,
+    check_box_size,
+    make_bank,
+    min_box_size,
+    rect_planes,
+    scale_bank,
+)
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .params import Params
 from .result import TrackResult
@@ -163,21 +171,24 @@ class Tracker:
         p = self._params
         self._rng = np.random.default_rng(self._seed)
         self._bank_arrays: BankArrays = make_bank(p, b[2], b[3], self._rng)
-        self._bank = _core.FeatureBank(self._bank_arrays.starts, self._bank_arrays.rects,
-                                       self._bank_arrays.weights)
+        # Channels (rcwmil-plus): each feature on one channel, drawn from its own stream; the
+        # integral image holds one plane per channel and each rectangle reads its feature's.
+        self._chan_names: tuple[str, ...] | None = None
+        self._chan_ids: list[int] = []
+        self._rect_planes: np.ndarray | None = None
+        if p.channels:
+            names = available_channels(p.channels, img)
+            chan_rng = np.random.default_rng([self._seed, 1])
+            self._feature_channel = chan_rng.integers(0, len(names), size=self._bank_arrays.size)
+            self._chan_names = names
+            self._chan_ids = [CHANNEL_IDS[c] for c in names]
+            self._rect_planes = rect_planes(self._bank_arrays, self._feature_channel)
+        self._bank = self._make_core_bank(self._bank_arrays)
         # Scale state (rcwmil-plus): the box is the first box scaled by scale_factor ** index.
         self._base_wh = (b[2], b[3])
         self._scale_index = 0
         self._banks: dict[int, tuple[_core.FeatureBank, BankArrays]] = {
             0: (self._bank, self._bank_arrays)}
-        # Channels (rcwmil-plus): each feature on one channel, drawn from its own stream.
-        self._chan: ChannelImages | None = None
-        self._chan_banks: dict[int, ChannelBank] = {}
-        if p.channels:
-            names = available_channels(p.channels, img)
-            chan_rng = np.random.default_rng([self._seed, 1])
-            self._feature_channel = chan_rng.integers(0, len(names), size=self._bank_arrays.size)
-            self._chan = ChannelImages(names)
         # Motion and recovery state (rcwmil-plus).
         self._velocity = (0.0, 0.0)
         self._last_good: IntBox = b
@@ -302,12 +313,12 @@ class Tracker:
         x, y, w, h = box
         m = margin + 1
         roi = (x - m, y - m, w + 2 * m, h + 2 * m)
-        if self._chan is not None:
+        if self._chan_names is not None:
             if img.ndim == 2 or img.shape[2] == 1:
-                if available_channels(self._chan.names, img) != self._chan.names:
+                if available_channels(self._chan_names, img) != self._chan_names:
                     raise ValueError("this tracker was started on a colour frame and uses colour "
                                      "channels; call init() to restart on gray frames")
-            self._chan.compute(img, roi)
+            self._ii.compute_channels(img, roi, self._chan_ids)
         else:
             self._ii.compute(img, roi)
 
@@ -315,9 +326,6 @@ class Tracker:
                     radius: int, step: int) -> tuple[int, int, float, int]:
         """Best offset, its raw score and the candidate count of a grid around ``box``."""
         guard = self._params.guard
-        if self._chan is not None:
-            return self._chan.score_grid(self._chan_bank_at(index), sel, *weak, guard, box,
-                                         radius, step)
         dx, dy, score, n = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, guard,
                                             box, radius, step, self._frame_wh)
         return int(dx), int(dy), float(score), int(n)
@@ -325,9 +333,6 @@ class Tracker:
     def _raw_grid(self, index: int, sel: np.ndarray, weak: Weak, box: IntBox, radius: int,
                   step: int) -> np.ndarray | None:
         """The full grid of raw scores around ``box`` (``-inf``: not a candidate)."""
-        if self._chan is not None:
-            return self._chan.grid(self._chan_bank_at(index), sel, *weak, self._params.guard, box,
-                                   radius, step)
         out = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, self._params.guard,
                                box, radius, step, self._frame_wh, True)
         grid: np.ndarray = out[4]  # type: ignore[misc]
@@ -362,20 +367,14 @@ class Tracker:
 
     def _project(self, index: int, corners: np.ndarray) -> np.ndarray:
         """Feature values ``(M, n)`` of the boxes at scale ``index`` with these top-left corners."""
-        if self._chan is not None:
-            return self._chan.project(self._chan_bank_at(index), corners[:, 0], corners[:, 1])
         values: np.ndarray = _core.project(self._ii, self._bank_at(index)[0], corners[:, 0],
                                            corners[:, 1])
         return values
 
-    def _chan_bank_at(self, index: int) -> ChannelBank:
-        cached = self._chan_banks.get(index)
-        if cached is None:
-            assert self._chan is not None
-            cached = ChannelBank.build(self._bank_at(index)[1], self._feature_channel,
-                                       len(self._chan.names))
-            self._chan_banks[index] = cached
-        return cached
+    def _make_core_bank(self, arrays: BankArrays) -> _core.FeatureBank:
+        """The core's bank of ``arrays``, each rectangle on its feature's channel plane."""
+        return _core.FeatureBank(arrays.starts, arrays.rects, arrays.weights,
+                                 channels=self._rect_planes)
 
     def _scale_margin(self) -> int:
         """Extra integral-image margin for the largest scale searched around the box."""
@@ -395,7 +394,7 @@ class Tracker:
         if cached is None:
             w, h = self._box_size(index)
             arrays = scale_bank(self._bank_arrays, self._base_wh[0], self._base_wh[1], w, h)
-            cached = (_core.FeatureBank(arrays.starts, arrays.rects, arrays.weights), arrays)
+            cached = (self._make_core_bank(arrays), arrays)
             self._banks[index] = cached
         return cached
 
