@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
+import os
+import sys
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -78,3 +82,110 @@ def test_sweep_is_a_list_of_specs(otb: Path, tmp_path: Path) -> None:
     b = read_boxes(tmp_path / "boxes" / safe_name(specs[1]) / "SynA.txt")
     assert a.shape == b.shape == (N, 4)
     assert not np.array_equal(a, b)  # the override changed the tracker
+
+
+# ----------------------------------------------------------------------------- Dask
+@pytest.fixture
+def need_distributed() -> None:
+    """Skip without ``distributed`` (the ``cluster`` extra), but fail under CI, which installs
+    it (``.ci/run``)."""
+    if importlib.util.find_spec("distributed") is None:
+        msg = 'distributed not installed (pip install -e ".[cluster]")'
+        if os.environ.get("CI"):
+            pytest.fail(msg)
+        pytest.skip(msg)
+
+
+def _files(root: Path) -> dict[str, np.ndarray]:
+    return {str(p.relative_to(root)): read_boxes(p) for p in sorted(root.rglob("*.txt"))}
+
+
+@pytest.mark.usefixtures("need_distributed")
+def test_dask_local_cluster_gives_the_serial_boxes(otb: Path, tmp_path: Path) -> None:
+    serial, dask_out = tmp_path / "serial", tmp_path / "dask"
+    common = ["--trackers", "rcwmil,ct", "--no-progress", "--no-plots", "--repeats", "2"]
+    assert main(["eval", str(otb), "--out", str(serial), *common]) == 0
+    assert main(["eval", str(otb), "--out", str(dask_out), "--executor", "dask", "-j", "2",
+                 *common]) == 0
+    a, b = _files(serial / "boxes"), _files(dask_out / "boxes")
+    assert sorted(a) == sorted(b) and len(a) == 2 * 2 * 2
+    for k in a:
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    ja = json.loads((serial / "eval_ope.json").read_text())
+    jb = json.loads((dask_out / "eval_ope.json").read_text())
+    assert ja["settings"]["executor"] == "serial" and jb["settings"]["executor"] == "dask"
+    assert ja["settings"]["jobs"] == 1 and jb["settings"]["jobs"] == 2
+    for t in ("rcwmil", "ct"):
+        for k in ("auc", "auc_std", "success_50", "precision_20", "success_curve", "n_lost", "errors"):
+            assert ja["summary"][t][k] == jb["summary"][t][k], (t, k)
+    # the table: the same rows up to the timing columns (FPS, FPS ratio, Init ms)
+    rows_a, rows_b = (
+        [line.split("|")[1:-4] for line in (d / "eval_ope.md").read_text().splitlines()
+         if line.startswith("| Syn") or line.startswith("| **mean")]
+        for d in (serial, dask_out)
+    )
+    assert len(rows_a) == 6 and rows_a == rows_b
+
+
+def _die_once(marker: str, task: Any) -> Any:
+    """Kill the worker process the first time (a worker dying under a task), then run it."""
+    import os
+
+    from wmiltrack.eval.runner import run_task
+
+    if not os.path.exists(marker):
+        Path(marker).write_text("died")
+        os._exit(1)
+    return run_task(task)
+
+
+@pytest.mark.usefixtures("need_distributed")
+def test_dask_retries_a_failed_task_once_and_reports_it(otb: Path, tmp_path: Path) -> None:
+    import functools
+    import sys
+
+    import cloudpickle
+    import dask
+
+    from wmiltrack.eval.cluster import DaskExecutor
+    from wmiltrack.eval.pipeline import make_tasks
+    from wmiltrack.eval.runner import run_task
+
+    # a tracker spec that fails in every try: its error comes back, after one retry
+    said: list[str] = []
+    tasks = make_tasks([otb / "SynA"], ["rcwmil", "rcwmil:no_such_param=1"], [0])
+    outs = list(DaskExecutor(2, log=said.append).map(run_task, tasks))
+    assert sorted(o.tracker for o in outs) == ["rcwmil", "rcwmil:no_such_param=1"]
+    bad = next(o for o in outs if o.tracker != "rcwmil")
+    assert bad.error is not None and "no_such_param" in bad.error
+    assert len(said) == 1 and said[0].startswith("retrying rcwmil:no_such_param=1 on SynA")
+    good = next(o for o in outs if o.tracker == "rcwmil")
+    assert good.error is None and good.boxes.shape == (N, 4)
+
+    # a worker that dies under its task: the task is submitted again and finishes
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    try:
+        marker = tmp_path / "died"
+        said.clear()
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+            outs = list(
+                DaskExecutor(1, log=said.append).map(
+                    functools.partial(_die_once, str(marker)), tasks[:1]
+                )
+            )
+        assert marker.read_text() == "died"
+        assert len(outs) == 1 and outs[0].error is None
+        np.testing.assert_array_equal(outs[0].boxes, good.boxes)
+        assert len(said) == 1 and "KilledWorker" in said[0]
+    finally:
+        cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
+
+
+def test_without_distributed_the_message_says_how_to_install(
+    otb: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed -> ImportError
+    rc = main(["eval", str(otb), "--out", str(tmp_path), "--executor", "dask", "--no-progress"])
+    assert rc == 1
+    assert 'pip install "wmiltrack[cluster]"' in capsys.readouterr().err
+    assert not (tmp_path / "boxes").exists()  # said before anything ran

@@ -34,6 +34,8 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         plots=not args.no_plots,
         cv_threads=args.cv_threads,
         show_progress=not args.no_progress,
+        executor=args.executor,
+        scheduler=args.scheduler,
     )
     print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
     print(f"(wall time {doc['wall_time']:.1f} s)")
@@ -77,7 +79,24 @@ def add_eval(sub: Subparsers) -> None:
         help="score box files DIR/<tracker>/<seq>.txt instead of running trackers",
     )
     p.add_argument("--out", type=Path, required=True, help="output folder")
-    p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes (default 1)")
+    p.add_argument(
+        "-j", "--jobs", type=int, default=1, help="parallel processes or Dask workers (default 1)"
+    )
+    p.add_argument(
+        "--executor",
+        choices=("serial", "process", "dask"),
+        default=None,
+        help="where tasks run: serial (this process), process (-j worker processes) or dask "
+        "(a LocalCluster of -j workers, or the cluster at --scheduler; needs "
+        "pip install \"wmiltrack[cluster]\"); default serial for -j 1, else process",
+    )
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="with --executor dask: an existing Dask scheduler (tcp://host:8786) whose workers "
+        "see the dataset at the same path",
+    )
     p.add_argument(
         "--repeats",
         type=int,

@@ -3,6 +3,7 @@
 Usage::
 
     wmiltrack eval DATASET --trackers rcwmil,fct,opencv:MIL --out DIR [-j N] [--repeats R]
+                   [--executor serial|process|dask] [--scheduler ADDRESS]
                    [--protocol ope|vot] [--sequences A,B] [--seed S]
     wmiltrack eval DATASET --results BOXDIR --out DIR      # score another tracker's files
 
@@ -45,7 +46,11 @@ Stages
 ------
 :mod:`~wmiltrack.eval.runner` runs tasks, one per (tracker, sequence, seed), through an
 executor; each finished task's box file is written at once, so a failing task (reported in
-the table and the JSON) or an interrupted run keeps every finished result.
+the table and the JSON) or an interrupted run keeps every finished result.  Executors:
+``serial`` (``-j 1``), ``process`` (``-j N`` worker processes) and ``dask``
+(:class:`~wmiltrack.eval.cluster.DaskExecutor`: a ``LocalCluster`` of ``-j N`` workers, or an
+existing cluster with ``--scheduler ADDRESS``; a failed task is retried once there).
+Tracker specs may carry overrides (``rcwmil:num_selected=30``), so a sweep is a list of specs.
 :mod:`~wmiltrack.eval.scoring` scores the runs and :mod:`~wmiltrack.eval.report` writes the
 table, JSON and plots.
 
@@ -67,6 +72,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -93,6 +99,8 @@ __all__ = ["make_tasks", "run_eval", "run_tasks"]
 
 FloatArray = npt.NDArray[np.float64]
 Protocol = Literal["ope", "vot"]
+ExecutorName = Literal["serial", "process", "dask"]
+EXECUTORS: tuple[ExecutorName, ...] = ("serial", "process", "dask")
 REFERENCE = "opencv:MIL"
 
 
@@ -228,13 +236,60 @@ def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
     return ok
 
 
+def _executor(
+    executor: Executor | ExecutorName | None,
+    jobs: int,
+    cv_threads: int | None,
+    scheduler: str | None,
+    say: Callable[[str], None],
+) -> Executor:
+    if executor is None:
+        executor = "serial" if jobs == 1 else "process"
+    if scheduler is not None and executor != "dask":
+        raise ValueError("--scheduler needs --executor dask")
+    if not isinstance(executor, str):
+        return executor
+    if executor == "serial":
+        if jobs != 1:
+            raise ValueError(f"--executor serial runs one task at a time; -j {jobs} needs another")
+        return SerialExecutor(cv_threads)
+    if executor == "process":
+        return ProcessExecutor(jobs, cv_threads)
+    if executor == "dask":
+        from .cluster import DaskExecutor, require_distributed
+
+        require_distributed()  # fail before anything runs, saying how to install it
+        return DaskExecutor(jobs, cv_threads, scheduler=scheduler, log=say)
+    raise ValueError(f"executor must be one of {', '.join(EXECUTORS)}, not {executor!r}")
+
+
+def _executor_name(executor: Executor | ExecutorName | None, jobs: int) -> str:
+    if executor is None:
+        return "serial" if jobs == 1 else "process"
+    return executor if isinstance(executor, str) else type(executor).__name__
+
+
+def _full_length(run: RunOutcome, lengths: dict[str, int]) -> RunOutcome:
+    """A failed task's outcome with NaN boxes on every frame when it has none at all (its
+    sequence was never loaded, e.g. a Dask worker died under it)."""
+    n = lengths.get(run.sequence)
+    if n is None or run.boxes.shape[0] == n or run.boxes.shape[0] != 0:
+        return run
+    return replace(run, boxes=np.full((n, 4), np.nan), oks=np.zeros(n, dtype=bool))
+
+
 def _box_writer(
-    box_root: Path, protocol: Protocol, missing: Missing, say: Callable[[str], None]
+    box_root: Path,
+    protocol: Protocol,
+    missing: Missing,
+    say: Callable[[str], None],
+    lengths: dict[str, int],
 ) -> Callable[[RunOutcome], None]:
     """What to do with each finished task: write its box file (the scored boxes for OPE) and
     report a failure at once."""
 
     def save(run: RunOutcome) -> None:
+        run = _full_length(run, lengths)
         boxes = run_boxes(run, missing) if protocol == "ope" else run.boxes
         write_run_boxes(box_root, run, boxes)
         if run.error is not None:
@@ -308,7 +363,8 @@ def run_eval(
     cv_threads: int | None = 1,
     show_progress: bool = True,
     log: Callable[[str], None] | None = None,
-    executor: Executor | None = None,
+    executor: Executor | ExecutorName | None = None,
+    scheduler: str | None = None,
 ) -> dict[str, Any]:
     """Run (or read) and score trackers on a dataset; write the table, JSON, plots and boxes.
 
@@ -347,8 +403,12 @@ def run_eval(
     log:
         Receives notes (skipped trackers, odd files); default prints to stderr.
     executor:
-        Runs the tasks (default: :class:`~wmiltrack.eval.runner.SerialExecutor` for
-        ``jobs == 1``, else :class:`~wmiltrack.eval.runner.ProcessExecutor`).
+        Runs the tasks: an executor object, or ``"serial"``, ``"process"`` (``jobs``
+        processes) or ``"dask"`` (:class:`~wmiltrack.eval.cluster.DaskExecutor`: a
+        ``LocalCluster`` of ``jobs`` workers, or the cluster at ``scheduler``).  Default:
+        serial for ``jobs == 1``, else process.
+    scheduler:
+        Address of a Dask scheduler (``tcp://host:8786``) for ``executor="dask"``.
 
     Returns
     -------
@@ -364,7 +424,8 @@ def run_eval(
     FileNotFoundError
         Missing dataset, sequences or result files.
     RuntimeError
-        matplotlib missing while plots are wanted (the message says how to install it).
+        matplotlib missing while plots are wanted, or ``distributed`` missing with
+        ``executor="dask"`` (the messages say how to install them).
     KeyboardInterrupt
         Passed on after the box files of every finished task are written.
     """
@@ -411,20 +472,24 @@ def run_eval(
             raise ValueError("no tracker left to run")
         box_root = out_p / ("boxes" if protocol == "ope" else "boxes_vot")
         files["boxes"] = str(box_root)
-        tasks = make_tasks(paths, tracker_names, seeds, protocol, skip, burnin)
-        if executor is None:
-            executor = (
-                SerialExecutor(cv_threads) if jobs == 1 else ProcessExecutor(jobs, cv_threads)
-            )
+        # absolute paths: the workers of a cluster may run in other folders
+        tasks = make_tasks([p.resolve() for p in paths], tracker_names, seeds, protocol, skip, burnin)
+        ex = _executor(executor, jobs, cv_threads, scheduler, say)
+        lengths = {name: gt.shape[0] for name, gt in gts.items()}
         runs = run_tasks(
-            tasks, executor, _box_writer(box_root, protocol, missing, say), show_progress
+            tasks,
+            ex,
+            _box_writer(box_root, protocol, missing, say, lengths),
+            show_progress,
         )
+        runs = [_full_length(r, lengths) for r in runs]
         timed = True
         n_repeats = repeats
     wall = time.perf_counter() - t_start
 
     settings = {
         "jobs": jobs,
+        "executor": None if results is not None else _executor_name(executor, jobs),
         "missing": missing,
         "skip": skip,
         "burnin": burnin,
