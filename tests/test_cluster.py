@@ -189,3 +189,88 @@ def test_without_distributed_the_message_says_how_to_install(
     assert rc == 1
     assert 'pip install "wmiltrack[cluster]"' in capsys.readouterr().err
     assert not (tmp_path / "boxes").exists()  # said before anything ran
+
+
+# ----------------------------------------------------------------------------- --resume
+def _rows(out: Path) -> list[list[str]]:
+    """The table's result rows up to the timing columns (FPS, FPS ratio, Init ms)."""
+    return [line.split("|")[1:-4] for line in (out / "eval_ope.md").read_text().splitlines()
+            if line.startswith("| Syn") or line.startswith("| **mean")]
+
+
+def test_resume_after_an_interruption_runs_only_what_is_missing(
+    otb: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from wmiltrack.eval import runner
+
+    full, out = tmp_path / "full", tmp_path / "out"
+    common = ["--trackers", "rcwmil,ct", "--no-progress", "--no-plots"]
+    assert main(["eval", str(otb), "--out", str(full), *common]) == 0
+
+    real = runner.make_tracker
+    made: list[str] = []
+
+    def make(spec: str, seed: int = 0, **params: Any) -> Any:
+        made.append(spec)
+        if len(made) == 3 and interrupt:  # the third task: SynB with rcwmil
+            raise KeyboardInterrupt
+        if fail and spec == "ct":
+            raise RuntimeError("cannot make it")
+        return real(spec, seed=seed, **params)
+
+    monkeypatch.setattr(runner, "make_tracker", make)
+    interrupt, fail = True, False
+    with pytest.raises(KeyboardInterrupt):
+        main(["eval", str(otb), "--out", str(out), *common])
+    assert sorted(p.name for p in (out / "boxes").rglob("*.txt")) == ["SynA.txt", "SynA.txt"]
+
+    made.clear()
+    interrupt = False
+    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 0
+    assert made == ["rcwmil", "ct"]  # only SynB's two runs
+    a, b = _files(full / "boxes"), _files(out / "boxes")
+    assert sorted(a) == sorted(b) and len(a) == 4
+    for k in a:
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+    assert _rows(full) == _rows(out) and len(_rows(out)) == 6
+    table = (out / "eval_ope.md").read_text()
+    assert "resumed: 2 of 4 runs read back from their box files" in table
+    doc = json.loads((out / "eval_ope.json").read_text())
+    assert doc["settings"]["resumed_runs"] == 2
+    # resumed runs are untimed; the runs made now are timed
+    assert doc["results"]["rcwmil"]["SynA"]["runs"][0]["fps"] is None
+    assert doc["results"]["rcwmil"]["SynB"]["runs"][0]["fps"] > 0
+
+    # a deleted box file and a failed run are run again; nothing else is
+    (out / "boxes" / "ct" / "SynA.txt").unlink()
+    made.clear()
+    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 0
+    assert made == ["ct"]
+    np.testing.assert_array_equal(read_boxes(out / "boxes" / "ct" / "SynA.txt"), a["ct/SynA.txt"])
+
+    # a run that failed is run again
+    for seq in ("SynA", "SynB"):
+        (out / "boxes" / "ct" / f"{seq}.txt").unlink()
+    made.clear()
+    fail = True
+    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 1
+    assert made == ["ct", "ct"]
+    record = json.loads((out / "boxes" / "ct" / "SynA.run.json").read_text())
+    assert record["seed"] == 0 and record["error"] == "RuntimeError: cannot make it"
+    assert np.isnan(read_boxes(out / "boxes" / "ct" / "SynA.txt")).all()
+    made.clear()
+    fail = False
+    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 0
+    assert made == ["ct", "ct"]  # failed runs are not taken as done
+    assert _rows(full) == _rows(out)
+
+    # another seed is another run
+    made.clear()
+    assert main(["eval", str(otb), "--out", str(out), "--resume", "--seed", "1", *common]) == 0
+    assert made == ["rcwmil", "ct", "rcwmil", "ct"]
+
+
+def test_resume_is_ope_only(otb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["eval", str(otb), "--out", str(tmp_path), "--protocol", "vot", "--resume",
+                 "--no-progress"]) == 1
+    assert "--resume reads OPE box files back" in capsys.readouterr().err

@@ -36,6 +36,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         show_progress=not args.no_progress,
         executor=args.executor,
         scheduler=args.scheduler,
+        resume=args.resume,
     )
     print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
     print(f"(wall time {doc['wall_time']:.1f} s)")
@@ -133,6 +134,12 @@ def add_eval(sub: Subparsers) -> None:
         default=1,
         help="cv2.setNumThreads(N) in every worker (default 1: one thread per tracker, as "
         "wmiltrack uses; 0 lets OpenCV choose)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="OPE: skip the runs whose box file is already in --out (read back, untimed), so an "
+        "interrupted run finishes only what is missing; failed runs are run again",
     )
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -59,7 +59,8 @@ Outputs in ``--out DIR``
 ``eval_<protocol>.md`` (table), ``eval_<protocol>.json`` (every figure per tracker and
 sequence, per repeat), ``success_ope.png`` and ``precision_ope.png`` (OPE), and the boxes:
 ``boxes/<tracker>/<seq>.txt`` (OPE; repeat ``k`` > 0 in ``<seq>.r<k>.txt``) or
-``boxes_vot/...`` (VOT; NaN rows on frames not tracked).  The box files hold the boxes that
+``boxes_vot/...`` (VOT; NaN rows on frames not tracked), each with a ``<seq>[.r<k>].run.json``
+record (seed, error, frames reported lost) that ``--resume`` reads.  The box files hold the boxes that
 were scored (after the ``--missing`` rule; NaN rows are misses).  Tracker names are made
 filesystem-safe (``opencv:MIL`` -> ``opencv_MIL``).  ``--results DIR`` reads exactly this
 layout (``DIR/<tracker>/<seq>.txt``), e.g. ``--results OUT/boxes``.
@@ -82,6 +83,7 @@ import numpy.typing as npt
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 from .peers import TrackerUnavailable
 from .report import (
+    box_path,
     caption,
     environment,
     format_ope_table,
@@ -269,6 +271,41 @@ def _executor_name(executor: Executor | ExecutorName | None, jobs: int) -> str:
     return executor if isinstance(executor, str) else type(executor).__name__
 
 
+def _run_record(path: Path) -> Path:
+    """``<seq>[.r<k>].run.json`` beside a box file: the run's seed, error and ``n_lost``
+    (what ``--resume`` needs besides the boxes: a failed run or another seed is run again)."""
+    return path.with_suffix(".run.json")
+
+
+def _split_resumable(
+    tasks: Sequence[Task], box_root: Path, lengths: dict[str, int]
+) -> tuple[list[Task], list[RunOutcome]]:
+    """``--resume``: the tasks still to run, and the outcomes of the others read back from
+    their box files (a file that exists, has one box per frame and is not marked failed)."""
+    from ..data.boxes import read_boxes
+
+    todo: list[Task] = []
+    done: list[RunOutcome] = []
+    for t in tasks:
+        seq = Path(t.sequence).name
+        path = box_path(box_root, t.tracker, seq, t.repeat)
+        boxes = None
+        record: dict[str, Any] = {}
+        try:  # the record is written after the boxes: with it, the box file is complete
+            record = json.loads(_run_record(path).read_text(encoding="utf-8"))
+            if record.get("error") is None and record.get("seed") == t.seed:
+                boxes = read_boxes(path)
+        except (OSError, ValueError):  # missing, or cut short by a kill: run the task again
+            boxes = None
+        if boxes is None or boxes.shape != (lengths[seq], 4):
+            todo.append(t)
+            continue
+        oks = np.all(np.isfinite(boxes), axis=1)
+        n_lost = int(record.get("n_lost", 0))
+        done.append(RunOutcome(t.tracker, seq, t.repeat, t.seed, boxes, oks, n_lost=n_lost))
+    return todo, done
+
+
 def _full_length(run: RunOutcome, lengths: dict[str, int]) -> RunOutcome:
     """A failed task's outcome with NaN boxes on every frame when it has none at all (its
     sequence was never loaded, e.g. a Dask worker died under it)."""
@@ -291,7 +328,16 @@ def _box_writer(
     def save(run: RunOutcome) -> None:
         run = _full_length(run, lengths)
         boxes = run_boxes(run, missing) if protocol == "ope" else run.boxes
-        write_run_boxes(box_root, run, boxes)
+        path = write_run_boxes(box_root, run, boxes)
+        record = {
+            "tracker": run.tracker,
+            "sequence": run.sequence,
+            "repeat": run.repeat,
+            "seed": run.seed,
+            "n_lost": run.n_lost,
+            "error": run.error,
+        }
+        _run_record(path).write_text(json.dumps(record) + "\n", encoding="utf-8")
         if run.error is not None:
             say(f"{run.tracker} on {run.sequence} (seed {run.seed}) failed: {run.error}")
 
@@ -365,6 +411,7 @@ def run_eval(
     log: Callable[[str], None] | None = None,
     executor: Executor | ExecutorName | None = None,
     scheduler: str | None = None,
+    resume: bool = False,
 ) -> dict[str, Any]:
     """Run (or read) and score trackers on a dataset; write the table, JSON, plots and boxes.
 
@@ -409,6 +456,10 @@ def run_eval(
         serial for ``jobs == 1``, else process.
     scheduler:
         Address of a Dask scheduler (``tcp://host:8786``) for ``executor="dask"``.
+    resume:
+        Do not run a task whose box file is already in ``out`` with its ``.run.json`` record
+        (same seed, no error): read its boxes back instead (untimed; a note in the table says
+        how many).  OPE only.
 
     Returns
     -------
@@ -438,6 +489,12 @@ def run_eval(
         raise ValueError(f"protocol must be 'ope' or 'vot', not {protocol!r}")
     if missing not in ("hold", "miss"):
         raise ValueError(f"missing must be 'hold' or 'miss', not {missing!r}")
+    if resume and (protocol != "ope" or results is not None):
+        raise ValueError(
+            "--resume reads OPE box files back; the VOT protocol's figures need the run itself"
+            if results is None
+            else "--resume is for running trackers, not with --results"
+        )
     if results is not None and protocol == "vot":
         raise ValueError(
             "--results scores box files with the OPE protocol; the VOT protocol "
@@ -458,6 +515,7 @@ def run_eval(
     files: dict[str, str] = {}
     out_p.mkdir(parents=True, exist_ok=True)
 
+    n_resumed = 0
     if results is not None:
         runs = read_results(Path(results), gts, notes)
         timed = False
@@ -474,15 +532,32 @@ def run_eval(
         files["boxes"] = str(box_root)
         # absolute paths: the workers of a cluster may run in other folders
         tasks = make_tasks([p.resolve() for p in paths], tracker_names, seeds, protocol, skip, burnin)
+        all_tasks = list(tasks)
         ex = _executor(executor, jobs, cv_threads, scheduler, say)
         lengths = {name: gt.shape[0] for name, gt in gts.items()}
-        runs = run_tasks(
+        resumed: list[RunOutcome] = []
+        if resume:
+            tasks, resumed = _split_resumable(tasks, box_root, lengths)
+            if resumed:
+                notes.append(
+                    f"resumed: {len(resumed)} of {len(tasks) + len(resumed)} runs read back from "
+                    f"their box files in {box_root} (untimed: no FPS)"
+                )
+                say(notes[-1])
+        new = run_tasks(
             tasks,
             ex,
             _box_writer(box_root, protocol, missing, say, lengths),
             show_progress,
+        ) if tasks else []
+        order = {(t, s, r): i for i, (t, s, r) in enumerate(
+            (t.tracker, Path(t.sequence).name, t.repeat) for t in all_tasks
+        )}
+        runs = sorted(
+            [_full_length(r, lengths) for r in new] + resumed,
+            key=lambda r: order.get((r.tracker, r.sequence, r.repeat), len(order)),
         )
-        runs = [_full_length(r, lengths) for r in runs]
+        n_resumed = len(resumed)
         timed = True
         n_repeats = repeats
     wall = time.perf_counter() - t_start
@@ -490,6 +565,7 @@ def run_eval(
     settings = {
         "jobs": jobs,
         "executor": None if results is not None else _executor_name(executor, jobs),
+        "resumed_runs": n_resumed,
         "missing": missing,
         "skip": skip,
         "burnin": burnin,
