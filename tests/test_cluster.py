@@ -274,3 +274,112 @@ def test_resume_is_ope_only(otb: Path, tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["eval", str(otb), "--out", str(tmp_path), "--protocol", "vot", "--resume",
                  "--no-progress"]) == 1
     assert "--resume reads OPE box files back" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- --layout
+def _build(root: Path, layout: str, n: int = 12, absent: tuple[int, ...] = ()) -> Any:
+    """One generated sequence written in a benchmark's layout (as tests/test_layouts.py's
+    end-to-end test does); ``absent`` frames are flagged absent (LaSOT out_of_view, GOT-10k
+    absence.label).  Returns the sequence as the layout loader reads it."""
+    from wmiltrack.data.layouts import load_layout
+
+    syn = make_sequence(n, size=(96, 128), target_size=(24, 20), seed=3, occlusion=False, clutter=False)
+    rows = [",".join(f"{v:.6f}" for v in r) for r in np.asarray(syn.groundtruth)]
+    flags = ["1" if k in absent else "0" for k in range(n)]
+    if layout == "lasot":
+        d = root / "toy" / "toy-1"
+        img_dir, names = d / "img", [f"{k + 1:08d}.jpg" for k in range(n)]
+        files = {d / "groundtruth.txt": rows, d / "full_occlusion.txt": [",".join(["0"] * n)],
+                 d / "out_of_view.txt": [",".join(flags)]}
+    elif layout == "got10k":
+        d = root / "val" / "GOT-10k_Val_000001"
+        img_dir, names = d, [f"{k + 1:08d}.jpg" for k in range(n)]
+        files = {d / "groundtruth.txt": rows, d / "absence.label": flags,
+                 d / "cover.label": ["0" if f == "1" else "8" for f in flags],
+                 d / "meta_info.ini": ["[METAINFO]", "resolution: (128, 96)"],
+                 root / "val" / "list.txt": ["GOT-10k_Val_000001"]}
+    elif layout == "uav123":
+        img_dir, names = root / "data_seq" / "UAV123" / "toy", [f"{k + 1:06d}.jpg" for k in range(n)]
+        files = {root / "anno" / "UAV123" / "toy.txt": rows}
+    elif layout == "trackingnet":
+        img_dir, names = root / "TRAIN_0" / "frames" / "toy", [f"{k}.jpg" for k in range(n)]
+        files = {root / "TRAIN_0" / "anno" / "toy.txt": rows}
+    else:  # vot: 8-value polygons, the corners of each box
+        img_dir, names = root / "toy" / "color", [f"{k + 1:08d}.jpg" for k in range(n)]
+        polys = []
+        for x, y, w, h in np.asarray(syn.groundtruth):
+            polys.append(",".join(f"{v:.6f}" for v in (x, y, x + w, y, x + w, y + h, x, y + h)))
+        files = {root / "toy" / "groundtruth.txt": polys, root / "list.txt": ["toy"]}
+    for path, lines in files.items():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("\n".join(lines) + "\n")
+    img_dir.mkdir(parents=True, exist_ok=True)
+    for name, frame in zip(names, syn):
+        assert cv2.imwrite(str(img_dir / name), frame)
+    (seq,) = load_layout(root, layout)
+    return seq
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    x1 = np.maximum(a[:, 0], b[:, 0])
+    y1 = np.maximum(a[:, 1], b[:, 1])
+    x2 = np.minimum(a[:, 0] + a[:, 2], b[:, 0] + b[:, 2])
+    y2 = np.minimum(a[:, 1] + a[:, 3], b[:, 1] + b[:, 3])
+    inter = np.clip(x2 - x1, 0, None) * np.clip(y2 - y1, 0, None)
+    return inter / (a[:, 2] * a[:, 3] + b[:, 2] * b[:, 3] - inter)
+
+
+@pytest.mark.parametrize("layout", ["lasot", "got10k", "uav123", "trackingnet", "vot"])
+def test_eval_reads_every_layout(tmp_path: Path, layout: str) -> None:
+    from wmiltrack.engine.tracker import Tracker
+
+    data, out = tmp_path / "data", tmp_path / "out"
+    seq = _build(data, layout)
+    rc = main(["eval", str(data), "--trackers", "rcwmil", "--out", str(out), "--no-plots",
+               "--no-progress"])
+    assert rc == 0
+    doc = json.loads((out / "eval_ope.json").read_text())
+    assert doc["layout"] == layout and doc["sequences"] == [seq.name]
+    # the boxes are the tracker's own on the layout loader's frames
+    pred = Tracker("rcwmil", seed=0).track(seq, seq.init_box)
+    got = read_boxes(out / "boxes" / "rcwmil" / f"{seq.name}.txt")
+    np.testing.assert_array_equal(got[1:], pred[1:])
+    np.testing.assert_array_equal(got[0], seq.groundtruth[0])  # row 0: the initialisation box
+    table = (out / "eval_ope.md").read_text()
+    assert ("| Tracker | AO | SR@0.5 | SR@0.75 |" in table) == (layout == "got10k")
+    assert (doc["got10k"] is not None) == (layout == "got10k")
+    # named explicitly, the same
+    assert main(["eval", str(data), "--layout", layout, "--trackers", "rcwmil", "--out",
+                 str(tmp_path / "named"), "--no-plots", "--no-progress"]) == 0
+    np.testing.assert_array_equal(read_boxes(tmp_path / "named" / "boxes" / "rcwmil" / f"{seq.name}.txt"), got)
+
+
+def test_lasot_absent_frames_fail_and_got10k_metrics(tmp_path: Path) -> None:
+    from wmiltrack.engine.tracker import Tracker
+
+    absent = (4, 5, 9)
+    for layout in ("lasot", "got10k"):
+        data, out = tmp_path / layout, tmp_path / f"out_{layout}"
+        seq = _build(data, layout, absent=absent)
+        assert main(["eval", str(data), "--trackers", "rcwmil", "--out", str(out), "--no-plots",
+                     "--no-progress"]) == 0
+        doc = json.loads((out / "eval_ope.json").read_text())
+        pred = read_boxes(out / "boxes" / "rcwmil" / f"{seq.name}.txt")
+        assert np.array_equal(pred[1:], Tracker("rcwmil", seed=0).track(seq, seq.init_box)[1:])
+        gt = np.asarray(seq.groundtruth)
+        visible = np.all(np.isfinite(gt), axis=1)
+        assert visible.sum() == 12 - len(absent)
+        iou = _iou(pred[visible], gt[visible])
+        run = doc["results"]["rcwmil"][seq.name]["runs"][0]
+        if layout == "lasot":  # LaSOT toolkit: successes over visible frames / all frames
+            assert run["success_50"] == pytest.approx(np.sum(iou > 0.5) / 12)
+            assert "count frames where the target is absent as failures" in (out / "eval_ope.md").read_text()
+        else:  # got10k toolkit: first frame skipped, absent frames left out
+            assert run["success_50"] == pytest.approx(np.mean(iou > 0.5))
+            keep = visible.copy()
+            keep[0] = False
+            iou_g = _iou(pred[keep], gt[keep])
+            g = doc["got10k"]["rcwmil"]
+            assert g["ao"] == pytest.approx(float(np.mean(iou_g)))
+            assert g["sr50"] == pytest.approx(float(np.mean(iou_g > 0.5)))
+            assert g["sr75"] == pytest.approx(float(np.mean(iou_g > 0.75)))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..data.layouts import LAYOUTS
 from .options import Subparsers
 
 
@@ -37,6 +38,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         executor=args.executor,
         scheduler=args.scheduler,
         resume=args.resume,
+        layout=args.layout,
     )
     print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
     print(f"(wall time {doc['wall_time']:.1f} s)")
@@ -65,7 +67,19 @@ def add_eval(sub: Subparsers) -> None:
         "figures use -j 1. A frame where a tracker gives no box keeps its last box (--missing "
         "hold); a frame left without a box is a miss in every figure.",
     )
-    p.add_argument("dataset", type=Path, help="folder of OTB sequence folders, or one of them")
+    p.add_argument(
+        "dataset",
+        type=Path,
+        help="dataset folder (OTB, LaSOT, GOT-10k, UAV123, TrackingNet or VOT layout, detected), "
+        "or one sequence folder",
+    )
+    p.add_argument(
+        "--layout",
+        choices=LAYOUTS,
+        default=None,
+        help="the dataset's layout (default: detected); absent frames are handled as each "
+        "benchmark does, and GOT-10k datasets get AO, SR@0.5 and SR@0.75 too",
+    )
     p.add_argument(
         "--trackers",
         default="rcwmil",

@@ -73,7 +73,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -113,6 +113,9 @@ def make_tasks(
     protocol: Protocol = "ope",
     skip: int = 5,
     burnin: int = 10,
+    *,
+    layout: str = "otb",
+    dataset: str | None = None,
 ) -> list[Task]:
     """Every (sequence, seed, tracker) task, sequence by sequence, the trackers interleaved
     within each seed (so slow drifts of the machine hit all of them alike).
@@ -127,13 +130,15 @@ def make_tasks(
         One seed per repeat.
     protocol, skip, burnin:
         Protocol settings.
+    layout, dataset:
+        For a layout other than OTB: ``paths`` are sequence names in the ``dataset`` folder.
 
     Returns
     -------
     list of Task
     """
     return [
-        Task(t, str(p), seed, r, protocol, skip, burnin)
+        Task(t, str(p), seed, r, protocol, skip, burnin, layout, dataset)
         for p in paths
         for r, seed in enumerate(seeds)
         for t in trackers
@@ -221,6 +226,81 @@ def _ground_truths(paths: Sequence[Path]) -> dict[str, FloatArray]:
         assert seq.groundtruth is not None
         out[seq.name] = np.asarray(seq.groundtruth, dtype=np.float64)
     return out
+
+
+@dataclass(frozen=True)
+class _Dataset:
+    layout: str
+    root: Path
+    paths: list[Path]  # OTB: sequence folders; other layouts: sequence names
+    gts: dict[str, FloatArray]
+    metas: dict[str, dict[str, Any]]
+
+
+def _open_dataset(dataset: Path, layout: str | None, names: Sequence[str] | None) -> _Dataset:
+    """The sequences' names and ground truths (no image is decoded but OTB's first ones)."""
+    from ..data.layouts import LayoutError, detect_layout, load_layout
+
+    if layout is None:
+        try:
+            layout = detect_layout(dataset)
+        except LayoutError:
+            layout = "otb"  # the OTB reader's own message says what is wrong
+    if layout == "otb":
+        paths = _sequence_paths(dataset, names)
+        gts = _ground_truths(paths)
+        return _Dataset("otb", dataset, paths, gts, {n: {"layout": "otb"} for n in gts})
+    seqs = load_layout(dataset, layout, list(names) if names else None)
+    if not seqs:
+        raise FileNotFoundError(f"no sequence in {dataset}")
+    gts = {}
+    metas: dict[str, dict[str, Any]] = {}
+    for seq in seqs:
+        assert seq.groundtruth is not None  # every layout loader reads it
+        gts[seq.name] = np.asarray(seq.groundtruth, dtype=np.float64)
+        metas[seq.name] = dict(seq.meta)
+    return _Dataset(layout, dataset, [Path(n) for n in gts], gts, metas)
+
+
+def _got10k_section(
+    runs: Sequence[RunOutcome],
+    gts: dict[str, FloatArray],
+    metas: dict[str, dict[str, Any]],
+    missing: Missing,
+) -> tuple[dict[str, Any], str]:
+    """GOT-10k's AO, SR@0.5 and SR@0.75 per tracker (the toolkit's overall figures: frames of
+    every sequence pooled), per repeat and as mean ± std over repeats; JSON part and table."""
+    from .got10k_metrics import got10k_aggregate, got10k_metrics
+
+    per: dict[str, dict[int, list[Any]]] = {}
+    for run in runs:
+        if run.sequence not in gts:
+            continue
+        res = metas[run.sequence].get("resolution")
+        bound = (float(res[0]), float(res[1])) if res is not None else None
+        fig = got10k_metrics(run_boxes(run, missing), gts[run.sequence], bound=bound)
+        per.setdefault(run.tracker, {}).setdefault(run.repeat, []).append(fig)
+    doc: dict[str, Any] = {}
+    lines = [
+        "",
+        "GOT-10k figures (got10k toolkit: first frame skipped, frames with the target absent or "
+        "fully covered left out, frames of all sequences pooled); mean ± std over repeats.",
+        "",
+        "| Tracker | AO | SR@0.5 | SR@0.75 |",
+        "|---|---|---|---|",
+    ]
+    for tracker, reps in per.items():
+        aggs = [got10k_aggregate(reps[r]) for r in sorted(reps)]
+        entry: dict[str, Any] = {"per_repeat": [a.to_dict() for a in aggs]}
+        cells = []
+        for key in ("ao", "sr50", "sr75"):
+            vals = np.array([getattr(a.pooled, key) for a in aggs], dtype=np.float64)
+            entry[key] = float(np.mean(vals))
+            entry[f"{key}_std"] = float(np.std(vals))
+            cells.append(f"{entry[key]:.3f} ± {entry[f'{key}_std']:.3f}")
+        doc[tracker] = entry
+        lines.append(f"| {tracker} | " + " | ".join(cells) + " |")
+    return doc, "\n".join(lines) + "\n"
 
 
 def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
@@ -355,17 +435,28 @@ def _score_and_write(
     notes: list[str],
     want_plots: bool,
     files: dict[str, str],
+    ds: _Dataset,
 ) -> dict[str, Any]:
     """Score stage and report stage: the table (captioned), plots; returns the JSON document
     (without the run's own fields) and records the files in ``files``."""
     env = environment()
     missing = settings["missing"]
     title = caption(env, {**settings, "missing": missing if protocol == "ope" else None})
+    got10k: dict[str, Any] | None = None
     if protocol == "ope":
-        scored = score_ope(runs, gts, missing=missing, reference=REFERENCE)
+        fail = [n for n in gts if ds.metas[n].get("absent_policy") == "fail"]
+        scored = score_ope(runs, gts, missing=missing, reference=REFERENCE, absent_fail=fail)
         table = format_ope_table(
             scored, repeats, timed, title=title, missing=missing, reference=REFERENCE
         )
+        if fail:
+            notes.append(
+                f"{len(fail)} sequence(s) ({ds.layout}) count frames where the target is absent "
+                "as failures, as the benchmark's toolkit does"
+            )
+        if ds.layout == "got10k":
+            got10k, section = _got10k_section(runs, gts, ds.metas, missing)
+            table += section
     else:
         scored = score_vot(runs, reference=REFERENCE)
         table = format_vot_table(scored, repeats, settings["skip"], settings["burnin"], title=title)
@@ -387,6 +478,7 @@ def _score_and_write(
         "notes": notes,
         "summary": scored["summary"],
         "results": scored["results"],
+        "got10k": got10k,
         "files": files,
     }
 
@@ -412,6 +504,7 @@ def run_eval(
     executor: Executor | ExecutorName | None = None,
     scheduler: str | None = None,
     resume: bool = False,
+    layout: str | None = None,
 ) -> dict[str, Any]:
     """Run (or read) and score trackers on a dataset; write the table, JSON, plots and boxes.
 
@@ -456,6 +549,12 @@ def run_eval(
         serial for ``jobs == 1``, else process.
     scheduler:
         Address of a Dask scheduler (``tcp://host:8786``) for ``executor="dask"``.
+    layout:
+        Dataset layout (:data:`wmiltrack.data.layouts.LAYOUTS`); ``None`` detects it
+        (:func:`wmiltrack.data.layouts.detect_layout`).  Each benchmark's absent frames are
+        handled as its toolkit does (LaSOT: failures); GOT-10k datasets get AO, SR@0.5 and
+        SR@0.75 too; sequences annotated on the first frame only are run (boxes written) but
+        not scored.
     resume:
         Do not run a task whose box file is already in ``out`` with its ``.run.json`` record
         (same seed, no error): read its boxes back instead (untimed; a note in the table says
@@ -507,9 +606,16 @@ def run_eval(
         require_matplotlib()  # fail before a long run, not after it
     dataset_p = Path(dataset)
     out_p = Path(out)
-    paths = _sequence_paths(dataset_p, sequences)
-    gts = _ground_truths(paths)
+    ds = _open_dataset(dataset_p, layout, sequences)
+    paths, all_gts = ds.paths, ds.gts
     notes: list[str] = []
+    first_only = [n for n in all_gts if ds.metas[n].get("first_frame_only")]
+    gts = {n: g for n, g in all_gts.items() if n not in first_only}
+    if first_only:
+        notes.append(
+            f"not scored: {len(first_only)} sequence(s) annotated on the first frame only "
+            "(the benchmark's server scores them); their boxes are written"
+        )
     seeds = tuple(seed + r for r in range(repeats))
     t_start = time.perf_counter()
     files: dict[str, str] = {}
@@ -531,10 +637,18 @@ def run_eval(
         box_root = out_p / ("boxes" if protocol == "ope" else "boxes_vot")
         files["boxes"] = str(box_root)
         # absolute paths: the workers of a cluster may run in other folders
-        tasks = make_tasks([p.resolve() for p in paths], tracker_names, seeds, protocol, skip, burnin)
+        if ds.layout == "otb":
+            tasks = make_tasks(
+                [p.resolve() for p in paths], tracker_names, seeds, protocol, skip, burnin
+            )
+        else:
+            tasks = make_tasks(
+                paths, tracker_names, seeds, protocol, skip, burnin,
+                layout=ds.layout, dataset=str(ds.root.resolve()),
+            )
         all_tasks = list(tasks)
         ex = _executor(executor, jobs, cv_threads, scheduler, say)
-        lengths = {name: gt.shape[0] for name, gt in gts.items()}
+        lengths = {name: gt.shape[0] for name, gt in all_gts.items()}
         resumed: list[RunOutcome] = []
         if resume:
             tasks, resumed = _split_resumable(tasks, box_root, lengths)
@@ -557,6 +671,7 @@ def run_eval(
             [_full_length(r, lengths) for r in new] + resumed,
             key=lambda r: order.get((r.tracker, r.sequence, r.repeat), len(order)),
         )
+        runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
         n_resumed = len(resumed)
         timed = True
         n_repeats = repeats
@@ -576,11 +691,17 @@ def run_eval(
         "std": "population (ddof=0) over repeats",
     }
     source = "run" if results is None else f"results:{Path(results).resolve()}"
+    if not gts:
+        raise ValueError(
+            f"nothing to score in {dataset_p}: every sequence is annotated on the first frame "
+            f"only; the boxes are in {files.get('boxes', '--out')}"
+        )
     doc = _score_and_write(
-        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots, files
+        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots, files, ds
     )
     doc.update(
         dataset=str(dataset_p.resolve()),
+        layout=ds.layout,
         trackers=tracker_names,
         box_folders={t: safe_name(t) for t in tracker_names},
         seeds=settings["seeds"],
