@@ -655,7 +655,8 @@ def run_eval(
             if resumed:
                 notes.append(
                     f"resumed: {len(resumed)} of {len(tasks) + len(resumed)} runs read back from "
-                    f"their box files in {box_root} (untimed: no FPS)"
+                    f"their box files in {box_root} (untimed: no FPS; the mean rows' FPS is over the "
+                    "runs made now)"
                 )
                 say(notes[-1])
         new = run_tasks(
