@@ -383,3 +383,32 @@ def test_lasot_absent_frames_fail_and_got10k_metrics(tmp_path: Path) -> None:
             assert g["ao"] == pytest.approx(float(np.mean(iou_g)))
             assert g["sr50"] == pytest.approx(float(np.mean(iou_g > 0.5)))
             assert g["sr75"] == pytest.approx(float(np.mean(iou_g > 0.75)))
+
+
+def test_first_frame_only_sequences_are_run_not_scored(tmp_path: Path) -> None:
+    syn = make_sequence(8, size=(96, 128), target_size=(24, 20), seed=3, occlusion=False)
+    d = tmp_path / "data" / "test" / "GOT-10k_Test_000001"
+    d.mkdir(parents=True)
+    for k, frame in enumerate(syn):
+        assert cv2.imwrite(str(d / f"{k + 1:08d}.jpg"), frame)
+    (d / "groundtruth.txt").write_text(",".join(f"{v:.3f}" for v in np.asarray(syn.groundtruth)[0]) + "\n")
+    (d.parent / "list.txt").write_text("GOT-10k_Test_000001\n")
+    out = tmp_path / "out"
+    assert main(["eval", str(tmp_path / "data"), "--trackers", "rcwmil", "--out", str(out),
+                 "--no-progress", "--no-plots"]) == 0
+    boxes = read_boxes(out / "boxes" / "rcwmil" / "GOT-10k_Test_000001.txt")
+    assert boxes.shape == (8, 4) and np.isfinite(boxes).all()  # for the benchmark's server
+    doc = json.loads((out / "eval_ope.json").read_text())
+    assert doc["layout"] == "got10k" and doc["sequences"] == [] and doc["results"] == {}
+    assert doc["unscored_sequences"] == ["GOT-10k_Test_000001"]
+    assert "not scored: 1 sequence(s) annotated on the first frame only" in (out / "eval_ope.md").read_text()
+
+
+def test_executor_arguments(otb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    base = ["eval", str(otb), "--out", str(tmp_path), "--no-progress", "--no-plots"]
+    assert main([*base, "--scheduler", "tcp://127.0.0.1:1"]) == 1
+    assert "--scheduler needs --executor dask" in capsys.readouterr().err
+    assert main([*base, "--executor", "serial", "-j", "2"]) == 1
+    assert "--executor serial runs one task at a time" in capsys.readouterr().err
+    assert main([*base, "--executor", "process", "-j", "2", "--sequences", "SynA"]) == 0
+    assert json.loads((tmp_path / "eval_ope.json").read_text())["settings"]["executor"] == "process"

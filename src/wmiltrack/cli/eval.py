@@ -45,6 +45,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     for key, path in doc["files"].items():
         print(f"wrote {key}: {path}")
     errors = sum(s.get("errors", 0) for s in doc["summary"].values())
+    errors += doc.get("unscored_errors", 0)
     return 1 if errors else 0
 
 

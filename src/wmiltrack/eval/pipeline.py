@@ -622,6 +622,7 @@ def run_eval(
     out_p.mkdir(parents=True, exist_ok=True)
 
     n_resumed = 0
+    unscored_errors = 0
     if results is not None:
         runs = read_results(Path(results), gts, notes)
         timed = False
@@ -672,6 +673,10 @@ def run_eval(
             [_full_length(r, lengths) for r in new] + resumed,
             key=lambda r: order.get((r.tracker, r.sequence, r.repeat), len(order)),
         )
+        for r in runs:
+            if r.sequence not in gts and r.error is not None:
+                unscored_errors += 1
+                notes.append(f"{r.tracker} on {r.sequence} (seed {r.seed}, not scored): {r.error}")
         runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
         n_resumed = len(resumed)
         timed = True
@@ -692,17 +697,15 @@ def run_eval(
         "std": "population (ddof=0) over repeats",
     }
     source = "run" if results is None else f"results:{Path(results).resolve()}"
-    if not gts:
-        raise ValueError(
-            f"nothing to score in {dataset_p}: every sequence is annotated on the first frame "
-            f"only; the boxes are in {files.get('boxes', '--out')}"
-        )
     doc = _score_and_write(
-        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots, files, ds
+        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots and bool(gts),
+        files, ds,
     )
     doc.update(
         dataset=str(dataset_p.resolve()),
         layout=ds.layout,
+        unscored_sequences=first_only,
+        unscored_errors=unscored_errors,
         trackers=tracker_names,
         box_folders={t: safe_name(t) for t in tracker_names},
         seeds=settings["seeds"],
