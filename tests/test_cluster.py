@@ -264,6 +264,11 @@ def test_resume_after_an_interruption_runs_only_what_is_missing(
     assert made == ["ct", "ct"]  # failed runs are not taken as done
     assert _rows(full) == _rows(out)
 
+    # another --missing rule is another run (the box files hold the boxes after it)
+    made.clear()
+    assert main(["eval", str(otb), "--out", str(out), "--resume", "--missing", "miss", *common]) == 0
+    assert made == ["rcwmil", "ct", "rcwmil", "ct"]
+
     # another seed is another run
     made.clear()
     assert main(["eval", str(otb), "--out", str(out), "--resume", "--seed", "1", *common]) == 0

@@ -364,10 +364,12 @@ def _run_record(path: Path) -> Path:
 
 
 def _split_resumable(
-    tasks: Sequence[Task], box_root: Path, lengths: dict[str, int]
+    tasks: Sequence[Task], box_root: Path, lengths: dict[str, int], missing: Missing
 ) -> tuple[list[Task], list[RunOutcome]]:
     """``--resume``: the tasks still to run, and the outcomes of the others read back from
-    their box files (a file that exists, has one box per frame and is not marked failed)."""
+    their box files (a box file with one box per frame, and a record saying that the run
+    ended without error, with this seed and this ``missing`` rule: the box files hold the
+    boxes after it)."""
     from ..data.boxes import read_boxes
 
     todo: list[Task] = []
@@ -379,7 +381,8 @@ def _split_resumable(
         record: dict[str, Any] = {}
         try:  # the record is written after the boxes: with it, the box file is complete
             record = json.loads(_run_record(path).read_text(encoding="utf-8"))
-            if record.get("error") is None and record.get("seed") == t.seed:
+            same = record.get("seed") == t.seed and record.get("missing") == missing
+            if record.get("error") is None and same:
                 boxes = read_boxes(path)
         except (OSError, ValueError):  # missing, or cut short by a kill: run the task again
             boxes = None
@@ -421,6 +424,7 @@ def _box_writer(
             "repeat": run.repeat,
             "seed": run.seed,
             "n_lost": run.n_lost,
+            "missing": missing,
             "error": run.error,
         }
         _run_record(path).write_text(json.dumps(record) + "\n", encoding="utf-8")
@@ -563,8 +567,8 @@ def run_eval(
         not scored.
     resume:
         Do not run a task whose box file is already in ``out`` with its ``.run.json`` record
-        (same seed, no error): read its boxes back instead (untimed; a note in the table says
-        how many).  OPE only.
+        (same seed and ``missing`` rule, no error): read its boxes back instead (untimed; a
+        note in the table says how many).  OPE only.
 
     Returns
     -------
@@ -658,7 +662,7 @@ def run_eval(
         lengths = {name: gt.shape[0] for name, gt in all_gts.items()}
         resumed: list[RunOutcome] = []
         if resume:
-            tasks, resumed = _split_resumable(tasks, box_root, lengths)
+            tasks, resumed = _split_resumable(tasks, box_root, lengths, missing)
             if resumed:
                 notes.append(
                     f"resumed: {len(resumed)} of {len(tasks) + len(resumed)} runs read back from "
