@@ -240,7 +240,8 @@ def test_an_interrupted_run_keeps_the_finished_box_files(tmp_path: Path, fakes: 
         run_eval(data, tmp_path / "out", trackers=["fake:stop"], plots=False,
                  show_progress=False, repeats=2)
     written = sorted(p.name for p in (tmp_path / "out" / "boxes" / "fake_stop").iterdir())
-    assert written == ["A.r1.txt", "A.txt", "B.r1.txt", "B.txt"]
+    assert written == ["A.r1.run.json", "A.r1.txt", "A.run.json", "A.txt",
+                       "B.r1.run.json", "B.r1.txt", "B.run.json", "B.txt"]
     assert not (tmp_path / "out" / "eval_ope.json").exists()
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..data.layouts import LAYOUTS
 from .options import Subparsers
 
 
@@ -34,12 +35,17 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         plots=not args.no_plots,
         cv_threads=args.cv_threads,
         show_progress=not args.no_progress,
+        executor=args.executor,
+        scheduler=args.scheduler,
+        resume=args.resume,
+        layout=args.layout,
     )
     print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
     print(f"(wall time {doc['wall_time']:.1f} s)")
     for key, path in doc["files"].items():
         print(f"wrote {key}: {path}")
     errors = sum(s.get("errors", 0) for s in doc["summary"].values())
+    errors += doc.get("unscored_errors", 0)
     return 1 if errors else 0
 
 
@@ -62,7 +68,19 @@ def add_eval(sub: Subparsers) -> None:
         "figures use -j 1. A frame where a tracker gives no box keeps its last box (--missing "
         "hold); a frame left without a box is a miss in every figure.",
     )
-    p.add_argument("dataset", type=Path, help="folder of OTB sequence folders, or one of them")
+    p.add_argument(
+        "dataset",
+        type=Path,
+        help="dataset folder (OTB, LaSOT, GOT-10k, UAV123, TrackingNet or VOT layout, detected), "
+        "or one sequence folder",
+    )
+    p.add_argument(
+        "--layout",
+        choices=LAYOUTS,
+        default=None,
+        help="the dataset's layout (default: detected); absent frames are handled as each "
+        "benchmark does, and GOT-10k datasets get AO, SR@0.5 and SR@0.75 too",
+    )
     p.add_argument(
         "--trackers",
         default="rcwmil",
@@ -77,7 +95,24 @@ def add_eval(sub: Subparsers) -> None:
         help="score box files DIR/<tracker>/<seq>.txt instead of running trackers",
     )
     p.add_argument("--out", type=Path, required=True, help="output folder")
-    p.add_argument("-j", "--jobs", type=int, default=1, help="parallel processes (default 1)")
+    p.add_argument(
+        "-j", "--jobs", type=int, default=1, help="parallel processes or Dask workers (default 1)"
+    )
+    p.add_argument(
+        "--executor",
+        choices=("serial", "process", "dask"),
+        default=None,
+        help="where tasks run: serial (this process), process (-j worker processes) or dask "
+        "(a LocalCluster of -j workers, or the cluster at --scheduler; needs "
+        "pip install \"wmiltrack[cluster]\"); default serial for -j 1, else process",
+    )
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="with --executor dask: an existing Dask scheduler (tcp://host:8786) whose workers "
+        "see the dataset at the same path",
+    )
     p.add_argument(
         "--repeats",
         type=int,
@@ -114,6 +149,12 @@ def add_eval(sub: Subparsers) -> None:
         default=1,
         help="cv2.setNumThreads(N) in every worker (default 1: one thread per tracker, as "
         "wmiltrack uses; 0 lets OpenCV choose)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="OPE: skip the runs whose box file is already in --out (read back, untimed), so an "
+        "interrupted run finishes only what is missing; failed runs are run again",
     )
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

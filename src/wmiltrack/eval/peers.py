@@ -46,6 +46,7 @@ __all__ = [
     "available_opencv_trackers",
     "make_tracker",
     "parse_opencv_name",
+    "parse_spec",
 ]
 
 #: Names of the OpenCV trackers that :class:`OpenCVTracker` wraps.
@@ -323,6 +324,51 @@ class OpenCVTracker:
         return TrackResult(box, math.nan, False)
 
 
+def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
+    """Split a tracker spec into its name and its parameter overrides.
+
+    ``"rcwmil:num_selected=30:learning_rate=0.85"`` gives ``("rcwmil", {"num_selected": 30,
+    "learning_rate": 0.85})``; ``"opencv:MIL"`` stays ``("opencv:MIL", {})`` (a part without
+    ``=`` belongs to the name).  Values are read with :func:`ast.literal_eval` (numbers,
+    ``True``, tuples...) and kept as strings when that fails.
+
+    Parameters
+    ----------
+    spec:
+        The spec.
+
+    Returns
+    -------
+    tuple
+        ``(name, overrides)``.
+
+    Raises
+    ------
+    ValueError
+        An override with an empty key, or a key given twice.
+    """
+    import ast
+
+    name_parts: list[str] = []
+    overrides: dict[str, Any] = {}
+    for part in spec.strip().split(":"):
+        if "=" not in part:
+            name_parts.append(part.strip())
+            continue
+        key, _, text = part.partition("=")
+        key = key.strip()
+        if not key.isidentifier():
+            raise ValueError(f"bad override {part!r} in tracker spec {spec!r}: want name=value")
+        if key in overrides:
+            raise ValueError(f"{key!r} given twice in tracker spec {spec!r}")
+        text = text.strip()
+        try:
+            overrides[key] = ast.literal_eval(text)
+        except (ValueError, SyntaxError):
+            overrides[key] = text
+    return ":".join(name_parts), overrides
+
+
 def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     """Create a tracker from a name.
 
@@ -331,11 +377,14 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     spec:
         ``"opencv:NAME"`` (NAME case-insensitive, one of :data:`OPENCV_TRACKERS`) for an
         :class:`OpenCVTracker`; anything else is a wmiltrack variant name (``"rcwmil"``,
-        ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``) given to ``wmiltrack.Tracker``.
+        ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``) given to ``wmiltrack.Tracker``;
+        either may end in ``:name=value`` overrides (``"rcwmil:num_selected=30"``, see
+        :func:`parse_spec`), so a parameter sweep is a list of specs.
     seed:
         Random seed of the tracker.
     **params:
-        Parameters of the tracker (OpenCV Params attributes, or ``wmiltrack.Tracker``'s).
+        Parameters of the tracker (OpenCV Params attributes, or ``wmiltrack.Tracker``'s);
+        they take precedence over the spec's overrides.
 
     Returns
     -------
@@ -349,10 +398,11 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     TrackerUnavailable
         The OpenCV tracker is not in the installed ``cv2``.
     """
-    s = spec.strip()
+    s, overrides = parse_spec(spec)
+    kw = {**overrides, **params}
     if s.lower().startswith(_PREFIX):
-        return OpenCVTracker(s[len(_PREFIX) :], seed=seed, **params)
+        return OpenCVTracker(s[len(_PREFIX) :], seed=seed, **kw)
     from ..engine.tracker import Tracker  # the compiled core is loaded only now
 
-    tracker: TrackerLike = Tracker(s, seed=seed, **params)
+    tracker: TrackerLike = Tracker(s, seed=seed, **kw)
     return tracker

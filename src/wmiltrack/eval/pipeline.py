@@ -3,11 +3,18 @@
 Usage::
 
     wmiltrack eval DATASET --trackers rcwmil,fct,opencv:MIL --out DIR [-j N] [--repeats R]
+                   [--executor serial|process|dask] [--scheduler ADDRESS] [--resume]
+                   [--layout otb|lasot|got10k|uav123|trackingnet|vot]
                    [--protocol ope|vot] [--sequences A,B] [--seed S]
     wmiltrack eval DATASET --results BOXDIR --out DIR      # score another tracker's files
 
 ``DATASET`` is a folder of OTB sequence folders (``<Seq>/img/`` + ``groundtruth_rect.txt``,
-optionally ``start.txt``) or one such sequence folder.
+optionally ``start.txt``) or one such sequence folder, or a dataset in another layout of
+:mod:`wmiltrack.data.layouts` (LaSOT, GOT-10k, UAV123, TrackingNet, VOT; detected, or named
+with ``--layout``).  Absent frames are scored as each benchmark does (LaSOT: failures; the
+others: left out); GOT-10k datasets also get AO, SR@0.5 and SR@0.75; sequences annotated on
+the first frame only are run but not scored.  ``--resume`` (OPE) skips the runs whose box file
+and ``.run.json`` record are already in ``--out``.
 
 Protocols
 ---------
@@ -45,7 +52,11 @@ Stages
 ------
 :mod:`~wmiltrack.eval.runner` runs tasks, one per (tracker, sequence, seed), through an
 executor; each finished task's box file is written at once, so a failing task (reported in
-the table and the JSON) or an interrupted run keeps every finished result.
+the table and the JSON) or an interrupted run keeps every finished result.  Executors:
+``serial`` (``-j 1``), ``process`` (``-j N`` worker processes) and ``dask``
+(:class:`~wmiltrack.eval.cluster.DaskExecutor`: a ``LocalCluster`` of ``-j N`` workers, or an
+existing cluster with ``--scheduler ADDRESS``; a failed task is retried once there).
+Tracker specs may carry overrides (``rcwmil:num_selected=30``), so a sweep is a list of specs.
 :mod:`~wmiltrack.eval.scoring` scores the runs and :mod:`~wmiltrack.eval.report` writes the
 table, JSON and plots.
 
@@ -54,7 +65,8 @@ Outputs in ``--out DIR``
 ``eval_<protocol>.md`` (table), ``eval_<protocol>.json`` (every figure per tracker and
 sequence, per repeat), ``success_ope.png`` and ``precision_ope.png`` (OPE), and the boxes:
 ``boxes/<tracker>/<seq>.txt`` (OPE; repeat ``k`` > 0 in ``<seq>.r<k>.txt``) or
-``boxes_vot/...`` (VOT; NaN rows on frames not tracked).  The box files hold the boxes that
+``boxes_vot/...`` (VOT; NaN rows on frames not tracked), each with a ``<seq>[.r<k>].run.json``
+record (seed, error, frames reported lost) that ``--resume`` reads.  The box files hold the boxes that
 were scored (after the ``--missing`` rule; NaN rows are misses).  Tracker names are made
 filesystem-safe (``opencv:MIL`` -> ``opencv_MIL``).  ``--results DIR`` reads exactly this
 layout (``DIR/<tracker>/<seq>.txt``), e.g. ``--results OUT/boxes``.
@@ -67,6 +79,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -76,6 +89,7 @@ import numpy.typing as npt
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 from .peers import TrackerUnavailable
 from .report import (
+    box_path,
     caption,
     environment,
     format_ope_table,
@@ -93,6 +107,8 @@ __all__ = ["make_tasks", "run_eval", "run_tasks"]
 
 FloatArray = npt.NDArray[np.float64]
 Protocol = Literal["ope", "vot"]
+ExecutorName = Literal["serial", "process", "dask"]
+EXECUTORS: tuple[ExecutorName, ...] = ("serial", "process", "dask")
 REFERENCE = "opencv:MIL"
 
 
@@ -103,6 +119,9 @@ def make_tasks(
     protocol: Protocol = "ope",
     skip: int = 5,
     burnin: int = 10,
+    *,
+    layout: str = "otb",
+    dataset: str | None = None,
 ) -> list[Task]:
     """Every (sequence, seed, tracker) task, sequence by sequence, the trackers interleaved
     within each seed (so slow drifts of the machine hit all of them alike).
@@ -117,13 +136,15 @@ def make_tasks(
         One seed per repeat.
     protocol, skip, burnin:
         Protocol settings.
+    layout, dataset:
+        For a layout other than OTB: ``paths`` are sequence names in the ``dataset`` folder.
 
     Returns
     -------
     list of Task
     """
     return [
-        Task(t, str(p), seed, r, protocol, skip, burnin)
+        Task(t, str(p), seed, r, protocol, skip, burnin, layout, dataset)
         for p in paths
         for r, seed in enumerate(seeds)
         for t in trackers
@@ -213,6 +234,81 @@ def _ground_truths(paths: Sequence[Path]) -> dict[str, FloatArray]:
     return out
 
 
+@dataclass(frozen=True)
+class _Dataset:
+    layout: str
+    root: Path
+    paths: list[Path]  # OTB: sequence folders; other layouts: sequence names
+    gts: dict[str, FloatArray]
+    metas: dict[str, dict[str, Any]]
+
+
+def _open_dataset(dataset: Path, layout: str | None, names: Sequence[str] | None) -> _Dataset:
+    """The sequences' names and ground truths (no image is decoded but OTB's first ones)."""
+    from ..data.layouts import LayoutError, detect_layout, load_layout
+
+    if layout is None:
+        try:
+            layout = detect_layout(dataset)
+        except LayoutError:
+            layout = "otb"  # the OTB reader's own message says what is wrong
+    if layout == "otb":
+        paths = _sequence_paths(dataset, names)
+        gts = _ground_truths(paths)
+        return _Dataset("otb", dataset, paths, gts, {n: {"layout": "otb"} for n in gts})
+    seqs = load_layout(dataset, layout, list(names) if names else None)
+    if not seqs:
+        raise FileNotFoundError(f"no sequence in {dataset}")
+    gts = {}
+    metas: dict[str, dict[str, Any]] = {}
+    for seq in seqs:
+        assert seq.groundtruth is not None  # every layout loader reads it
+        gts[seq.name] = np.asarray(seq.groundtruth, dtype=np.float64)
+        metas[seq.name] = dict(seq.meta)
+    return _Dataset(layout, dataset, [Path(n) for n in gts], gts, metas)
+
+
+def _got10k_section(
+    runs: Sequence[RunOutcome],
+    gts: dict[str, FloatArray],
+    metas: dict[str, dict[str, Any]],
+    missing: Missing,
+) -> tuple[dict[str, Any], str]:
+    """GOT-10k's AO, SR@0.5 and SR@0.75 per tracker (the toolkit's overall figures: frames of
+    every sequence pooled), per repeat and as mean ± std over repeats; JSON part and table."""
+    from .got10k_metrics import got10k_aggregate, got10k_metrics
+
+    per: dict[str, dict[int, list[Any]]] = {}
+    for run in runs:
+        if run.sequence not in gts:
+            continue
+        res = metas[run.sequence].get("resolution")
+        bound = (float(res[0]), float(res[1])) if res is not None else None
+        fig = got10k_metrics(run_boxes(run, missing), gts[run.sequence], bound=bound)
+        per.setdefault(run.tracker, {}).setdefault(run.repeat, []).append(fig)
+    doc: dict[str, Any] = {}
+    lines = [
+        "",
+        "GOT-10k figures (got10k toolkit: first frame skipped, frames with the target absent or "
+        "fully covered left out, frames of all sequences pooled); mean ± std over repeats.",
+        "",
+        "| Tracker | AO | SR@0.5 | SR@0.75 |",
+        "|---|---|---|---|",
+    ]
+    for tracker, reps in per.items():
+        aggs = [got10k_aggregate(reps[r]) for r in sorted(reps)]
+        entry: dict[str, Any] = {"per_repeat": [a.to_dict() for a in aggs]}
+        cells = []
+        for key in ("ao", "sr50", "sr75"):
+            vals = np.array([getattr(a.pooled, key) for a in aggs], dtype=np.float64)
+            entry[key] = float(np.mean(vals))
+            entry[f"{key}_std"] = float(np.std(vals))
+            cells.append(f"{entry[key]:.3f} ± {entry[f'{key}_std']:.3f}")
+        doc[tracker] = entry
+        lines.append(f"| {tracker} | " + " | ".join(cells) + " |")
+    return doc, "\n".join(lines) + "\n"
+
+
 def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
     from .peers import make_tracker
 
@@ -228,15 +324,110 @@ def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
     return ok
 
 
+def _executor(
+    executor: Executor | ExecutorName | None,
+    jobs: int,
+    cv_threads: int | None,
+    scheduler: str | None,
+    say: Callable[[str], None],
+) -> Executor:
+    if executor is None:
+        executor = "serial" if jobs == 1 else "process"
+    if scheduler is not None and executor != "dask":
+        raise ValueError("--scheduler needs --executor dask")
+    if not isinstance(executor, str):
+        return executor
+    if executor == "serial":
+        if jobs != 1:
+            raise ValueError(f"--executor serial runs one task at a time; -j {jobs} needs another")
+        return SerialExecutor(cv_threads)
+    if executor == "process":
+        return ProcessExecutor(jobs, cv_threads)
+    if executor == "dask":
+        from .cluster import DaskExecutor, require_distributed
+
+        require_distributed()  # fail before anything runs, saying how to install it
+        return DaskExecutor(jobs, cv_threads, scheduler=scheduler, log=say)
+    raise ValueError(f"executor must be one of {', '.join(EXECUTORS)}, not {executor!r}")
+
+
+def _executor_name(executor: Executor | ExecutorName | None, jobs: int) -> str:
+    if executor is None:
+        return "serial" if jobs == 1 else "process"
+    return executor if isinstance(executor, str) else type(executor).__name__
+
+
+def _run_record(path: Path) -> Path:
+    """``<seq>[.r<k>].run.json`` beside a box file: the run's seed, error and ``n_lost``
+    (what ``--resume`` needs besides the boxes: a failed run or another seed is run again)."""
+    return path.with_suffix(".run.json")
+
+
+def _split_resumable(
+    tasks: Sequence[Task], box_root: Path, lengths: dict[str, int], missing: Missing
+) -> tuple[list[Task], list[RunOutcome]]:
+    """``--resume``: the tasks still to run, and the outcomes of the others read back from
+    their box files (a box file with one box per frame, and a record saying that the run
+    ended without error, with this seed and this ``missing`` rule: the box files hold the
+    boxes after it)."""
+    from ..data.boxes import read_boxes
+
+    todo: list[Task] = []
+    done: list[RunOutcome] = []
+    for t in tasks:
+        seq = Path(t.sequence).name
+        path = box_path(box_root, t.tracker, seq, t.repeat)
+        boxes = None
+        record: dict[str, Any] = {}
+        try:  # the record is written after the boxes: with it, the box file is complete
+            record = json.loads(_run_record(path).read_text(encoding="utf-8"))
+            same = record.get("seed") == t.seed and record.get("missing") == missing
+            if record.get("error") is None and same:
+                boxes = read_boxes(path)
+        except (OSError, ValueError):  # missing, or cut short by a kill: run the task again
+            boxes = None
+        if boxes is None or boxes.shape != (lengths[seq], 4):
+            todo.append(t)
+            continue
+        oks = np.all(np.isfinite(boxes), axis=1)
+        n_lost = int(record.get("n_lost", 0))
+        done.append(RunOutcome(t.tracker, seq, t.repeat, t.seed, boxes, oks, n_lost=n_lost))
+    return todo, done
+
+
+def _full_length(run: RunOutcome, lengths: dict[str, int]) -> RunOutcome:
+    """A failed task's outcome with NaN boxes on every frame when it has none at all (its
+    sequence was never loaded, e.g. a Dask worker died under it)."""
+    n = lengths.get(run.sequence)
+    if n is None or run.boxes.shape[0] == n or run.boxes.shape[0] != 0:
+        return run
+    return replace(run, boxes=np.full((n, 4), np.nan), oks=np.zeros(n, dtype=bool))
+
+
 def _box_writer(
-    box_root: Path, protocol: Protocol, missing: Missing, say: Callable[[str], None]
+    box_root: Path,
+    protocol: Protocol,
+    missing: Missing,
+    say: Callable[[str], None],
+    lengths: dict[str, int],
 ) -> Callable[[RunOutcome], None]:
     """What to do with each finished task: write its box file (the scored boxes for OPE) and
     report a failure at once."""
 
     def save(run: RunOutcome) -> None:
+        run = _full_length(run, lengths)
         boxes = run_boxes(run, missing) if protocol == "ope" else run.boxes
-        write_run_boxes(box_root, run, boxes)
+        path = write_run_boxes(box_root, run, boxes)
+        record = {
+            "tracker": run.tracker,
+            "sequence": run.sequence,
+            "repeat": run.repeat,
+            "seed": run.seed,
+            "n_lost": run.n_lost,
+            "missing": missing,
+            "error": run.error,
+        }
+        _run_record(path).write_text(json.dumps(record) + "\n", encoding="utf-8")
         if run.error is not None:
             say(f"{run.tracker} on {run.sequence} (seed {run.seed}) failed: {run.error}")
 
@@ -254,17 +445,28 @@ def _score_and_write(
     notes: list[str],
     want_plots: bool,
     files: dict[str, str],
+    ds: _Dataset,
 ) -> dict[str, Any]:
     """Score stage and report stage: the table (captioned), plots; returns the JSON document
     (without the run's own fields) and records the files in ``files``."""
     env = environment()
     missing = settings["missing"]
     title = caption(env, {**settings, "missing": missing if protocol == "ope" else None})
+    got10k: dict[str, Any] | None = None
     if protocol == "ope":
-        scored = score_ope(runs, gts, missing=missing, reference=REFERENCE)
+        fail = [n for n in gts if ds.metas[n].get("absent_policy") == "fail"]
+        scored = score_ope(runs, gts, missing=missing, reference=REFERENCE, absent_fail=fail)
         table = format_ope_table(
             scored, repeats, timed, title=title, missing=missing, reference=REFERENCE
         )
+        if fail:
+            notes.append(
+                f"{len(fail)} sequence(s) ({ds.layout}) count frames where the target is absent "
+                "as failures, as the benchmark's toolkit does"
+            )
+        if ds.layout == "got10k":
+            got10k, section = _got10k_section(runs, gts, ds.metas, missing)
+            table += section
     else:
         scored = score_vot(runs, reference=REFERENCE)
         table = format_vot_table(scored, repeats, settings["skip"], settings["burnin"], title=title)
@@ -286,6 +488,7 @@ def _score_and_write(
         "notes": notes,
         "summary": scored["summary"],
         "results": scored["results"],
+        "got10k": got10k,
         "files": files,
     }
 
@@ -308,7 +511,10 @@ def run_eval(
     cv_threads: int | None = 1,
     show_progress: bool = True,
     log: Callable[[str], None] | None = None,
-    executor: Executor | None = None,
+    executor: Executor | ExecutorName | None = None,
+    scheduler: str | None = None,
+    resume: bool = False,
+    layout: str | None = None,
 ) -> dict[str, Any]:
     """Run (or read) and score trackers on a dataset; write the table, JSON, plots and boxes.
 
@@ -347,8 +553,22 @@ def run_eval(
     log:
         Receives notes (skipped trackers, odd files); default prints to stderr.
     executor:
-        Runs the tasks (default: :class:`~wmiltrack.eval.runner.SerialExecutor` for
-        ``jobs == 1``, else :class:`~wmiltrack.eval.runner.ProcessExecutor`).
+        Runs the tasks: an executor object, or ``"serial"``, ``"process"`` (``jobs``
+        processes) or ``"dask"`` (:class:`~wmiltrack.eval.cluster.DaskExecutor`: a
+        ``LocalCluster`` of ``jobs`` workers, or the cluster at ``scheduler``).  Default:
+        serial for ``jobs == 1``, else process.
+    scheduler:
+        Address of a Dask scheduler (``tcp://host:8786``) for ``executor="dask"``.
+    layout:
+        Dataset layout (:data:`wmiltrack.data.layouts.LAYOUTS`); ``None`` detects it
+        (:func:`wmiltrack.data.layouts.detect_layout`).  Each benchmark's absent frames are
+        handled as its toolkit does (LaSOT: failures); GOT-10k datasets get AO, SR@0.5 and
+        SR@0.75 too; sequences annotated on the first frame only are run (boxes written) but
+        not scored.
+    resume:
+        Do not run a task whose box file is already in ``out`` with its ``.run.json`` record
+        (same seed and ``missing`` rule, no error): read its boxes back instead (untimed; a
+        note in the table says how many).  OPE only.
 
     Returns
     -------
@@ -364,7 +584,8 @@ def run_eval(
     FileNotFoundError
         Missing dataset, sequences or result files.
     RuntimeError
-        matplotlib missing while plots are wanted (the message says how to install it).
+        matplotlib missing while plots are wanted, or ``distributed`` missing with
+        ``executor="dask"`` (the messages say how to install them).
     KeyboardInterrupt
         Passed on after the box files of every finished task are written.
     """
@@ -377,6 +598,12 @@ def run_eval(
         raise ValueError(f"protocol must be 'ope' or 'vot', not {protocol!r}")
     if missing not in ("hold", "miss"):
         raise ValueError(f"missing must be 'hold' or 'miss', not {missing!r}")
+    if resume and (protocol != "ope" or results is not None):
+        raise ValueError(
+            "--resume reads OPE box files back; the VOT protocol's figures need the run itself"
+            if results is None
+            else "--resume is for running trackers, not with --results"
+        )
     if results is not None and protocol == "vot":
         raise ValueError(
             "--results scores box files with the OPE protocol; the VOT protocol "
@@ -389,14 +616,23 @@ def run_eval(
         require_matplotlib()  # fail before a long run, not after it
     dataset_p = Path(dataset)
     out_p = Path(out)
-    paths = _sequence_paths(dataset_p, sequences)
-    gts = _ground_truths(paths)
+    ds = _open_dataset(dataset_p, layout, sequences)
+    paths, all_gts = ds.paths, ds.gts
     notes: list[str] = []
+    first_only = [n for n in all_gts if ds.metas[n].get("first_frame_only")]
+    gts = {n: g for n, g in all_gts.items() if n not in first_only}
+    if first_only:
+        notes.append(
+            f"not scored: {len(first_only)} sequence(s) annotated on the first frame only "
+            "(the benchmark's server scores them); their boxes are written"
+        )
     seeds = tuple(seed + r for r in range(repeats))
     t_start = time.perf_counter()
     files: dict[str, str] = {}
     out_p.mkdir(parents=True, exist_ok=True)
 
+    n_resumed = 0
+    unscored_errors = 0
     if results is not None:
         runs = read_results(Path(results), gts, notes)
         timed = False
@@ -411,20 +647,56 @@ def run_eval(
             raise ValueError("no tracker left to run")
         box_root = out_p / ("boxes" if protocol == "ope" else "boxes_vot")
         files["boxes"] = str(box_root)
-        tasks = make_tasks(paths, tracker_names, seeds, protocol, skip, burnin)
-        if executor is None:
-            executor = (
-                SerialExecutor(cv_threads) if jobs == 1 else ProcessExecutor(jobs, cv_threads)
+        # absolute paths: the workers of a cluster may run in other folders
+        if ds.layout == "otb":
+            tasks = make_tasks(
+                [p.resolve() for p in paths], tracker_names, seeds, protocol, skip, burnin
             )
-        runs = run_tasks(
-            tasks, executor, _box_writer(box_root, protocol, missing, say), show_progress
+        else:
+            tasks = make_tasks(
+                paths, tracker_names, seeds, protocol, skip, burnin,
+                layout=ds.layout, dataset=str(ds.root.resolve()),
+            )
+        all_tasks = list(tasks)
+        ex = _executor(executor, jobs, cv_threads, scheduler, say)
+        lengths = {name: gt.shape[0] for name, gt in all_gts.items()}
+        resumed: list[RunOutcome] = []
+        if resume:
+            tasks, resumed = _split_resumable(tasks, box_root, lengths, missing)
+            if resumed:
+                notes.append(
+                    f"resumed: {len(resumed)} of {len(tasks) + len(resumed)} runs read back from "
+                    f"their box files in {box_root} (untimed: no FPS; the mean rows' FPS is over the "
+                    "runs made now)"
+                )
+                say(notes[-1])
+        new = run_tasks(
+            tasks,
+            ex,
+            _box_writer(box_root, protocol, missing, say, lengths),
+            show_progress,
+        ) if tasks else []
+        order = {(t, s, r): i for i, (t, s, r) in enumerate(
+            (t.tracker, Path(t.sequence).name, t.repeat) for t in all_tasks
+        )}
+        runs = sorted(
+            [_full_length(r, lengths) for r in new] + resumed,
+            key=lambda r: order.get((r.tracker, r.sequence, r.repeat), len(order)),
         )
+        for r in runs:
+            if r.sequence not in gts and r.error is not None:
+                unscored_errors += 1
+                notes.append(f"{r.tracker} on {r.sequence} (seed {r.seed}, not scored): {r.error}")
+        runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
+        n_resumed = len(resumed)
         timed = True
         n_repeats = repeats
     wall = time.perf_counter() - t_start
 
     settings = {
         "jobs": jobs,
+        "executor": None if results is not None else _executor_name(executor, jobs),
+        "resumed_runs": n_resumed,
         "missing": missing,
         "skip": skip,
         "burnin": burnin,
@@ -436,10 +708,14 @@ def run_eval(
     }
     source = "run" if results is None else f"results:{Path(results).resolve()}"
     doc = _score_and_write(
-        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots, files
+        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots and bool(gts),
+        files, ds,
     )
     doc.update(
         dataset=str(dataset_p.resolve()),
+        layout=ds.layout,
+        unscored_sequences=first_only,
+        unscored_errors=unscored_errors,
         trackers=tracker_names,
         box_folders={t: safe_name(t) for t in tracker_names},
         seeds=settings["seeds"],

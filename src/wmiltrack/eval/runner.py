@@ -290,7 +290,8 @@ class Task:
     tracker:
         Tracker spec for :func:`wmiltrack.eval.peers.make_tracker`.
     sequence:
-        Path of the OTB sequence (:func:`wmiltrack.data.sequences.load_otb_sequence`).
+        Path of the OTB sequence (:func:`wmiltrack.data.sequences.load_otb_sequence`), or for
+        another layout the sequence's name in ``dataset``.
     seed:
         Tracker seed.
     repeat:
@@ -300,6 +301,12 @@ class Task:
         re-initialised ``skip`` frames after each failure; ``burnin`` frames left out).
     skip, burnin:
         VOT settings.
+    layout:
+        Dataset layout (:data:`wmiltrack.data.layouts.LAYOUTS`); ``"otb"`` reads ``sequence``
+        as a folder.
+    dataset:
+        For the other layouts: the dataset folder :func:`wmiltrack.data.layouts.load_layout`
+        finds ``sequence`` in.
     """
 
     tracker: str
@@ -309,6 +316,8 @@ class Task:
     protocol: Literal["ope", "vot"] = "ope"
     skip: int = 5
     burnin: int = 10
+    layout: str = "otb"
+    dataset: str | None = None
 
 
 @dataclass(frozen=True)
@@ -389,20 +398,28 @@ def set_cv_threads(n: int | None) -> int:
 
 
 # one decoded sequence per process: tasks come sequence by sequence, so each is decoded once
-_decoded: dict[str, tuple[str, FloatArray, list[Frame]]] = {}
+_decoded: dict[tuple[str, str | None, str], tuple[str, FloatArray, list[Frame]]] = {}
 
 
-def _load(path: str) -> tuple[str, FloatArray, list[Frame]]:
-    if path not in _decoded:
-        from ..data.sequences import load_otb_sequence
-
+def _load(task: Task) -> tuple[str, FloatArray, list[Frame]]:
+    key = (task.layout, task.dataset, task.sequence)
+    if key not in _decoded:
         _decoded.clear()
-        seq = load_otb_sequence(path)
-        if seq.groundtruth is None:  # pragma: no cover - the OTB loader always reads it
-            raise ValueError(f"{path}: no ground truth")
+        if task.layout == "otb":
+            from ..data.sequences import load_otb_sequence
+
+            seq = load_otb_sequence(task.sequence)
+        else:
+            from ..data.layouts import load_layout
+
+            if task.dataset is None:
+                raise ValueError(f"a {task.layout} task needs the dataset folder")
+            seq = load_layout(task.dataset, task.layout, [task.sequence])[0]
+        if seq.groundtruth is None:  # pragma: no cover - every loader reads it
+            raise ValueError(f"{task.sequence}: no ground truth")
         gt = np.asarray(seq.groundtruth, dtype=np.float64)
-        _decoded[path] = (seq.name, gt, seq.load())  # decoded before any clock starts
-    return _decoded[path]
+        _decoded[key] = (seq.name, gt, seq.load())  # decoded before any clock starts
+    return _decoded[key]
 
 
 class _TimedTracker:
@@ -510,7 +527,7 @@ def run_task(task: Task) -> RunOutcome:
     name = Path(task.sequence).name
     n = 0
     try:
-        name, gt, frames = _load(task.sequence)
+        name, gt, frames = _load(task)
         n = len(frames)
         if task.protocol == "vot":
             return _run_vot(task, name, frames, gt)

@@ -25,12 +25,13 @@ sequences computed per repeat, then mean and standard deviation over the repeats
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 
+from .benchmark_scores import count_absent_as_failures
 from .metrics import hold_missing, ope_metrics
 from .runner import RunOutcome
 
@@ -204,8 +205,13 @@ def score_ope(
     *,
     missing: Missing = "hold",
     reference: str = "opencv:MIL",
+    absent_fail: Collection[str] = (),
 ) -> dict[str, Any]:
     """Score OPE runs: figures per run, per (tracker, sequence) and per tracker.
+
+    Sequences named in ``absent_fail`` (LaSOT's) count their frames without ground truth as
+    failures (:func:`wmiltrack.eval.benchmark_scores.count_absent_as_failures`); elsewhere
+    those frames are left out.
 
     Parameters
     ----------
@@ -234,7 +240,10 @@ def score_ope(
     summary: dict[str, Any] = {}
 
     def figures(run: RunOutcome, seq_name: str) -> dict[str, Any]:
-        fig = ope_metrics(run_boxes(run, missing), gts[seq_name]).to_dict()
+        res = ope_metrics(run_boxes(run, missing), gts[seq_name])
+        if seq_name in absent_fail:
+            res = count_absent_as_failures(res)
+        fig = res.to_dict()
         fig["n_lost"] = run.n_lost
         return fig
 
