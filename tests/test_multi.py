@@ -30,17 +30,19 @@ def single(variant: str, seed: int, frames: list[np.ndarray], box: tuple[float, 
     return [t.update(f).box for f in frames[start + 1:]]
 
 
-@pytest.mark.parametrize("variant", ["rcwmil", "mil"])
-@pytest.mark.parametrize("threads", [1, 2])
-def test_each_target_gives_the_boxes_of_a_single_tracker(two_targets, variant: str, threads: int) -> None:
+@pytest.mark.parametrize("variant", ["rcwmil", "mil", "rcwmil-plus"])
+@pytest.mark.parametrize(("threads", "share"), [(1, "never"), (2, "never"), (1, "always"), (2, "always")])
+def test_each_target_gives_the_boxes_of_a_single_tracker(two_targets, variant: str, threads: int,
+                                                         share: str) -> None:
     frames, boxes, _, _ = two_targets
-    with MultiTracker(variant, seed=5, threads=threads) as mt:
+    with MultiTracker(variant, seed=5, threads=threads, share=share) as mt:
         ids = [mt.add(frames[0], b) for b in boxes]
         assert ids == [0, 1]
         got: dict[int, list[tuple[float, ...]]] = {0: [], 1: []}
         for f in frames[1:]:
             for i, r in mt.update(f).items():
                 got[i].append(r.box)
+            assert mt.last_shared == (share == "always")
     for i, b in enumerate(boxes):
         assert got[i] == single(variant, 5 + i, frames, b)
 
@@ -182,3 +184,21 @@ def test_track_cli_boxes_errors(tmp_path, capsys) -> None:
     assert "OpenCV tracker" in capsys.readouterr().err
     assert main(["track", str(folder), "--boxes", str(one), "--box", "1,1,5,5"]) == 1
     assert "not both" in capsys.readouterr().err
+
+
+def test_one_integral_image_when_it_covers_fewer_pixels() -> None:
+    rng = np.random.default_rng(0)
+    small = [rng.integers(0, 256, (240, 320, 3), dtype=np.uint8) for _ in range(3)]
+    mt = MultiTracker("rcwmil", seed=0, threads=1)
+    for x, y in [(100, 80), (130, 90), (110, 120)]:  # close targets: their regions overlap
+        mt.add(small[0], (x, y, 40, 40))
+    mt.update(small[1])
+    assert mt.last_shared
+    big = [rng.integers(0, 256, (720, 1280, 3), dtype=np.uint8) for _ in range(2)]
+    far = MultiTracker("rcwmil", seed=0, threads=1)
+    far.add(big[0], (40, 40, 40, 40))
+    far.add(big[0], (1180, 620, 40, 40))  # the union would be nearly the whole frame
+    far.update(big[1])
+    assert not far.last_shared
+    with pytest.raises(ValueError, match="share"):
+        MultiTracker("rcwmil", share="sometimes")

@@ -3,9 +3,11 @@
 Target ``i`` (the ``i``-th successful :meth:`MultiTracker.add`) runs exactly the tracker
 ``Tracker(variant, seed=seed + i)`` would, so its boxes are those of a single tracker started on
 the same frame with the same box. What the targets share is the per-frame work that does not
-depend on the target: the frame is checked and converted once, and the targets' updates run in
-a thread pool (the compiled core releases the GIL, so targets proceed in parallel on several
-cores).
+depend on the target: the frame is checked and converted once; one integral image is built over
+the union of the targets' search regions when that covers fewer pixels than their separate
+regions (many or close targets: up to the whole frame), and every target reads it, with the
+same result as its own table; and the targets' updates run in a thread pool (the compiled core
+releases the GIL, so targets proceed in parallel on several cores).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _core
 from .frames import as_frame
 from .params import Params
 from .result import TrackResult
@@ -36,6 +39,9 @@ class MultiTracker:
     threads : int, optional
         Worker threads for :meth:`update`; ``None`` = one per core (``os.cpu_count()``),
         ``1`` = update the targets one after the other in the calling thread.
+    share : {"auto", "always", "never"}
+        One integral image for all targets: when it covers fewer pixels than the targets'
+        separate regions (``"auto"``), always, or never. Boxes are the same either way.
     params : Params, optional
         Start from these parameters instead of the preset's defaults.
     **overrides
@@ -53,12 +59,18 @@ class MultiTracker:
     """
 
     def __init__(self, variant: str = "rcwmil", *, seed: int = 0, threads: int | None = None,
-                 params: Params | None = None, **overrides: Any) -> None:
+                 share: str = "auto", params: Params | None = None, **overrides: Any) -> None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed must be a non-negative int, got {seed!r}")
         if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int)
                                     or threads < 1):
             raise ValueError(f"threads must be None or an int >= 1, got {threads!r}")
+        if share not in ("auto", "always", "never"):
+            raise ValueError(f"share must be 'auto', 'always' or 'never', got {share!r}")
+        self._share = share
+        self._shared = _core.IntegralImage()
+        self.last_shared = False
+        """Whether the last :meth:`update` built one integral image for all targets."""
         # Validate the preset and overrides now, not at the first add().
         self._params = (Params.for_variant(variant, **overrides) if params is None
                         else params.replace(**overrides) if overrides else params)
@@ -117,13 +129,15 @@ class MultiTracker:
         items = list(self._targets.items())
         if not items:
             return {}
+        shared = self._prepare(img, [t for _, t in items])
         if self._threads == 1 or len(items) == 1:
-            outcomes = [self._step(t, img) for _, t in items]
+            outcomes = [self._step(t, img, shared) for _, t in items]
         else:
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(max_workers=self._threads,
                                                 thread_name_prefix="wmiltrack")
-            outcomes = list(self._pool.map(lambda t: self._step(t, img), [t for _, t in items]))
+            outcomes = list(self._pool.map(lambda t: self._step(t, img, shared),
+                                           [t for _, t in items]))
         results: dict[int, TrackResult] = {}
         failed: list[str] = []
         for (target_id, _), outcome in zip(items, outcomes):
@@ -157,9 +171,34 @@ class MultiTracker:
                 f"targets={self.ids}, threads={self._threads})")
 
     # -- internals -------------------------------------------------------------------------
+    def _prepare(self, img: np.ndarray, trackers: list[Tracker]) -> _core.IntegralImage | None:
+        """One luma integral image over the union of the targets' regions, or None when the
+        targets are better served by their own (fewer pixels apart, or other channels)."""
+        self.last_shared = False
+        if self._share == "never" or len(trackers) < 2 or any(t.uses_channels for t in trackers):
+            return None
+        fh, fw = img.shape[:2]
+        rects = []
+        for t in trackers:
+            x, y, w, h = t.search_region()
+            x0, y0, x1, y1 = max(x, 0), max(y, 0), min(x + w, fw), min(y + h, fh)
+            if x1 > x0 and y1 > y0:
+                rects.append((x0, y0, x1, y1))
+        if len(rects) < 2:
+            return None
+        ux0, uy0 = min(r[0] for r in rects), min(r[1] for r in rects)
+        ux1, uy1 = max(r[2] for r in rects), max(r[3] for r in rects)
+        separate = sum((r[2] - r[0]) * (r[3] - r[1]) for r in rects)
+        if self._share == "auto" and (ux1 - ux0) * (uy1 - uy0) > separate:
+            return None
+        self._shared.compute(img, (ux0, uy0, ux1 - ux0, uy1 - uy0))
+        self.last_shared = True
+        return self._shared
+
     @staticmethod
-    def _step(tracker: Tracker, img: np.ndarray) -> TrackResult | Exception:
+    def _step(tracker: Tracker, img: np.ndarray,
+              shared: _core.IntegralImage | None) -> TrackResult | Exception:
         try:
-            return tracker.update(img)
+            return tracker.update(img, integral=shared)
         except (ValueError, TypeError) as exc:  # reported per target by update()
             return exc

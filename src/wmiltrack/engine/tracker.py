@@ -41,6 +41,15 @@ class NotInitializedError(ValueError):
     """``update`` was called before ``init``."""
 
 
+def _covers(ii: _core.IntegralImage, roi: IntBox, frame_wh: tuple[int, int]) -> bool:
+    """Whether a luma integral image holds ``roi`` clipped to a ``frame_wh`` frame."""
+    x, y, w, h = roi
+    x0, y0 = max(x, 0), max(y, 0)
+    x1, y1 = min(x + w, frame_wh[0]), min(y + h, frame_wh[1])
+    return (ii.num_channels == 1 and ii.channels == (_core.CH_LUMA,) and ii.x0 <= x0 and ii.y0 <= y0
+            and ii.x0 + ii.width >= x1 and ii.y0 + ii.height >= y1)
+
+
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 
@@ -215,9 +224,28 @@ class Tracker:
 
     reinit = init
 
+    def search_region(self) -> tuple[int, int, int, int]:
+        """The frame region ``(x, y, w, h)`` that the next :meth:`update` reads: its integral
+        image covers this rectangle clipped to the frame (what :class:`~wmiltrack.MultiTracker`
+        needs to prepare one integral image for several targets)."""
+        self._require_init()
+        origin, _ = self._search_origin()
+        margin = self._params.search_reach + self._track.reach + self._scale_margin()
+        return self._roi(origin, margin)
+
+    @property
+    def uses_channels(self) -> bool:
+        """Whether this tracker's features read other channels than luma (``Params.channels``)."""
+        return self._chan_names is not None
+
     @_one_thread_at_a_time
-    def update(self, frame: np.ndarray) -> TrackResult:
+    def update(self, frame: np.ndarray, *, integral: _core.IntegralImage | None = None) -> TrackResult:
         """Locate the target in the next frame and learn from it.
+
+        ``integral`` (advanced): a luma integral image of this same frame that covers
+        :meth:`search_region` (clipped to the frame), computed once for several trackers; the
+        tracker reads it instead of building its own, with the same result. It is ignored when
+        it does not cover the region or the tracker uses other channels.
 
         Returns
         -------
@@ -238,26 +266,34 @@ class Tracker:
         previous = self._box
         origin, coarse = self._search_origin()
         margin = p.search_reach + self._track.reach + self._scale_margin()
-        self._compute_integral(img, origin, margin)
-        if self._colour is not None:
-            x, y, w, h = origin
-            m = margin + 1
-            self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
-        self._box = origin
-        raw = self._detect(coarse)
-        score = confidence(raw, len(self._selected), p.confidence_offset)
-        tracked = score >= p.lost_threshold
-        k = max(len(self._selected), 1)
-        if score >= p.gate_threshold and self._level_ok(raw / k):
-            slow = not tracked and p.gate_learning_rate is not None
-            self._learn(self._track, p.gate_learning_rate if slow else None)
+        own = self._ii
+        roi = self._roi(origin, margin)
+        if integral is not None and self._chan_names is None and _covers(integral, roi, wh):
+            self._ii = integral
         else:
-            empty = np.zeros((0, 2), dtype=np.int32)
-            self._bags = (empty, empty)
-        self._score = score
-        if self._colour is not None:
-            self._colour.learn(img, self._box)
-        self._follow(previous, tracked)
+            self._compute_integral(img, origin, margin)
+        try:
+            if self._colour is not None:
+                x, y, w, h = origin
+                m = margin + 1
+                self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
+            self._box = origin
+            raw = self._detect(coarse)
+            score = confidence(raw, len(self._selected), p.confidence_offset)
+            tracked = score >= p.lost_threshold
+            k = max(len(self._selected), 1)
+            if score >= p.gate_threshold and self._level_ok(raw / k):
+                slow = not tracked and p.gate_learning_rate is not None
+                self._learn(self._track, p.gate_learning_rate if slow else None)
+            else:
+                empty = np.zeros((0, 2), dtype=np.int32)
+                self._bags = (empty, empty)
+            self._score = score
+            if self._colour is not None:
+                self._colour.learn(img, self._box)
+            self._follow(previous, tracked)
+        finally:
+            self._ii = own  # a shared table is only borrowed for this frame
         x, y, w, h = self._box
         return TrackResult((float(x), float(y), float(w), float(h)), self._score, tracked)
 
@@ -309,10 +345,15 @@ class Tracker:
         if not self._initialized:
             raise NotInitializedError("call init(frame, box) before update(frame)")
 
-    def _compute_integral(self, img: np.ndarray, box: IntBox, margin: int) -> None:
+    @staticmethod
+    def _roi(box: IntBox, margin: int) -> IntBox:
+        """The integral image's region around ``box``: ``margin`` pixels and one more."""
         x, y, w, h = box
         m = margin + 1
-        roi = (x - m, y - m, w + 2 * m, h + 2 * m)
+        return x - m, y - m, w + 2 * m, h + 2 * m
+
+    def _compute_integral(self, img: np.ndarray, box: IntBox, margin: int) -> None:
+        roi = self._roi(box, margin)
         if self._chan_names is not None:
             if img.ndim == 2 or img.shape[2] == 1:
                 if available_channels(self._chan_names, img) != self._chan_names:
