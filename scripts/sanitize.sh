@@ -91,6 +91,11 @@ run_tsan() {
 
   log "the same rules through the Python bindings: _core built with TSan (build/tsan-py)"
   local pybind_dir libtsan site
+  # Build requirements that `pip install .` does not leave in the environment (as in CI).
+  if ! "$PY" -c "import pybind11, Cython" >/dev/null 2>&1; then
+    log "pybind11/Cython not in $PY's environment: installing them"
+    "$PY" -m pip install --quiet "pybind11>=2.12" "cython>=3.0"
+  fi
   pybind_dir=$("$PY" -c "import pybind11; print(pybind11.get_cmake_dir())")
   build build/tsan-py _core _select -- -Dpybind11_DIR="$pybind_dir" \
     -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
@@ -105,8 +110,12 @@ run_tsan() {
   libtsan=$(${CXX:-c++} -print-file-name=libtsan.so)
   [ -f "$libtsan" ] || { echo "libtsan.so not found ($libtsan)" >&2; return 1; }
   # The interpreter is not instrumented: TSan sees the core's accesses and the GIL's mutex.
+  # Preload into the interpreter itself, not into a wrapper script (a pyenv shim is bash,
+  # which crashes under TSan).
+  local py_exe
+  py_exe=$("$PY" -c "import sys; print(sys.executable)")
   LD_PRELOAD="$libtsan" TSAN_OPTIONS="halt_on_error=1:abort_on_error=0:report_signal_unsafe=0" \
-    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests" "${run[@]}" "$PY" - <<'PYEOF'
+    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests" "${run[@]}" "$py_exe" - <<'PYEOF'
 import os, sys
 sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__module__.lower()]
 sys.path.insert(0, os.environ["WMILTRACK_SANITIZED_SITE"])
