@@ -48,12 +48,21 @@ build() {
 }
 
 ensure_eigen() {
-  local purelib
-  purelib=$("$PY" -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
-  if ! ls "$purelib"/cmeel.prefix/share/eigen3/cmake/Eigen3Config.cmake >/dev/null 2>&1; then
-    log "Eigen (cmeel-eigen) not in $purelib: installing it"
+  # cmeel-eigen in any of the interpreter's site directories (a venv made with
+  # --system-site-packages sees the base interpreter's): pip-installed when in none.
+  local find_prefix='import os, site, sysconfig
+dirs = [sysconfig.get_paths()["purelib"], *site.getsitepackages()]
+hits = [os.path.join(d, "cmeel.prefix") for d in dirs
+        if os.path.exists(os.path.join(d, "cmeel.prefix/share/eigen3/cmake/Eigen3Config.cmake"))]
+print(hits[0] if hits else "")'
+  local prefix
+  prefix=$("$PY" -c "$find_prefix")
+  if [ -z "$prefix" ]; then
+    log "Eigen (cmeel-eigen) not in $PY's site-packages: installing it"
     "$PY" -m pip install --quiet cmeel-eigen
+    prefix=$("$PY" -c "$find_prefix")
   fi
+  export CMAKE_PREFIX_PATH="${prefix}${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
 }
 
 # Sanitizer runtime options: stop at the first report with a non-zero exit code.
@@ -79,6 +88,49 @@ run_tsan() {
   local run=()
   command -v setarch >/dev/null && run=(setarch "$(uname -m)" -R)
   TSAN_OPTIONS="halt_on_error=1:abort_on_error=0:second_deadlock_stack=1" "${run[@]}" build/tsan/test_threads
+
+  log "the same rules through the Python bindings: _core built with TSan (build/tsan-py)"
+  local pybind_dir libtsan site
+  # Build requirements that `pip install .` does not leave in the environment (as in CI).
+  if ! "$PY" -c "import pybind11, Cython" >/dev/null 2>&1; then
+    log "pybind11/Cython not in $PY's environment: installing them"
+    "$PY" -m pip install --quiet "pybind11>=2.12" "cython>=3.0"
+  fi
+  pybind_dir=$("$PY" -c "import pybind11; print(pybind11.get_cmake_dir())")
+  build build/tsan-py _core _select -- -Dpybind11_DIR="$pybind_dir" \
+    -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
+    -DCMAKE_C_FLAGS="-fsanitize=thread -fno-omit-frame-pointer" \
+    -DSKBUILD_PROJECT_NAME=wmiltrack -DSKBUILD_PROJECT_VERSION=0.0.0 \
+    -DWMILTRACK_BUILD_PYTHON=ON -DWMILTRACK_SANITIZE=OFF -DWMILTRACK_TSAN=ON
+  site=build/tsan-py/site
+  rm -rf "$site" && mkdir -p "$site/wmiltrack"
+  cp -r src/wmiltrack/. "$site/wmiltrack/"
+  rm -f "$site"/wmiltrack/*.so
+  cp build/tsan-py/_core*.so build/tsan-py/_select*.so "$site/wmiltrack/"
+  libtsan=$(${CXX:-c++} -print-file-name=libtsan.so)
+  [ -f "$libtsan" ] || { echo "libtsan.so not found ($libtsan)" >&2; return 1; }
+  # The interpreter is not instrumented: TSan sees the core's accesses and the GIL's mutex.
+  # Preload into the interpreter itself, not into a wrapper script (a pyenv shim is bash,
+  # which crashes under TSan).
+  local py_exe
+  py_exe=$("$PY" -c "import sys; print(sys.executable)")
+  LD_PRELOAD="$libtsan" TSAN_OPTIONS="halt_on_error=1:abort_on_error=0:report_signal_unsafe=0" \
+    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests" "${run[@]}" "$py_exe" - <<'PYEOF'
+import os, sys
+sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__module__.lower()]
+sys.path.insert(0, os.environ["WMILTRACK_SANITIZED_SITE"])
+sys.path.insert(1, os.environ["WMILTRACK_TESTS"])
+import wmiltrack._core
+assert wmiltrack._core.__file__.startswith(os.environ["WMILTRACK_SANITIZED_SITE"])
+import test_core_hardening as h
+for name in ("SHARED_SCRIPT", "MUTATE_SCRIPT"):
+    try:
+        exec(compile(getattr(h, name), name, "exec"), {"__name__": "__main__"})
+    except SystemExit as e:
+        if e.code:
+            sys.exit(f"{name} failed")
+print("threaded binding scripts: clean")
+PYEOF
   log "tsan: clean"
 }
 
@@ -104,7 +156,9 @@ run_python() {
     -DWMILTRACK_BUILD_PYTHON=ON -DWMILTRACK_SANITIZE=ON -DWMILTRACK_TSAN=OFF
   site=build/sanitize-py/site
   rm -rf "$site" && mkdir -p "$site/wmiltrack"
-  cp src/wmiltrack/*.py "$site/wmiltrack/"
+  # The whole package (it has subpackages: engine/, data/, ...), then the sanitized modules.
+  cp -r src/wmiltrack/. "$site/wmiltrack/"
+  find "$site/wmiltrack" -name '*.so' -delete
   cp build/sanitize-py/_core*.so build/sanitize-py/_select*.so "$site/wmiltrack/"
   libasan=$(${CXX:-c++} -print-file-name=libasan.so)
   [ -f "$libasan" ] || { echo "libasan.so not found ($libasan)" >&2; return 1; }
@@ -120,9 +174,9 @@ sys.path.insert(1, os.environ["WMILTRACK_TESTS"])
 import wmiltrack, wmiltrack._core, wmiltrack._select
 for mod in (wmiltrack._core, wmiltrack._select):
     assert mod.__file__.startswith(os.environ["WMILTRACK_SANITIZED_SITE"]), mod.__file__
-import wmiltrack.synthetic
+import wmiltrack.data.synthetic
 t0 = time.perf_counter()
-seq = wmiltrack.synthetic.make_preset("all", seed=0, n_frames=40)
+seq = wmiltrack.data.synthetic.make_preset("all", seed=0, n_frames=40)
 frames, gt = seq.load(), seq.groundtruth
 n_frames = 0
 for v in sorted(wmiltrack.variants()):
