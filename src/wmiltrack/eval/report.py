@@ -251,6 +251,23 @@ def _markdown(
     return lines
 
 
+def _accuracy_cells(tracker: str, m: Mapping[str, Any], repeats: int) -> list[str]:
+    """The OPE table's cells from the tracker's name to the frames without a box, for one
+    sequence's figures or a tracker's summary (the same keys)."""
+    return [
+        tracker + (" (!)" if m["errors"] else ""),
+        str(m["n_frames"]),
+        str(m["n_missing"]),
+        _pm(m, "auc", ".3f", repeats),
+        _pm(m, "success_50", ".3f", repeats),
+        _pm(m, "precision_20", ".3f", repeats),
+        _pm(m, "norm_precision_20", ".3f", repeats),
+        _pm(m, "mean_center_error", ".1f", repeats),
+        _f(m["n_lost"], ".0f"),
+        _f(m["n_no_prediction"], ".0f"),
+    ]
+
+
 def format_ope_table(
     scored: Mapping[str, Any],
     repeats: int,
@@ -307,19 +324,7 @@ def format_ope_table(
             if seq not in tr:
                 continue
             m = tr[seq]["mean"]
-            row = [
-                seq,
-                tracker + (" (!)" if m["errors"] else ""),
-                str(m["n_frames"]),
-                str(m["n_missing"]),
-                _pm(m, "auc", ".3f", repeats),
-                _pm(m, "success_50", ".3f", repeats),
-                _pm(m, "precision_20", ".3f", repeats),
-                _pm(m, "norm_precision_20", ".3f", repeats),
-                _pm(m, "mean_center_error", ".1f", repeats),
-                _f(m["n_lost"], ".0f"),
-                _f(m["n_no_prediction"], ".0f"),
-            ]
+            row = [seq, *_accuracy_cells(tracker, m, repeats)]
             if timed:
                 ref = results.get(reference, {}).get(seq)
                 base = math.nan if ref is None else float(ref["mean"]["fps"])
@@ -328,19 +333,7 @@ def format_ope_table(
             rows.append(row)
     bold: list[list[str]] = []
     for tracker, s in scored["summary"].items():
-        row = [
-            f"mean ({s['n_sequences']} seq)",
-            tracker + (" (!)" if s["errors"] else ""),
-            str(s["n_frames"]),
-            str(s["n_missing"]),
-            _pm(s, "auc", ".3f", repeats),
-            _pm(s, "success_50", ".3f", repeats),
-            _pm(s, "precision_20", ".3f", repeats),
-            _pm(s, "norm_precision_20", ".3f", repeats),
-            _pm(s, "mean_center_error", ".1f", repeats),
-            _f(s["n_lost"], ".0f"),
-            _f(s["n_no_prediction"], ".0f"),
-        ]
+        row = [f"mean ({s['n_sequences']} seq)", *_accuracy_cells(tracker, s, repeats)]
         if timed:
             row += [_f(s["fps"], ".1f"), _f(s["fps_ratio"], ".2f"), _ms(s["init_time"])]
         bold.append(row)
