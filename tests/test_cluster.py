@@ -102,11 +102,23 @@ def _files(root: Path) -> dict[str, np.ndarray]:
 
 @pytest.mark.usefixtures("need_distributed")
 def test_dask_local_cluster_gives_the_serial_boxes(otb: Path, tmp_path: Path) -> None:
+    import socket
+
     serial, dask_out = tmp_path / "serial", tmp_path / "dask"
     common = ["--trackers", "rcwmil,ct", "--no-progress", "--no-plots", "--repeats", "2"]
     assert main(["eval", str(otb), "--out", str(serial), *common]) == 0
-    assert main(["eval", str(otb), "--out", str(dask_out), "--executor", "dask", "-j", "2",
-                 *common]) == 0
+    # dask's default HTTP port taken by someone else (another cluster, a notebook) must not matter
+    blocker = socket.socket()
+    try:
+        blocker.bind(("0.0.0.0", 8787))
+        blocker.listen()
+    except OSError:  # already taken: the same situation
+        pass
+    try:
+        assert main(["eval", str(otb), "--out", str(dask_out), "--executor", "dask", "-j", "2",
+                     *common]) == 0
+    finally:
+        blocker.close()
     a, b = _files(serial / "boxes"), _files(dask_out / "boxes")
     assert sorted(a) == sorted(b) and len(a) == 2 * 2 * 2
     for k in a:

@@ -142,6 +142,9 @@ class DaskExecutor:
             threads_per_worker=1,
             processes=True,
             dashboard_address=None,
+            # No dashboard; the scheduler's small HTTP server (health, metrics) on a free port
+            # instead of its default 8787, which another cluster or program may hold.
+            scheduler_kwargs={"dashboard_address": ":0"},
         )
         return distributed.Client(cluster), cluster
 
