@@ -63,6 +63,8 @@ class ColourModel:
         self.shrink = shrink
         self._fg: FloatArray | None = None
         self._bg: FloatArray | None = None
+        # The bin index of the last integral()'s region, reused by learn() on the same frame.
+        self._indexed: tuple[np.ndarray, int, int, npt.NDArray[np.intp]] | None = None
 
     @staticmethod
     def usable(frame: np.ndarray) -> bool:
@@ -77,6 +79,16 @@ class ColourModel:
         idx: npt.NDArray[np.intp] = (b << (2 * self.bits)) | (g << self.bits) | r
         return idx
 
+    def _bins(self, frame: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> npt.NDArray[np.intp]:
+        """Bin indices of ``frame[y0:y1, x0:x1]``, cut from the last integral()'s when that was
+        the same frame and held the region (the tracker learns inside its search region)."""
+        if self._indexed is not None:
+            f, ix, iy, idx = self._indexed
+            if (f is frame and ix <= x0 and iy <= y0 and x1 <= ix + idx.shape[1]
+                    and y1 <= iy + idx.shape[0]):
+                return idx[y0 - iy:y1 - iy, x0 - ix:x1 - ix]
+        return self._index(frame[y0:y1, x0:x1])
+
     def learn(self, frame: np.ndarray, box: tuple[int, int, int, int]) -> None:
         """Fold in the histograms of ``box`` (target) and its surroundings (background)."""
         fh, fw = frame.shape[:2]
@@ -84,7 +96,7 @@ class ColourModel:
         pad = int(round(self.pad * (w + h) / 2))
         x0, y0 = max(0, x - pad), max(0, y - pad)
         x1, y1 = min(fw, x + w + pad), min(fh, y + h + pad)
-        idx = self._index(frame[y0:y1, x0:x1])
+        idx = self._bins(frame, x0, y0, x1, y1)
         inside = np.zeros(idx.shape, dtype=bool)
         inside[max(0, y - y0):max(0, y - y0 + h), max(0, x - x0):max(0, x - x0 + w)] = True
         core = np.zeros(idx.shape, dtype=bool)
@@ -112,6 +124,7 @@ class ColourModel:
         x0, y0 = max(0, roi[0]), max(0, roi[1])
         x1, y1 = min(fw, roi[2]), min(fh, roi[3])
         idx = self._index(frame[y0:y1, x0:x1])
+        self._indexed = (frame, x0, y0, idx)
         total = self._fg + self._bg
         likelihood = np.divide(self._fg, total, out=np.full(total.shape, 0.5), where=total > 0)
         p = likelihood[idx]

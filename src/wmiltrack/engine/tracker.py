@@ -28,7 +28,7 @@ from .features import (
     scale_bank,
 )
 from .frames import IntBox, as_frame, clip_box, frame_size
-from .params import Params
+from .params import CONFIDENCE_OFFSET, Params
 from .result import TrackResult
 from .sampling import BagSampler, instance_weights
 from .selection import milboost_select, wmil_select
@@ -74,12 +74,6 @@ def _sigmoid(z: float) -> float:
     e = math.exp(z)
     return e / (1.0 + e)
 
-
-#: Offset of :func:`confidence`: the mean weak-classifier log ratio at which a frame is as
-#: likely tracked (IoU > 0) as lost. A class-balanced logistic fit of "IoU > 0" on the mean
-#: log ratio over 17 OTB sequences and 6 generated full-occlusion/vanishing sequences gave
-#: offsets 1.25-1.63 and gains 0.8-1.1 for five variants (``scripts/score_study.py``).
-CONFIDENCE_OFFSET = 1.4
 
 
 def confidence(raw: float, k: int, offset: float = CONFIDENCE_OFFSET) -> float:
