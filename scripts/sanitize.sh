@@ -11,7 +11,7 @@
 #             any race report fails.
 #   valgrind  build the same tests without sanitizers (and without -march=native: valgrind
 #             does not decode AVX-512) in build/memcheck, run them under valgrind memcheck.
-#   python    build the extension modules (_core and the Cython _select) with ASan + UBSan in
+#   python    build the extension modules (_core and the Cython _learn) with ASan + UBSan in
 #             build/sanitize-py, copy them next to a copy of the Python sources, and run a short
 #             tracking run of every variant (plus the awkward geometries and frame layouts of
 #             tests/test_reliability.py) with libasan preloaded into the interpreter
@@ -97,7 +97,7 @@ run_tsan() {
     "$PY" -m pip install --quiet "pybind11>=2.12" "cython>=3.0"
   fi
   pybind_dir=$("$PY" -c "import pybind11; print(pybind11.get_cmake_dir())")
-  build build/tsan-py _core _select -- -Dpybind11_DIR="$pybind_dir" \
+  build build/tsan-py _core _learn -- -Dpybind11_DIR="$pybind_dir" \
     -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
     -DCMAKE_C_FLAGS="-fsanitize=thread -fno-omit-frame-pointer" \
     -DSKBUILD_PROJECT_NAME=wmiltrack -DSKBUILD_PROJECT_VERSION=0.0.0 \
@@ -106,7 +106,7 @@ run_tsan() {
   rm -rf "$site" && mkdir -p "$site/wmiltrack"
   cp -r src/wmiltrack/. "$site/wmiltrack/"
   rm -f "$site"/wmiltrack/*.so
-  cp build/tsan-py/_core*.so build/tsan-py/_select*.so "$site/wmiltrack/"
+  cp build/tsan-py/_core*.so build/tsan-py/_learn*.so "$site/wmiltrack/"
   libtsan=$(${CXX:-c++} -print-file-name=libtsan.so)
   [ -f "$libtsan" ] || { echo "libtsan.so not found ($libtsan)" >&2; return 1; }
   # The interpreter is not instrumented: TSan sees the core's accesses and the GIL's mutex.
@@ -149,7 +149,7 @@ run_python() {
   log "tracking run of the sanitized extension modules (build/sanitize-py)"
   local pybind_dir libasan site
   pybind_dir=$("$PY" -c "import pybind11; print(pybind11.get_cmake_dir())")
-  build build/sanitize-py _core _select -- -Dpybind11_DIR="$pybind_dir" \
+  build build/sanitize-py _core _learn -- -Dpybind11_DIR="$pybind_dir" \
     -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
     -DCMAKE_C_FLAGS="-fsanitize=address,undefined -fno-omit-frame-pointer" \
     -DSKBUILD_PROJECT_NAME=wmiltrack -DSKBUILD_PROJECT_VERSION=0.0.0 \
@@ -159,7 +159,7 @@ run_python() {
   # The whole package (it has subpackages: engine/, data/, ...), then the sanitized modules.
   cp -r src/wmiltrack/. "$site/wmiltrack/"
   find "$site/wmiltrack" -name '*.so' -delete
-  cp build/sanitize-py/_core*.so build/sanitize-py/_select*.so "$site/wmiltrack/"
+  cp build/sanitize-py/_core*.so build/sanitize-py/_learn*.so "$site/wmiltrack/"
   libasan=$(${CXX:-c++} -print-file-name=libasan.so)
   [ -f "$libasan" ] || { echo "libasan.so not found ($libasan)" >&2; return 1; }
   # detect_leaks=0: the interpreter's own allocations are not ours to report.
@@ -171,8 +171,8 @@ import os, sys, time
 sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__module__.lower()]
 sys.path.insert(0, os.environ["WMILTRACK_SANITIZED_SITE"])
 sys.path.insert(1, os.environ["WMILTRACK_TESTS"])
-import wmiltrack, wmiltrack._core, wmiltrack._select
-for mod in (wmiltrack._core, wmiltrack._select):
+import wmiltrack, wmiltrack._core, wmiltrack._learn
+for mod in (wmiltrack._core, wmiltrack._learn):
     assert mod.__file__.startswith(os.environ["WMILTRACK_SANITIZED_SITE"]), mod.__file__
 import wmiltrack.data.synthetic
 t0 = time.perf_counter()

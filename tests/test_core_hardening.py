@@ -329,7 +329,7 @@ def test_default_build_is_portable() -> None:
     objdump = shutil.which("objdump")
     if objdump is None:
         pytest.skip("objdump (binutils) not installed")
-    for mod in (_core, wmiltrack._select):
+    for mod in (_core, wmiltrack._learn):
         path = Path(mod.__file__ or "")
         asm = subprocess.run([objdump, "-d", "--no-show-raw-insn", str(path)], capture_output=True,
                              text=True, check=True).stdout

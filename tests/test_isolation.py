@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import wmiltrack
-from wmiltrack import _core, _select
+from wmiltrack import _core, _learn
 from wmiltrack.data.synthetic import make_sequence
 
 VARIANTS = sorted(wmiltrack.variants())
@@ -171,8 +171,8 @@ def _heavy_calls() -> dict[str, Callable[[], object]]:
         "log_ratio": lambda: _core.log_ratio(values, mu, sig, mu + 1, sig, 1e-30),
         "score_grid": lambda: _core.score_grid(ii, bank, sel, mu, sig, mu + 1, sig, 1e-30, (250, 250, 20, 20),
                                                100, 1, (600, 600)),
-        "wmil_select": lambda: _select.wmil_select(h_pos, h_neg, np.full(300, 1 / 300), 200, False),
-        "milboost_select": lambda: _select.milboost_select(h_pos, h_neg, 300, 1e-5),
+        "wmil_select": lambda: _learn.wmil_select(h_pos, h_neg, np.full(300, 1 / 300), 200, False),
+        "milboost_select": lambda: _learn.milboost_select(h_pos, h_neg, 300, 1e-5),
     }
 
 

@@ -19,7 +19,7 @@ from wmiltrack.visualize import draw_samples, grid_offsets
 
 def test_package_ships_type_information() -> None:
     root = resources.files("wmiltrack")
-    for name in ("py.typed", "_core.pyi", "_select.pyi"):
+    for name in ("py.typed", "_core.pyi", "_learn.pyi"):
         assert root.joinpath(name).is_file(), name
 
 

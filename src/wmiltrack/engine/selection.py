@@ -1,6 +1,6 @@
 """Online feature selection: weighted MIL (gradient inner product) and MILBoost (Noisy-OR).
 
-The loops are compiled (``_select.pyx``); this module documents them and keeps plain numpy
+The loops are compiled (``_learn.pyx``); this module documents them and keeps plain numpy
 references that the tests compare them with.
 """
 
@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import _select
+from .. import _learn
 
 
 def _c(a: np.ndarray) -> np.ndarray:
-    return np.ascontiguousarray(a, dtype=np.float64)
+    """float64 without copying a float64 view (the kernels take strided rows)."""
+    return np.asarray(a, dtype=np.float64)
 
 
 def wmil_select(h_pos: np.ndarray, h_neg: np.ndarray, w_pos: np.ndarray, k: int,
@@ -38,7 +39,7 @@ def wmil_select(h_pos: np.ndarray, h_neg: np.ndarray, w_pos: np.ndarray, k: int,
     -------
     (k,) int32 array of feature indices, in selection order.
     """
-    return np.asarray(_select.wmil_select(_c(h_pos), _c(h_neg), _c(w_pos), int(k), bool(code_gradient)))
+    return np.asarray(_learn.wmil_select(_c(h_pos), _c(h_neg), _c(w_pos), int(k), bool(code_gradient)))
 
 
 def milboost_select(h_pos: np.ndarray, h_neg: np.ndarray, k: int, *, guard: float = 1e-5) -> np.ndarray:
@@ -47,7 +48,7 @@ def milboost_select(h_pos: np.ndarray, h_neg: np.ndarray, k: int, *, guard: floa
     Minimises, step by step, the negative log-likelihood of a Noisy-OR positive bag
     (divided by its size, as MILTrack's code does) plus one bag per negative.
     """
-    return np.asarray(_select.milboost_select(_c(h_pos), _c(h_neg), int(k), float(guard)))
+    return np.asarray(_learn.milboost_select(_c(h_pos), _c(h_neg), int(k), float(guard)))
 
 
 # -- numpy references ---------------------------------------------------------------------
