@@ -39,12 +39,17 @@ class BagSampler:
         count = p.init_neg_count if first_frame and p.init_neg_count is not None else p.neg_count
         self.pos_offsets = disc_offsets(pos_r)
         self.pos_dist = np.hypot(self.pos_offsets[:, 0], self.pos_offsets[:, 1])
+        self.pos_dist.setflags(write=False)  # handed out as is by positives()
         self.neg_offsets = annulus_offsets(inner, outer)
         self.neg_count = count
         self.mode = p.neg_sampling
         # The references keep each annulus point with probability max / bounding-square area.
         self.keep_prob = min(1.0, count / float((2 * math.floor(outer) + 1) ** 2))
         self.reach = math.ceil(max(pos_r, outer))
+        # Largest |dx|, |dy| of each offset set: a box at least this far from every frame edge
+        # keeps all its offsets inside, and the masks below can be skipped (same result).
+        self._pos_reach = int(np.abs(self.pos_offsets).max(initial=0))
+        self._neg_reach = int(np.abs(self.neg_offsets).max(initial=0))
 
     @staticmethod
     def _inside(offsets: np.ndarray, box: tuple[int, int, int, int], frame_w: int,
@@ -54,17 +59,27 @@ class BagSampler:
         ys = y + offsets[:, 1]
         return (xs >= 0) & (ys >= 0) & (xs + w <= frame_w) & (ys + h <= frame_h)
 
+    @staticmethod
+    def _all_inside(reach: int, box: tuple[int, int, int, int], frame_w: int, frame_h: int) -> bool:
+        x, y, w, h = box
+        return x - reach >= 0 and y - reach >= 0 and x + reach + w <= frame_w and y + reach + h <= frame_h
+
     def positives(self, box: tuple[int, int, int, int], frame_w: int,
                   frame_h: int) -> tuple[np.ndarray, np.ndarray]:
         """Top-left corners ``(n, 2)`` of the positive bag inside the frame, and their distances."""
+        origin = np.array(box[:2], dtype=np.int32)
+        if self._all_inside(self._pos_reach, box, frame_w, frame_h):
+            return self.pos_offsets + origin, self.pos_dist
         keep = self._inside(self.pos_offsets, box, frame_w, frame_h)
-        corners = self.pos_offsets[keep] + np.array(box[:2], dtype=np.int32)
-        return corners, self.pos_dist[keep]
+        return self.pos_offsets[keep] + origin, self.pos_dist[keep]
 
     def negatives(self, box: tuple[int, int, int, int], frame_w: int, frame_h: int,
                   rng: np.random.Generator) -> np.ndarray:
         """Top-left corners ``(n, 2)`` of the negatives inside the frame."""
-        candidates = self.neg_offsets[self._inside(self.neg_offsets, box, frame_w, frame_h)]
+        if self._all_inside(self._neg_reach, box, frame_w, frame_h):
+            candidates = self.neg_offsets
+        else:
+            candidates = self.neg_offsets[self._inside(self.neg_offsets, box, frame_w, frame_h)]
         if self.mode == "exact":
             if candidates.shape[0] > self.neg_count:
                 pick = rng.choice(candidates.shape[0], size=self.neg_count, replace=False)
