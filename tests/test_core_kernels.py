@@ -33,6 +33,23 @@ def test_integral_image_matches_numpy_and_opencv_luma(channels: int | None) -> N
     np.testing.assert_array_equal(ii.table(), integral_ref(gray_of(frame)))
 
 
+def test_luma_of_every_row_width_and_offset_matches_opencv() -> None:
+    """The BGR luma runs 16 pixels at a time (SSSE3, when the CPU has it) and finishes each
+    row one pixel at a time: every width and start column must give cv2's bytes, including
+    saturated colours (the extreme weighted sums)."""
+    rng = np.random.default_rng(7)
+    frame = rng.integers(0, 256, size=(6, 131, 3), dtype=np.uint8)
+    frame[0] = 255
+    frame[1, ::2] = (255, 255, 0)
+    frame[2, 1::3] = (0, 0, 255)
+    gray = gray_of(frame)
+    ii = _core.IntegralImage()
+    for x in range(0, 20):
+        for w in range(1, 131 - x, 7):
+            ii.compute(frame, (x, 0, w, 6))
+            np.testing.assert_array_equal(ii.table(), integral_ref(gray[:, x:x + w]), err_msg=f"x={x} w={w}")
+
+
 def test_integral_image_over_a_region_is_clipped_and_exact() -> None:
     rng = np.random.default_rng(1)
     frame = rng.integers(0, 256, size=(80, 90, 3), dtype=np.uint8)

@@ -186,4 +186,23 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   return result;
 }
 
+std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
+                               const std::int32_t* selected, int n_selected,
+                               const WeakGaussians& weak, Rect box,
+                               const std::vector<SearchStage>& stages, int frame_width,
+                               int frame_height) {
+  std::vector<GridResult> out;
+  out.reserve(stages.size());
+  for (const SearchStage& stage : stages) {
+    const GridResult r = score_grid(ii, bank, selected, n_selected, weak, box, stage.radius,
+                                    stage.step, frame_width, frame_height, nullptr);
+    if (r.candidates > 0) {
+      box.x += r.dx;
+      box.y += r.dy;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
 }  // namespace wmiltrack

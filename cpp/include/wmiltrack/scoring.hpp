@@ -55,4 +55,19 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
                       int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
                       int step, int frame_width, int frame_height, double* scores);
 
+// One stage of a coarse-to-fine search: a grid of this radius and step.
+struct SearchStage {
+  int radius;
+  int step;
+};
+
+// score_grid() for each stage in turn, each centred where the previous one moved the box
+// (a stage without candidates leaves it in place). Returns each stage's result, whose dx/dy
+// are relative to that stage's centre. One call for the whole search of a frame.
+std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
+                               const std::int32_t* selected, int n_selected,
+                               const WeakGaussians& weak, Rect box,
+                               const std::vector<SearchStage>& stages, int frame_width,
+                               int frame_height);
+
 }  // namespace wmiltrack

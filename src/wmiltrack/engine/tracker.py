@@ -502,18 +502,30 @@ class Tracker:
         p = self._params
         sel = self._selected
         pool = self._pool
-        weak: Weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
         best = -math.inf
         stages = [coarse]
         if p.fine_radius > 0:
             stages.append((p.fine_radius, p.fine_step))
         self._search_origins = []
         self._search_stages = stages
-        for radius, step in stages:
+        weak: Weak | None = None
+        if self._colour_table is None and p.scale_steps == 0:
+            # The whole coarse-to-fine search in one call to the core.
+            results = _core.search(self._ii, self._bank_at(self._scale_index)[0], sel, pool.mu1,
+                                   pool.sigma1, pool.mu0, pool.sigma0, p.guard, self._box, stages,
+                                   self._frame_wh)
+        else:
+            weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
+            results = None
+        for i, (radius, step) in enumerate(stages):
             self._search_origins.append(self._box)
-            if self._colour_table is not None:
+            if results is not None:
+                dx, dy, score, n = results[i]
+            elif self._colour_table is not None:
+                assert weak is not None
                 dx, dy, score, n = self._colour_stage(sel, weak, radius, step)
             else:
+                assert weak is not None
                 dx, dy, score, n = self._score_grid(self._scale_index, sel, weak, self._box, radius,
                                                     step)
             if n > 0:
@@ -522,6 +534,7 @@ class Tracker:
                 best = score
         self._scale_boxes = []
         if p.scale_steps > 0 and math.isfinite(best):
+            assert weak is not None
             if p.scale_model == "likelihood":
                 self._scale_by_likelihood()
             else:
@@ -611,18 +624,21 @@ class Tracker:
         pos, dist = sampler.positives(self._box, fw, fh)
         neg = sampler.negatives(self._box, fw, fh, self._rng)
         self._bags = (pos, neg)
-        v_pos = self._project(self._scale_index, pos)
-        v_neg = self._project(self._scale_index, neg)
+        n_pos = pos.shape[0]
+        # Both bags in one projection (and one log-ratio call below): columns [0, n_pos) are
+        # the positives, the rest the negatives.
+        values = self._project(self._scale_index, np.concatenate((pos, neg)))
         if p.scale_negatives > 0:
-            v_neg = np.concatenate([v_neg, *self._wrong_scale_values()], axis=1)
+            values = np.concatenate([values, *self._wrong_scale_values()], axis=1)
+        v_pos, v_neg = values[:, :n_pos], values[:, n_pos:]
         pool = self._pool
         pool.update(v_pos, v_neg, learning_rate)
         if self._scale_pool is not None:
             self._scale_pool.update(v_pos, v_neg[:, :0])
-        if p.selection == "none" or pos.shape[0] == 0:
+        if p.selection == "none" or n_pos == 0:
             return
-        h_pos = _core.log_ratio(v_pos, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard)
-        h_neg = _core.log_ratio(v_neg, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard)
+        h = _core.log_ratio(values, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard)
+        h_pos, h_neg = h[:, :n_pos], h[:, n_pos:]
         if p.selection == "wmil":
             w = instance_weights(dist, p.instance_weights)
             self._selected = wmil_select(h_pos, h_neg, w, p.num_selected,
