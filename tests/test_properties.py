@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
@@ -107,6 +107,10 @@ def test_rect_sum_exact_inside_and_refused_outside(frame: np.ndarray, data: st.D
 
 @FAST
 @given(frame=frames(max_side=12), roi=st.tuples(huge, huge, huge, huge))
+# Found by this test: y + h far below zero wrapped around to a large int when narrowed, and
+# the "region" asked for ~2^31 rows (std::bad_alloc instead of ValueError).
+@example(frame=np.zeros((1, 1), np.uint8), roi=(0, -1, 1, -2**31))
+@example(frame=np.zeros((1, 1), np.uint8), roi=(-1, 0, -2**31, 1))
 def test_compute_never_overflows(frame: np.ndarray, roi: tuple[int, int, int, int]) -> None:
     fh, fw = frame.shape[:2]
     x, y, w, h = roi

@@ -103,3 +103,22 @@ def test_wmil_gradient_stays_exact_when_the_bags_are_confidently_classified(w, e
     h_neg = np.array([[-50.0, -50], [0, 0], [-1, 0]])
     picks = wmil_select(h_pos, h_neg, np.array(w), 2)
     assert picks[0] == 0 and picks[1] == expected
+
+
+@pytest.mark.parametrize("m", [5, 8, 37, 100])
+def test_selection_reads_column_slices_of_one_array(m: int) -> None:
+    """The tracker keeps both bags' log ratios in one array and passes column slices; the
+    kernels must pick what they pick from contiguous copies (and M need not be a multiple
+    of the eight features scored at a time)."""
+    rng = np.random.default_rng(m)
+    h = rng.normal(size=(m, 45 + 50)) * 3
+    w = np.exp(-rng.uniform(0, 4, 45))
+    w /= w.sum()
+    h_pos, h_neg = h[:, :45], h[:, 45:]
+    k = min(m, 20)
+    np.testing.assert_array_equal(wmil_select(h_pos, h_neg, w, k),
+                                  wmil_select(h_pos.copy(), h_neg.copy(), w, k))
+    np.testing.assert_array_equal(wmil_select(h_pos, h_neg, w, k),
+                                  wmil_select_reference(h_pos, h_neg, w, k))
+    np.testing.assert_array_equal(milboost_select(h_pos, h_neg, k),
+                                  milboost_select(h_pos.copy(), h_neg.copy(), k))

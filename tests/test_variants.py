@@ -95,15 +95,21 @@ CANDIDATES = {(25, 4): 121, (10, 1): 305, (20, 1): 1245, (25, 1): 1941}
 @pytest.mark.parametrize("variant", list(SEARCH))
 def test_search_grids(variant: str, monkeypatch: pytest.MonkeyPatch) -> None:
     calls = []
-    real = tracker_mod._core.score_grid
+    real, real_search = tracker_mod._core.score_grid, tracker_mod._core.search
 
     def spy(*args, **kw):
         out = real(*args, **kw)
         calls.append((args[9], args[10], out[3], len(args[2])))
         return out
 
+    def spy_search(*args, **kw):  # the whole coarse-to-fine search in one call
+        out = real_search(*args, **kw)
+        calls.extend((r, s, stage[3], len(args[2])) for (r, s), stage in zip(args[9], out))
+        return out
+
     t, _ = bank(variant)
     monkeypatch.setattr(tracker_mod._core, "score_grid", spy)
+    monkeypatch.setattr(tracker_mod._core, "search", spy_search)
     t.update(FRAME)
     assert [(r, s) for r, s, _, _ in calls] == SEARCH[variant]
     assert [n for _, _, n, _ in calls] == [CANDIDATES[g] for g in SEARCH[variant]]

@@ -33,15 +33,16 @@ Rect clip_roi(const ImageView& image, const Rect& roi) {
   }
   const int x_begin = std::max(roi.x, 0);
   const int y_begin = std::max(roi.y, 0);
-  // 64-bit far edges: roi.x + roi.w must not overflow for any pair of ints.
-  const int x_end = static_cast<int>(
-      std::min<std::int64_t>(static_cast<std::int64_t>(roi.x) + roi.w, image.cols));
-  const int y_end = static_cast<int>(
-      std::min<std::int64_t>(static_cast<std::int64_t>(roi.y) + roi.h, image.rows));
+  // 64-bit far edges, compared before any narrowing: roi.x + roi.w neither overflows nor,
+  // when far below zero, wraps around to a large int.
+  const std::int64_t x_end =
+      std::min<std::int64_t>(static_cast<std::int64_t>(roi.x) + roi.w, image.cols);
+  const std::int64_t y_end =
+      std::min<std::int64_t>(static_cast<std::int64_t>(roi.y) + roi.h, image.rows);
   if (x_end <= x_begin || y_end <= y_begin) {
     throw std::invalid_argument("integral image: the region does not meet the frame");
   }
-  return Rect{x_begin, y_begin, x_end - x_begin, y_end - y_begin};
+  return Rect{x_begin, y_begin, static_cast<int>(x_end - x_begin), static_cast<int>(y_end - y_begin)};
 }
 
 // Per-pixel loops over a row of `n` pixels starting at `src`, with the column stride fixed

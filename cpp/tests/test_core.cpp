@@ -10,6 +10,7 @@
 
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/integral.hpp"
+#include "wmiltrack/learning.hpp"
 #include "wmiltrack/scoring.hpp"
 
 namespace {
@@ -484,6 +485,74 @@ void test_hardening(std::mt19937& rng) {
     }
   }
 }
+
+// The learning kernels: numpy's pairwise sums (exact on integers), a Gaussian update against
+// the formulas written out, selections that pick distinct features, and the search.
+void test_learning(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-5.0, 5.0);
+  // Integers below 2^53 sum exactly whatever the order: the pairwise sum must equal them.
+  for (int n : {0, 1, 7, 8, 9, 127, 128, 129, 300}) {
+    std::vector<double> a(static_cast<std::size_t>(2 * n) + 1);
+    double want = 0.0;
+    for (int i = 0; i < n; ++i) {
+      a[static_cast<std::size_t>(2 * i)] = static_cast<double>(i % 17);
+      want += static_cast<double>(i % 17);
+    }
+    CHECK(pairwise_sum(a.data(), n, 2) == want);
+  }
+  const int M = 13, P = 9, N = 11;
+  std::vector<double> hp(static_cast<std::size_t>(M * P)), hn(static_cast<std::size_t>(M * N));
+  for (double& v : hp) v = u(rng);
+  for (double& v : hn) v = u(rng);
+  MatrixView vp{hp.data(), M, P, P, 1}, vn{hn.data(), M, N, N, 1};
+  // Gaussian update, blend rule, against the formula.
+  std::vector<double> mu(M, 1.0), sigma(M, 2.0), nm(M), ns(M), scratch(P);
+  GaussianRule rule;
+  rule.lam = 0.85;
+  gaussian_update(vp, mu.data(), sigma.data(), rule, nm.data(), ns.data(), scratch.data());
+  for (int m = 0; m < M; ++m) {
+    double mean = 0.0, var = 0.0;
+    for (int j = 0; j < P; ++j) mean += hp[static_cast<std::size_t>(m * P + j)];
+    mean /= P;
+    for (int j = 0; j < P; ++j) var += std::pow(hp[static_cast<std::size_t>(m * P + j)] - mean, 2);
+    var /= P;
+    const double want_s = std::sqrt(0.85 * 4.0 + 0.15 * var + 0.85 * 0.15 * (1.0 - mean) * (1.0 - mean));
+    CHECK(std::fabs(nm[static_cast<std::size_t>(m)] - (0.85 + 0.15 * mean)) < 1e-12);
+    CHECK(std::fabs(ns[static_cast<std::size_t>(m)] - want_s) < 1e-12);
+  }
+  bool threw = false;
+  try {
+    gaussian_update(MatrixView{hp.data(), M, 0, P, 1}, mu.data(), sigma.data(), rule, nm.data(),
+                    ns.data(), scratch.data());
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+  // Selections: k distinct features in range.
+  std::vector<double> w(P, 1.0 / P);
+  std::vector<std::int32_t> sel(M);
+  wmil_select(vp, vn, w.data(), M, false, sel.data());
+  std::vector<std::int32_t> sorted = sel;
+  std::sort(sorted.begin(), sorted.end());
+  for (int m = 0; m < M; ++m) CHECK(sorted[static_cast<std::size_t>(m)] == m);
+  std::vector<double> ep(static_cast<std::size_t>(P * M)), en(static_cast<std::size_t>(N * M));
+  for (int m = 0; m < M; ++m) {
+    for (int j = 0; j < P; ++j) ep[static_cast<std::size_t>(j * M + m)] = std::exp(hp[static_cast<std::size_t>(m * P + j)]);
+    for (int j = 0; j < N; ++j) en[static_cast<std::size_t>(j * M + m)] = std::exp(hn[static_cast<std::size_t>(m * N + j)]);
+  }
+  std::vector<std::int32_t> sel2(5);
+  milboost_select(vp, vn, MatrixView{ep.data(), P, M, M, 1}, MatrixView{en.data(), N, M, M, 1}, 5,
+                  1e-5, sel2.data());
+  for (std::int32_t f : sel2) CHECK(f >= 0 && f < M);
+  threw = false;
+  try {
+    wmil_select(vp, vn, w.data(), M + 1, false, sel.data());
+  } catch (const std::invalid_argument&) {
+    threw = true;
+  }
+  CHECK(threw);
+}
+
 }  // namespace
 
 int main() {
@@ -494,6 +563,7 @@ int main() {
   test_orientation_bin();
   test_channels(rng);
   test_hardening(rng);
+  test_learning(rng);
   if (failures == 0) {
     std::printf("test_core: all checks passed\n");
     return EXIT_SUCCESS;

@@ -110,3 +110,9 @@ def score_grid(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.Ar
                box: tuple[int, int, int, int], radius: int, step: int,
                frame_size: tuple[int, int], return_scores: bool,
                ) -> tuple[int, int, float, int] | tuple[int, int, float, int, _F64]: ...
+def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayLike,
+           sigma1: npt.ArrayLike, mu0: npt.ArrayLike, sigma0: npt.ArrayLike, guard: float,
+           box: tuple[int, int, int, int], stages: Sequence[tuple[int, int]],
+           frame_size: tuple[int, int]) -> tuple[tuple[int, int, float, int], ...]:
+    """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage."""
+

@@ -1,0 +1,292 @@
+#include "wmiltrack/learning.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace wmiltrack {
+
+double pairwise_sum(const double* a, std::ptrdiff_t n, std::ptrdiff_t stride) {
+  if (n < 8) {
+    double res = 0.0;
+    for (std::ptrdiff_t i = 0; i < n; ++i) res = res + a[i * stride];
+    return res;
+  }
+  if (n <= 128) {
+    double r[8];
+    for (int j = 0; j < 8; ++j) r[j] = a[j * stride];
+    std::ptrdiff_t i = 8;
+    for (; i < n - (n % 8); i += 8) {
+      for (int j = 0; j < 8; ++j) r[j] = r[j] + a[(i + j) * stride];
+    }
+    double res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]));
+    for (; i < n; ++i) res = res + a[i * stride];
+    return res;
+  }
+  std::ptrdiff_t n2 = n / 2;
+  n2 -= n2 % 8;
+  return pairwise_sum(a, n2, stride) + pairwise_sum(a + n2 * stride, n - n2, stride);
+}
+
+namespace {
+
+// numpy.add.reduce over row m: 0.0 plus the pairwise sum.
+double row_sum(const MatrixView& v, int m) {
+  return 0.0 + pairwise_sum(v.row(m), v.cols, v.col_stride);
+}
+
+// ((row - centre) ** 2).mean() as numpy computes it.
+double row_sq_dev_mean(const MatrixView& v, int m, double centre, double* scratch) {
+  const double* r = v.row(m);
+  for (int j = 0; j < v.cols; ++j) {
+    const double d = r[j * v.col_stride] - centre;
+    scratch[j] = d * d;
+  }
+  return (0.0 + pairwise_sum(scratch, v.cols, 1)) / static_cast<double>(v.cols);
+}
+
+// numpy.maximum(a, b): NaN propagates.
+double max_nan(double a, double b) { return (std::isnan(a) || a >= b) ? a : b; }
+
+// ln sigma(z), and 1 - sigma(z) into *rest, from one exp(-|z|) without overflow (1 - sigma(z)
+// stays exact for large z, where computing 1 - sigma would round to 0).
+double log_sigmoid_and_rest(double z, double* rest) {
+  if (z >= 0) {
+    const double e = std::exp(-z);
+    *rest = e / (1.0 + e);
+    return -std::log1p(e);
+  }
+  const double e = std::exp(z);
+  *rest = 1.0 / (1.0 + e);
+  return z - std::log1p(e);
+}
+
+// out[j] = w[j] exp(logv[j]) / sum_m w[m] exp(logv[m]), computed without underflow.
+void normalised(const double* logv, const double* w, double* out, int n) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (int j = 0; j < n; ++j) {
+    if (w[j] > 0 && logv[j] > top) top = logv[j];
+  }
+  if (top == -std::numeric_limits<double>::infinity()) {
+    for (int j = 0; j < n; ++j) out[j] = 0.0;
+    return;
+  }
+  double total = 0.0;
+  for (int j = 0; j < n; ++j) {
+    out[j] = w[j] * std::exp(logv[j] - top);
+    total += out[j];
+  }
+  for (int j = 0; j < n; ++j) out[j] /= total;
+}
+
+// Adds feature `best` to the strong classifier (the first unused one if best < 0, i.e. when
+// every candidate scored NaN).
+void take(int best, int step, const MatrixView& h_pos, const MatrixView& h_neg,
+          std::vector<double>& H_pos, std::vector<double>& H_neg, std::vector<unsigned char>& used,
+          std::int32_t* selected) {
+  if (best < 0) {
+    for (int m = 0; m < static_cast<int>(used.size()); ++m) {
+      if (!used[static_cast<std::size_t>(m)]) {
+        best = m;
+        break;
+      }
+    }
+  }
+  used[static_cast<std::size_t>(best)] = 1;
+  selected[step] = best;
+  for (int j = 0; j < h_pos.cols; ++j) H_pos[static_cast<std::size_t>(j)] += h_pos.at(best, j);
+  for (int j = 0; j < h_neg.cols; ++j) H_neg[static_cast<std::size_t>(j)] += h_neg.at(best, j);
+}
+
+void check_selection(const MatrixView& h_pos, const MatrixView& h_neg, int k) {
+  if (h_neg.rows != h_pos.rows) {
+    throw std::invalid_argument("h_pos and h_neg disagree in the number of features");
+  }
+  if (k < 1 || k > h_pos.rows) {
+    throw std::invalid_argument("k must be in 1.." + std::to_string(h_pos.rows) + ", got " +
+                                std::to_string(k));
+  }
+}
+
+}  // namespace
+
+void gaussian_update(const MatrixView& values, const double* mu, const double* sigma,
+                     const GaussianRule& rule, double* new_mu, double* new_sigma,
+                     double* scratch) {
+  if (values.cols < 1) throw std::invalid_argument("gaussian_update needs at least one sample");
+  const double lam = rule.lam;
+  const double keep = 1.0 - lam;
+  const double cross = lam * (1.0 - lam);
+  const double n = static_cast<double>(values.cols);
+  for (int m = 0; m < values.rows; ++m) {
+    const double mean = row_sum(values, m) / n;
+    if (rule.mil) {
+      double var;
+      if (rule.first) {
+        var = row_sq_dev_mean(values, m, mean, scratch) + 1e-9;
+        new_mu[m] = mean;
+      } else {
+        new_mu[m] = lam * mu[m] + keep * mean;
+        var = lam * (sigma[m] * sigma[m]) + keep * row_sq_dev_mean(values, m, new_mu[m], scratch);
+      }
+      new_sigma[m] = max_nan(std::sqrt(var), rule.sigma_floor);
+      continue;
+    }
+    const double s = std::sqrt(row_sq_dev_mean(values, m, mean, scratch));  // numpy's std
+    if (rule.first && rule.direct_first) {
+      new_mu[m] = mean;
+      new_sigma[m] = max_nan(s, rule.sigma_floor);
+      continue;
+    }
+    const double d = mu[m] - mean;
+    const double var = (lam * (sigma[m] * sigma[m]) + keep * (s * s)) + cross * (d * d);
+    new_sigma[m] = max_nan(std::sqrt(var), rule.sigma_floor);
+    new_mu[m] = lam * mu[m] + keep * mean;
+  }
+}
+
+void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double* w_pos, int k,
+                 bool code_gradient, std::int32_t* selected) {
+  check_selection(h_pos, h_neg, k);
+  const int M = h_pos.rows, P = h_pos.cols, N = h_neg.cols;
+  const std::size_t Mz = static_cast<std::size_t>(M);
+  std::vector<double> H_pos(static_cast<std::size_t>(P), 0.0), H_neg(static_cast<std::size_t>(N), 0.0);
+  std::vector<double> g(static_cast<std::size_t>(P + N), 0.0);
+  std::vector<double> tmp(static_cast<std::size_t>(std::max(P, N))), rest(tmp.size());
+  const std::vector<double> ones(static_cast<std::size_t>(std::max(N, 1)), 1.0);
+  std::vector<unsigned char> used(Mz, 0);
+  std::vector<double> score(Mz);
+  // Instance-major copy of the log ratios (row j: every feature's h on instance j, the
+  // positives then the negatives), so that the scoring loop runs over features: M
+  // independent sums, each adding its terms in the order j = 0, 1, ... as a feature-by-
+  // feature loop does (the same bits), eight of them at a time in registers.
+  std::vector<double> hT(static_cast<std::size_t>(P + N) * Mz);
+  for (int j = 0; j < P; ++j) {
+    for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m)] = h_pos.at(m, j);
+  }
+  for (int j = 0; j < N; ++j) {
+    for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(P + j) * Mz + static_cast<std::size_t>(m)] = h_neg.at(m, j);
+  }
+  double* g_pos = g.data();
+  double* g_neg = g.data() + P;
+  for (int step = 0; step < k; ++step) {
+    // Positive bag: d ln(sum_j w_j sigma_j) / dH_j = w_j sigma_j (1 - sigma_j) / sum w sigma.
+    if (P > 0) {
+      for (int j = 0; j < P; ++j) tmp[static_cast<std::size_t>(j)] = log_sigmoid_and_rest(H_pos[static_cast<std::size_t>(j)], &rest[static_cast<std::size_t>(j)]);
+      normalised(tmp.data(), w_pos, g_pos, P);
+      if (code_gradient) {
+        // The reference code's w sigma (1 - w sigma) / sum(w sigma) (spec 5, compat).
+        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * (1.0 - w_pos[j] * std::exp(tmp[static_cast<std::size_t>(j)]));
+      } else {
+        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * rest[static_cast<std::size_t>(j)];
+      }
+    }
+    // Negative bag: d ln(sum_j (1 - sigma_j)) / dH_j = -sigma_j (1 - sigma_j) / sum(1 - sigma).
+    if (N > 0) {
+      for (int j = 0; j < N; ++j) tmp[static_cast<std::size_t>(j)] = log_sigmoid_and_rest(-H_neg[static_cast<std::size_t>(j)], &rest[static_cast<std::size_t>(j)]);
+      normalised(tmp.data(), ones.data(), g_neg, N);
+      for (int j = 0; j < N; ++j) g_neg[j] = -g_neg[j] * rest[static_cast<std::size_t>(j)];
+    }
+    // score_m = sum_j h_mj g_j over the positives then the negatives.
+    int m0 = 0;
+    for (; m0 + 8 <= M; m0 += 8) {
+      double a[8] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+      for (int j = 0; j < P + N; ++j) {
+        const double* row = hT.data() + static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m0);
+        const double gj = g[static_cast<std::size_t>(j)];
+        for (int q = 0; q < 8; ++q) a[q] = a[q] + row[q] * gj;
+      }
+      for (int q = 0; q < 8; ++q) score[static_cast<std::size_t>(m0 + q)] = a[q];
+    }
+    for (int m = m0; m < M; ++m) {
+      double a = 0.0;
+      for (int j = 0; j < P + N; ++j) a = a + hT[static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m)] * g[static_cast<std::size_t>(j)];
+      score[static_cast<std::size_t>(m)] = a;
+    }
+    int best = -1;
+    double best_score = -std::numeric_limits<double>::infinity();
+    for (int m = 0; m < M; ++m) {
+      const double sc = score[static_cast<std::size_t>(m)];
+      if (used[static_cast<std::size_t>(m)] || std::isnan(sc)) continue;
+      if (best < 0 || sc > best_score) {
+        best = m;
+        best_score = sc;
+      }
+    }
+    take(best, step, h_pos, h_neg, H_pos, H_neg, used, selected);
+  }
+}
+
+void milboost_select(const MatrixView& h_pos, const MatrixView& h_neg, const MatrixView& exp_pos,
+                     const MatrixView& exp_neg, int k, double guard, std::int32_t* selected) {
+  check_selection(h_pos, h_neg, k);
+  const int M = h_pos.rows, P = h_pos.cols, N = h_neg.cols;
+  if (exp_pos.rows != P || exp_neg.rows != N || (P > 0 && exp_pos.cols != M) ||
+      (N > 0 && exp_neg.cols != M) || (P > 0 && exp_pos.col_stride != 1) ||
+      (N > 0 && exp_neg.col_stride != 1)) {
+    throw std::invalid_argument("exp_pos/exp_neg must be samples x features with contiguous rows");
+  }
+  const std::size_t Mz = static_cast<std::size_t>(M);
+  std::vector<double> H_pos(static_cast<std::size_t>(P), 0.0), H_neg(static_cast<std::size_t>(N), 0.0);
+  std::vector<double> D(Mz), prod(Mz), L(Mz);
+  std::vector<unsigned char> used(Mz, 0);
+  double* Dp = D.data();
+  double* pp = prod.data();
+  double* Lp = L.data();
+  const double inv_p = P > 0 ? 1.0 / P : 0.0;
+  const double inv_n = N > 0 ? 1.0 / N : 0.0;
+  const auto clamp60 = [](double z) { return z > 60.0 ? 60.0 : (z < -60.0 ? -60.0 : z); };
+  for (int step = 0; step < k; ++step) {
+    for (int m = 0; m < M; ++m) {
+      Dp[m] = 1.0;
+      pp[m] = 1.0;
+      Lp[m] = 0.0;
+    }
+    // Positive bag: prod_j (1 - sigma(H_j + h_mj)) = 1 / prod_j (1 + e^H_j e^h_mj).
+    // Capping the product at 1e30 changes 1 - 1/D by < 1e-30, far below the guard.
+    for (int j = 0; j < P; ++j) {
+      const double c = std::exp(clamp60(H_pos[static_cast<std::size_t>(j)]));
+      const double* e = exp_pos.row(j);
+      for (int m = 0; m < M; ++m) {
+        const double t = Dp[m] * (1.0 + c * e[m]);
+        Dp[m] = t < 1e30 ? t : 1e30;
+      }
+    }
+    // Negatives: sum_j ln(guard + 1 - sigma), as logs of products of <= 60 factors (each
+    // factor >= guard = 1e-5, so a product stays above 1e-300). The logs of features
+    // already chosen are never used: skipped.
+    int chunk = 0;
+    for (int j = 0; j < N; ++j) {
+      const double c = std::exp(clamp60(H_neg[static_cast<std::size_t>(j)]));
+      const double* e = exp_neg.row(j);
+      for (int m = 0; m < M; ++m) pp[m] = pp[m] * (guard + 1.0 / (1.0 + c * e[m]));
+      ++chunk;
+      if (chunk == 60 || j == N - 1) {
+        for (int m = 0; m < M; ++m) {
+          if (!used[static_cast<std::size_t>(m)]) Lp[m] += std::log(pp[m]);
+          pp[m] = 1.0;
+        }
+        chunk = 0;
+      }
+    }
+    int best = -1;
+    double best_nll = std::numeric_limits<double>::infinity();
+    for (int m = 0; m < M; ++m) {
+      if (used[static_cast<std::size_t>(m)]) continue;
+      double nll = 0.0;
+      if (P > 0) nll = -std::log(1.0 - 1.0 / Dp[m] + guard) * inv_p;
+      nll = nll - Lp[m] * inv_n;
+      if (std::isnan(nll)) continue;
+      if (best < 0 || nll < best_nll) {
+        best = m;
+        best_nll = nll;
+      }
+    }
+    take(best, step, h_pos, h_neg, H_pos, H_neg, used, selected);
+  }
+}
+
+}  // namespace wmiltrack
