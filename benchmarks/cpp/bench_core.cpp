@@ -1,12 +1,15 @@
-// Microbenchmarks of wmiltrack's C++ core: integral image, Haar feature projection and
-// candidate scoring. Plain std::chrono; each case is run `reps` times after one warm-up call
-// and reports the minimum and median wall time of one call and a throughput from the minimum.
+// Microbenchmarks of wmiltrack's C++ core: integral image, Haar feature projection,
+// candidate scoring, and a whole frame step of the tracker (the same kernels in the same
+// order as Tracker.update, no Python: the floor the Python path is measured against). Plain
+// std::chrono; each case is run `reps` times after one warm-up call and reports the minimum
+// and median wall time of one call and a throughput from the minimum.
 //
-//   bench_core [--quick] [--reps N]
+//   bench_core [--quick] [--reps N] [--frame-only]
 //
 // The feature bank mimics the tracker's: every feature sums 2..4 random rectangles inside
 // the target box with weights +-1/sqrt(n) (compressive-tracking style).
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -19,6 +22,7 @@
 
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/integral.hpp"
+#include "wmiltrack/learning.hpp"
 #include "wmiltrack/scoring.hpp"
 
 using namespace wmiltrack;
@@ -250,18 +254,188 @@ void bench_score(int reps_cap, double budget, std::mt19937& rng) {
   }
 }
 
+
+// A whole frame step of a tracker preset, kernel by kernel as Tracker.update runs them:
+// integral image of the search region, coarse-to-fine search, projection of both bags,
+// Gaussian update of each class, log ratios, feature selection. Frames cycle through
+// `n_frames` distinct images (as a decoded video does: a new frame is not in cache). The bags
+// are the tracker's (positives in a disc, negatives drawn from an annulus); the box does not
+// move, which changes nothing in the cost. Prints the median per stage and per frame.
+struct Preset {
+  const char* name;
+  int features, selected;
+  int coarse_radius, coarse_step, fine_radius, fine_step;
+  double pos_radius, neg_inner, neg_outer;
+  int neg_count;
+  bool milboost;
+  double guard;
+};
+
+std::vector<std::array<int, 2>> offsets_between(double inner, double outer) {
+  std::vector<std::array<int, 2>> out;
+  const int n = static_cast<int>(std::ceil(outer));
+  for (int dy = -n; dy <= n; ++dy) {
+    for (int dx = -n; dx <= n; ++dx) {
+      const double d2 = dx * dx + dy * dy;
+      if (d2 >= inner * inner && d2 < outer * outer) out.push_back({dx, dy});
+    }
+  }
+  return out;
+}
+
+void bench_frame(int reps_cap, bool quick, std::mt19937& rng) {
+  const Preset presets[] = {
+      {"rcwmil", 100, 20, 25, 4, 10, 1, 4.0, 8.0, 22.0, 50, false, 1e-30},
+      {"mil", 250, 50, 25, 1, 0, 1, 4.0, 9.0, 37.5, 65, true, 1e-5},
+  };
+  const int fw = 640, fh = 480;
+  const int n_frames = quick ? 4 : 20;
+  std::vector<Image> frames;
+  for (int i = 0; i < n_frames; ++i) frames.push_back(random_image(fh, fw, rng));
+  const char* stage_names[] = {"integral", "search", "projection", "gaussian update",
+                               "log ratios", "selection"};
+  constexpr int kStages = 6;
+  for (const Preset& p : presets) {
+    for (int bs : {32, 64, 128}) {
+      const FeatureBank bank = random_bank(p.features, bs, bs, rng);
+      const int M = p.features, K = p.selected;
+      const auto pos_off = offsets_between(0.0, p.pos_radius);
+      const auto neg_all = offsets_between(p.neg_inner, p.neg_outer);
+      const int P = static_cast<int>(pos_off.size()), N = p.neg_count, B = P + N;
+      const Rect box{fw / 2 - bs / 2, fh / 2 - bs / 2, bs, bs};
+      const int reach = std::max(p.coarse_radius, p.fine_radius) + (p.fine_radius > 0 ? p.fine_radius : 0);
+      const int margin = reach + static_cast<int>(std::ceil(p.neg_outer)) + 1;
+      const Rect roi{box.x - margin, box.y - margin, bs + 2 * margin, bs + 2 * margin};
+      std::vector<SearchStage> stages{{p.coarse_radius, p.coarse_step}};
+      if (p.fine_radius > 0) stages.push_back({p.fine_radius, p.fine_step});
+      std::vector<double> mu1(static_cast<std::size_t>(M), 0.0), s1(static_cast<std::size_t>(M), 1.0),
+          mu0 = mu1, s0 = s1, nm(static_cast<std::size_t>(M)), ns(static_cast<std::size_t>(M));
+      std::vector<std::int32_t> sel(static_cast<std::size_t>(K));
+      for (int k = 0; k < K; ++k) sel[static_cast<std::size_t>(k)] = k;
+      std::vector<std::int32_t> xs(static_cast<std::size_t>(B)), ys(static_cast<std::size_t>(B));
+      std::vector<double> values(static_cast<std::size_t>(M) * B), h(values.size()),
+          scratch(static_cast<std::size_t>(B)), w(static_cast<std::size_t>(P));
+      for (int j = 0; j < P; ++j) {
+        w[static_cast<std::size_t>(j)] = std::exp(-std::hypot(pos_off[static_cast<std::size_t>(j)][0], pos_off[static_cast<std::size_t>(j)][1]));
+      }
+      std::vector<double> ep(static_cast<std::size_t>(P) * M), en(static_cast<std::size_t>(N) * M);
+      std::vector<int> pick(neg_all.size());
+      IntegralImage ii;
+      bool first = true;
+      std::vector<std::array<double, kStages>> times;
+      const int steps = std::max(reps_cap, 2 * n_frames);
+      for (int step = 0; step < steps + 1; ++step) {
+        const Image& img = frames[static_cast<std::size_t>(step % n_frames)];
+        const auto t0 = Clock::now();
+        ii.compute(img.view(), roi);
+        const auto t1 = Clock::now();
+        if (!first) {
+          std::vector<double> g[4];
+          for (int k = 0; k < K; ++k) {
+            const std::size_t f = static_cast<std::size_t>(sel[static_cast<std::size_t>(k)]);
+            g[0].push_back(mu1[f]);
+            g[1].push_back(s1[f]);
+            g[2].push_back(mu0[f]);
+            g[3].push_back(s0[f]);
+          }
+          const WeakGaussians weak(g[0].data(), g[1].data(), g[2].data(), g[3].data(), K, p.guard);
+          const auto res = search(ii, bank, sel.data(), K, weak, box, stages, fw, fh);
+          g_sink = g_sink + res.back().score;
+        }
+        const auto t2 = Clock::now();
+        // Bags: every positive offset, `neg_count` distinct negatives (sorted, as the tracker).
+        for (int j = 0; j < P; ++j) {
+          xs[static_cast<std::size_t>(j)] = box.x + pos_off[static_cast<std::size_t>(j)][0];
+          ys[static_cast<std::size_t>(j)] = box.y + pos_off[static_cast<std::size_t>(j)][1];
+        }
+        for (std::size_t i = 0; i < pick.size(); ++i) pick[i] = static_cast<int>(i);
+        std::shuffle(pick.begin(), pick.end(), rng);
+        std::sort(pick.begin(), pick.begin() + N);
+        for (int j = 0; j < N; ++j) {
+          const auto& o = neg_all[static_cast<std::size_t>(pick[static_cast<std::size_t>(j)])];
+          xs[static_cast<std::size_t>(P + j)] = box.x + o[0];
+          ys[static_cast<std::size_t>(P + j)] = box.y + o[1];
+        }
+        const auto t3 = Clock::now();
+        project(ii, bank, nullptr, M, xs.data(), ys.data(), B, values.data());
+        const auto t4 = Clock::now();
+        const MatrixView vpos{values.data(), M, P, B, 1}, vneg{values.data() + P, M, N, B, 1};
+        GaussianRule rule;
+        rule.first = first;
+        rule.mil = p.milboost;
+        gaussian_update(vpos, mu1.data(), s1.data(), rule, nm.data(), ns.data(), scratch.data());
+        mu1.swap(nm);
+        s1.swap(ns);
+        gaussian_update(vneg, mu0.data(), s0.data(), rule, nm.data(), ns.data(), scratch.data());
+        mu0.swap(nm);
+        s0.swap(ns);
+        const auto t5 = Clock::now();
+        const WeakGaussians all(mu1.data(), s1.data(), mu0.data(), s0.data(), M, p.guard);
+        for (int k = 0; k < M; ++k) {
+          all.log_ratio(k, values.data() + static_cast<std::ptrdiff_t>(k) * B, B,
+                        h.data() + static_cast<std::ptrdiff_t>(k) * B, false, nullptr);
+        }
+        const auto t6 = Clock::now();
+        const MatrixView hpos{h.data(), M, P, B, 1}, hneg{h.data() + P, M, N, B, 1};
+        if (p.milboost) {
+          for (int m = 0; m < M; ++m) {
+            for (int j = 0; j < P; ++j) ep[static_cast<std::size_t>(j) * M + m] = std::exp(std::clamp(hpos.at(m, j), -300.0, 300.0));
+            for (int j = 0; j < N; ++j) en[static_cast<std::size_t>(j) * M + m] = std::exp(std::clamp(hneg.at(m, j), -300.0, 300.0));
+          }
+          milboost_select(hpos, hneg, MatrixView{ep.data(), P, M, M, 1},
+                          MatrixView{en.data(), N, M, M, 1}, K, p.guard, sel.data());
+        } else {
+          wmil_select(hpos, hneg, w.data(), K, false, sel.data());
+        }
+        const auto t7 = Clock::now();
+        if (!first) {
+          const auto us = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count() * 1e6; };
+          times.push_back({us(t0, t1), us(t1, t2), us(t3, t4), us(t4, t5), us(t5, t6), us(t6, t7)});
+          (void)t3;
+        }
+        first = false;
+      }
+      std::array<double, kStages> med{};
+      std::vector<double> total;
+      for (const auto& t : times) {
+        double sum = 0.0;
+        for (double v : t) sum += v;
+        total.push_back(sum);
+      }
+      for (int s = 0; s < kStages; ++s) {
+        std::vector<double> col;
+        for (const auto& t : times) col.push_back(t[static_cast<std::size_t>(s)]);
+        std::sort(col.begin(), col.end());
+        med[static_cast<std::size_t>(s)] = col[col.size() / 2];
+      }
+      std::sort(total.begin(), total.end());
+      const std::string cfg = std::string(p.name) + ", box " + std::to_string(bs) + ", " +
+                              std::to_string(fw) + "x" + std::to_string(fh);
+      std::printf("| frame      | %-32s | %6d | %10.2f | %10.2f | %12.0f fps    |", cfg.c_str(),
+                  static_cast<int>(times.size()), total.front(), total[total.size() / 2],
+                  1e6 / total[total.size() / 2]);
+      std::printf("  ");
+      for (int s = 0; s < kStages; ++s) std::printf("%s %.0f; ", stage_names[s], med[static_cast<std::size_t>(s)]);
+      std::printf("\n");
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   bool quick = false;
+  bool frame_only = false;
   int reps_cap = 200;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
+    } else if (std::strcmp(argv[i], "--frame-only") == 0) {
+      frame_only = true;
     } else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
       reps_cap = std::max(5, std::atoi(argv[++i]));
     } else {
-      std::fprintf(stderr, "usage: %s [--quick] [--reps N]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--quick] [--reps N] [--frame-only]\n", argv[0]);
       return 2;
     }
   }
@@ -270,12 +444,17 @@ int main(int argc, char** argv) {
   std::mt19937 rng(12345);
   std::printf("| Benchmark  | Configuration                    | Reps   | Min us     | Median us  | Throughput (min)   |\n");
   std::printf("|------------|----------------------------------|--------|------------|------------|--------------------|\n");
-  bench_integral(reps_cap, budget, rng);
-  bench_channels(reps_cap, budget, rng);
-  bench_project(reps_cap, budget, rng);
-  bench_score(reps_cap, budget, rng);
+  if (!frame_only) {
+    bench_integral(reps_cap, budget, rng);
+    bench_channels(reps_cap, budget, rng);
+    bench_project(reps_cap, budget, rng);
+    bench_score(reps_cap, budget, rng);
+  }
+  bench_frame(reps_cap, quick, rng);
   std::printf("\nintegral: pixels of the ROI converted to luma and summed per second; project: "
               "feature values per second; channels: ROI pixels x planes per second; score: candidate boxes scored per second (each "
-              "evaluates K=50 features and their Gaussian log-ratios).\n");
+              "evaluates K=50 features and their Gaussian log-ratios); frame: one whole frame step of the "
+              "preset in C++ (median us per stage after the row; the bag sampling between search and "
+              "projection is not timed), the floor of Tracker.update.\n");
   return g_sink == 12345.678 ? 1 : 0;
 }
