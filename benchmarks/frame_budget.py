@@ -16,7 +16,9 @@ slightly above those of ``fps_compare.py``; the shares are what this script is f
 
 Stages: integral image, search (coarse and fine grids; the colour-merged grid for
 rcwmil-plus), scale search, bag sampling, projection (feature values of the bags), Gaussian
-update, log ratios, selection, colour model, glue.  The same script runs on older versions of
+update, log ratios, selection, colour model, glue.  The last row is the share of the update
+that holds the GIL (everything but the compiled calls that release it): what keeps two
+trackers in two threads from running twice as fast.  The same script runs on older versions of
 the package (stages it does not find are reported as 0), which is how the README's "before"
 table was made.
 """
@@ -46,6 +48,9 @@ import wmiltrack
 
 STAGES = ("integral", "search", "scale", "sampling", "projection", "gaussian update",
           "log ratios", "selection", "colour", "glue")
+# Stages that run in one compiled call with the GIL released (the others hold it all or part
+# of the time: sampling and glue are Python and numpy, scale and colour mix both).
+RELEASES_GIL = ("integral", "search", "projection", "gaussian update", "log ratios", "selection")
 # Compiled calls of wmiltrack._core and the stage each belongs to.
 CORE_STAGES = {"score_grid": "search", "search": "search", "project": "projection",
                "log_ratio": "log ratios"}
@@ -155,6 +160,11 @@ def _print(name: str, results: list[dict[str, Any]]) -> None:
             cells.append("-" if us == 0 else f"{us:.0f} ({100 * us / total:.0f} %)")
         print(f"| {s} | " + " | ".join(cells) + " |")
     print("| **update (median)** | " + " | ".join(f"**{r['us']['total']:.0f}**" for r in results) + " |")
+    held = []
+    for r in results:
+        free = sum(r["us"][s] for s in RELEASES_GIL)
+        held.append(f"{100 * max(r['us']['total'] - free, 0.0) / r['us']['total']:.0f} %")
+    print("| holds the GIL (update less the GIL-free stages) | " + " | ".join(held) + " |")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -80,3 +80,38 @@ def test_errors() -> None:
         ColourModel(learning_rate=0.0)
     with pytest.raises(ValueError, match="learn"):
         ColourModel().integral(np.zeros((4, 4, 3), np.uint8), (0, 0, 4, 4))
+
+
+def _bins_numpy(patch: np.ndarray, bits: int) -> np.ndarray:
+    s = 8 - bits
+    b, g, r = ((patch[..., c] >> s).astype(np.int64) for c in range(3))
+    return (b << (2 * bits)) | (g << bits) | r
+
+
+@pytest.mark.parametrize("bits", [1, 3, 5, 8])
+@pytest.mark.parametrize("channels", [3, 4])
+def test_colour_kernels_match_numpy(bits: int, channels: int) -> None:
+    """The core's per-pixel bins, likelihood map and histogram counts are numpy's."""
+    from wmiltrack import _core
+
+    rng = np.random.default_rng(bits * 10 + channels)
+    frame = rng.integers(0, 256, (37, 53, channels), dtype=np.uint8)
+    likelihood = rng.random(1 << (3 * bits))
+    x, y, w, h = 5, 3, 41, 30
+    want = likelihood[_bins_numpy(frame[y:y + h, x:x + w], bits)]
+    np.testing.assert_array_equal(_core.colour_map(frame, (x, y, w, h), bits, likelihood), want)
+    idx = _bins_numpy(frame[y:y + h, x:x + w], bits)
+    inside, core = (4, 20, 6, 30), (6, 18, 9, 27)  # (row0, row1, col0, col1) in the region
+    m_in = np.zeros(idx.shape, bool)
+    m_in[4:20, 6:30] = True
+    m_core = np.zeros(idx.shape, bool)
+    m_core[6:18, 9:27] = True
+    fg, bg = _core.colour_counts(frame, (x, y, w, h), inside, core, bits)
+    np.testing.assert_array_equal(fg, np.bincount(idx[m_core], minlength=1 << (3 * bits)))
+    np.testing.assert_array_equal(bg, np.bincount(idx[~m_in], minlength=1 << (3 * bits)))
+    with pytest.raises(ValueError):
+        _core.colour_map(frame[..., 0], (x, y, w, h), bits, likelihood)  # gray
+    with pytest.raises(ValueError):
+        _core.colour_map(frame, (x, y, 60, h), bits, likelihood)  # outside the frame
+    with pytest.raises(ValueError):
+        _core.colour_map(frame, (x, y, w, h), bits, likelihood[:-1])  # wrong table size

@@ -4,6 +4,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -46,6 +47,7 @@ ImageView image_view(const py::array& frame);
 void bind_integral(py::module_& m);
 void bind_haar(py::module_& m);
 void bind_scoring(py::module_& m);
+void bind_colour(py::module_& m);
 
 inline void require(bool ok, const std::string& message) {
   if (!ok) throw py::value_error(message);

@@ -8,4 +8,5 @@ PYBIND11_MODULE(_core, m) {
   wmiltrack::bindings::bind_integral(m);
   wmiltrack::bindings::bind_haar(m);
   wmiltrack::bindings::bind_scoring(m);
+  wmiltrack::bindings::bind_colour(m);
 }

@@ -116,3 +116,12 @@ def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayL
            frame_size: tuple[int, int]) -> tuple[tuple[int, int, float, int], ...]:
     """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage."""
 
+
+def colour_map(frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int], bits: int,
+               likelihood: npt.ArrayLike) -> _F64:
+    """likelihood[bin] of every pixel of region = (x, y, w, h): an h x w float64 array."""
+
+def colour_counts(frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int],
+                  inside: tuple[int, int, int, int], core: tuple[int, int, int, int],
+                  bits: int) -> tuple[_F64, _F64]:
+    """Colour histogram counts of region: (fg over core, bg outside inside)."""

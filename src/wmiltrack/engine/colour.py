@@ -23,6 +23,8 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
+from .. import _core
+
 __all__ = ["ColourModel", "is_colour"]
 
 FloatArray = npt.NDArray[np.float64]
@@ -63,31 +65,12 @@ class ColourModel:
         self.shrink = shrink
         self._fg: FloatArray | None = None
         self._bg: FloatArray | None = None
-        # The bin index of the last integral()'s region, reused by learn() on the same frame.
-        self._indexed: tuple[np.ndarray, int, int, npt.NDArray[np.intp]] | None = None
+        self._likelihood: FloatArray | None = None  # P(target | bin), after each learn()
 
     @staticmethod
     def usable(frame: np.ndarray) -> bool:
         """Whether the model has colour to work with on frames like ``frame``."""
         return is_colour(frame)
-
-    def _index(self, patch: np.ndarray) -> npt.NDArray[np.intp]:
-        s = 8 - self.bits  # shift the uint8 values first, widen to 32 bits once
-        b = (patch[..., 0] >> s).astype(np.uint32)
-        g = (patch[..., 1] >> s).astype(np.uint32)
-        r = (patch[..., 2] >> s).astype(np.uint32)
-        idx: npt.NDArray[np.intp] = (b << (2 * self.bits)) | (g << self.bits) | r
-        return idx
-
-    def _bins(self, frame: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> npt.NDArray[np.intp]:
-        """Bin indices of ``frame[y0:y1, x0:x1]``, cut from the last integral()'s when that was
-        the same frame and held the region (the tracker learns inside its search region)."""
-        if self._indexed is not None:
-            f, ix, iy, idx = self._indexed
-            if (f is frame and ix <= x0 and iy <= y0 and x1 <= ix + idx.shape[1]
-                    and y1 <= iy + idx.shape[0]):
-                return idx[y0 - iy:y1 - iy, x0 - ix:x1 - ix]
-        return self._index(frame[y0:y1, x0:x1])
 
     def learn(self, frame: np.ndarray, box: tuple[int, int, int, int]) -> None:
         """Fold in the histograms of ``box`` (target) and its surroundings (background)."""
@@ -96,15 +79,18 @@ class ColourModel:
         pad = int(round(self.pad * (w + h) / 2))
         x0, y0 = max(0, x - pad), max(0, y - pad)
         x1, y1 = min(fw, x + w + pad), min(fh, y + h + pad)
-        idx = self._bins(frame, x0, y0, x1, y1)
-        inside = np.zeros(idx.shape, dtype=bool)
-        inside[max(0, y - y0):max(0, y - y0 + h), max(0, x - x0):max(0, x - x0 + w)] = True
-        core = np.zeros(idx.shape, dtype=bool)
+        rh, rw = max(y1 - y0, 0), max(x1 - x0, 0)
+
+        def span(r0: int, r1: int, c0: int, c1: int) -> tuple[int, int, int, int]:
+            """Rows [r0, r1) and columns [c0, c1) of the region, cut as numpy slices are."""
+            return min(r0, rh), min(r1, rh), min(c0, rw), min(c1, rw)
+
+        inside = span(max(0, y - y0), max(0, y - y0 + h), max(0, x - x0), max(0, x - x0 + w))
         sx, sy = max(1, int(self.shrink * w)), max(1, int(self.shrink * h))
-        core[max(0, y - y0 + sy):max(0, y - y0 + h - sy), max(0, x - x0 + sx):max(0, x - x0 + w - sx)] = True
-        nb = 1 << (3 * self.bits)
-        fg = np.bincount(idx[core], minlength=nb).astype(np.float64)
-        bg = np.bincount(idx[~inside], minlength=nb).astype(np.float64)
+        core = span(max(0, y - y0 + sy), max(0, y - y0 + h - sy), max(0, x - x0 + sx),
+                    max(0, x - x0 + w - sx))
+        # Counts of the core's bins (target) and of the bins outside the box (background).
+        fg, bg = _core.colour_counts(frame, (x0, y0, rw, rh), inside, core, self.bits)
         fg /= max(fg.sum(), 1.0)
         bg /= max(bg.sum(), 1.0)
         if self._fg is None or self._bg is None:
@@ -113,21 +99,20 @@ class ColourModel:
             a = self.learning_rate
             self._fg = (1.0 - a) * self._fg + a * fg
             self._bg = (1.0 - a) * self._bg + a * bg
+        total = self._fg + self._bg
+        self._likelihood = np.divide(self._fg, total, out=np.full(total.shape, 0.5), where=total > 0)
 
     def integral(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> tuple[FloatArray, int, int]:
         """Integral image of ``P(target | colour)`` over ``roi = (x0, y0, x1, y1)`` (clipped to the
         frame): ``(table, x0, y0)``, the table ``(y1 - y0 + 1) x (x1 - x0 + 1)`` with a zero
         first row and column."""
-        if self._fg is None or self._bg is None:
+        if self._likelihood is None:
             raise ValueError("call learn() before integral()")
         fh, fw = frame.shape[:2]
         x0, y0 = max(0, roi[0]), max(0, roi[1])
         x1, y1 = min(fw, roi[2]), min(fh, roi[3])
-        idx = self._index(frame[y0:y1, x0:x1])
-        self._indexed = (frame, x0, y0, idx)
-        total = self._fg + self._bg
-        likelihood = np.divide(self._fg, total, out=np.full(total.shape, 0.5), where=total > 0)
-        p = likelihood[idx]
+        p = _core.colour_map(frame, (x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)), self.bits,
+                             self._likelihood)
         table: FloatArray = cv2.integral(p, sdepth=cv2.CV_64F)
         return table, x0, y0
 

@@ -1,0 +1,52 @@
+#include "wmiltrack/colour.hpp"
+
+#include <stdexcept>
+
+namespace wmiltrack {
+
+namespace {
+
+void check(const ImageView& image, const Rect& region, int bits) {
+  if (image.data == nullptr || image.channels < 3) {
+    throw std::invalid_argument("colour model: needs a BGR or BGRA frame");
+  }
+  if (bits < 1 || bits > 8) throw std::invalid_argument("colour model: bits must be in 1..8");
+  if (region.x < 0 || region.y < 0 || region.w < 0 || region.h < 0 ||
+      static_cast<std::int64_t>(region.x) + region.w > image.cols ||
+      static_cast<std::int64_t>(region.y) + region.h > image.rows) {
+    throw std::invalid_argument("colour model: the region must lie inside the frame");
+  }
+}
+
+template <class F>
+void for_region(const ImageView& image, const Rect& region, int bits, F&& f) {
+  const std::ptrdiff_t cs = image.channel_stride;
+  for (int r = 0; r < region.h; ++r) {
+    const std::uint8_t* p = image.data + static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
+                            static_cast<std::ptrdiff_t>(region.x) * image.col_stride;
+    for (int c = 0; c < region.w; ++c, p += image.col_stride) {
+      f(r, c, colour_bin(p[0], p[cs], p[2 * cs], bits));
+    }
+  }
+}
+
+}  // namespace
+
+void colour_map(const ImageView& image, const Rect& region, int bits, const double* likelihood,
+                double* out) {
+  check(image, region, bits);
+  const std::ptrdiff_t w = region.w;
+  for_region(image, region, bits,
+             [&](int r, int c, std::uint32_t bin) { out[r * w + c] = likelihood[bin]; });
+}
+
+void colour_counts(const ImageView& image, const Rect& region, const Span& inside,
+                   const Span& core, int bits, double* fg, double* bg) {
+  check(image, region, bits);
+  for_region(image, region, bits, [&](int r, int c, std::uint32_t bin) {
+    if (core.holds(r, c)) fg[bin] += 1.0;
+    if (!inside.holds(r, c)) bg[bin] += 1.0;
+  });
+}
+
+}  // namespace wmiltrack
