@@ -113,7 +113,7 @@ class ColourModel:
         x1, y1 = min(fw, roi[2]), min(fh, roi[3])
         p = _core.colour_map(frame, (x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)), self.bits,
                              self._likelihood)
-        table: FloatArray = cv2.integral(p, sdepth=cv2.CV_64F)
+        table: FloatArray = np.asarray(cv2.integral(p, sdepth=cv2.CV_64F), dtype=np.float64)
         return table, x0, y0
 
     @staticmethod
