@@ -75,6 +75,33 @@ void bind_colour(py::module_& m) {
       "Colour histogram counts of region = (x, y, w, h): (fg, bg), 2**(3 * bits) float64 each;\n"
       "fg counts the pixels in core, bg those outside inside (both (row0, row1, col0, col1)\n"
       "relative to the region, half-open).");
+
+  m.def(
+      "colour_update",
+      [](py::array_t<double, py::array::c_style> fg_model, py::array_t<double, py::array::c_style> bg_model,
+         py::array_t<double, py::array::c_style> fg_counts, py::array_t<double, py::array::c_style> bg_counts,
+         double rate, bool first, py::array_t<double, py::array::c_style> likelihood) {
+        const py::ssize_t n = fg_model.size();
+        for (const auto* a : {&fg_model, &bg_model, &fg_counts, &bg_counts, &likelihood}) {
+          require(a->ndim() == 1 && a->size() == n, "all five arrays must be 1-D of one length");
+          require(a->writeable(), "the arrays must be writeable float64");
+        }
+        require(rate > 0.0 && rate <= 1.0, "rate must be in (0, 1]");
+        double* f = fg_model.mutable_data();
+        double* b = bg_model.mutable_data();
+        double* fc = fg_counts.mutable_data();
+        double* bc = bg_counts.mutable_data();
+        double* l = likelihood.mutable_data();
+        py::gil_scoped_release release;
+        colour_update(f, b, fc, bc, static_cast<int>(n), rate, first, l);
+      },
+      py::arg("fg_model").noconvert(), py::arg("bg_model").noconvert(),
+      py::arg("fg_counts").noconvert(), py::arg("bg_counts").noconvert(), py::arg("rate"),
+      py::arg("first"), py::arg("likelihood").noconvert(),
+      "One frame of the colour model's update, in place: the counts normalised to sum 1, the\n"
+      "model blended ((1 - rate) model + rate counts; the counts when first), and likelihood =\n"
+      "fg / (fg + bg) (0.5 where both are 0). All five arrays: C-contiguous float64 of one\n"
+      "length (TypeError otherwise: a converted copy would be updated instead).");
 }
 
 }  // namespace wmiltrack::bindings

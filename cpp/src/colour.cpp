@@ -1,5 +1,6 @@
 #include "wmiltrack/colour.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace wmiltrack {
@@ -47,6 +48,27 @@ void colour_counts(const ImageView& image, const Rect& region, const Span& insid
     if (core.holds(r, c)) fg[bin] += 1.0;
     if (!inside.holds(r, c)) bg[bin] += 1.0;
   });
+}
+
+void colour_update(double* fg_model, double* bg_model, double* fg_counts, double* bg_counts,
+                   int n, double rate, bool first, double* likelihood) {
+  // Sums of whole counts (< 2^53): exact in any order.
+  double fg_sum = 0.0, bg_sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    fg_sum += fg_counts[i];
+    bg_sum += bg_counts[i];
+  }
+  const double fd = std::max(fg_sum, 1.0), bd = std::max(bg_sum, 1.0);
+  const double keep = 1.0 - rate;
+  for (int i = 0; i < n; ++i) {
+    const double f = fg_counts[i] / fd, b = bg_counts[i] / bd;
+    fg_counts[i] = f;
+    bg_counts[i] = b;
+    fg_model[i] = first ? f : keep * fg_model[i] + rate * f;
+    bg_model[i] = first ? b : keep * bg_model[i] + rate * b;
+    const double total = fg_model[i] + bg_model[i];
+    likelihood[i] = total > 0 ? fg_model[i] / total : 0.5;
+  }
 }
 
 }  // namespace wmiltrack

@@ -125,3 +125,7 @@ def colour_counts(frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int
                   inside: tuple[int, int, int, int], core: tuple[int, int, int, int],
                   bits: int) -> tuple[_F64, _F64]:
     """Colour histogram counts of region: (fg over core, bg outside inside)."""
+
+def colour_update(fg_model: _F64, bg_model: _F64, fg_counts: _F64, bg_counts: _F64, rate: float,
+                  first: bool, likelihood: _F64) -> None:
+    """One frame of the colour model's update, in place (all five: C-contiguous float64)."""

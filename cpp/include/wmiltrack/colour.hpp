@@ -36,4 +36,12 @@ void colour_map(const ImageView& image, const Rect& region, int bits, const doub
 void colour_counts(const ImageView& image, const Rect& region, const Span& inside,
                    const Span& core, int bits, double* fg, double* bg);
 
+// One frame of the model's update, on n bins: each count histogram is divided by its sum
+// (at least 1), blended into the model (model = (1 - rate) model + rate counts; the counts
+// themselves when `first`), and likelihood = fg / (fg + bg) (0.5 where both are 0). The same
+// operations in the same order as the numpy code it replaced (the same bits). The counts are
+// overwritten.
+void colour_update(double* fg_model, double* bg_model, double* fg_counts, double* bg_counts,
+                   int n, double rate, bool first, double* likelihood);
+
 }  // namespace wmiltrack

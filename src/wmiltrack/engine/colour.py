@@ -91,16 +91,12 @@ class ColourModel:
                     max(0, x - x0 + w - sx))
         # Counts of the core's bins (target) and of the bins outside the box (background).
         fg, bg = _core.colour_counts(frame, (x0, y0, rw, rh), inside, core, self.bits)
-        fg /= max(fg.sum(), 1.0)
-        bg /= max(bg.sum(), 1.0)
-        if self._fg is None or self._bg is None:
-            self._fg, self._bg = fg, bg
-        else:
-            a = self.learning_rate
-            self._fg = (1.0 - a) * self._fg + a * fg
-            self._bg = (1.0 - a) * self._bg + a * bg
-        total = self._fg + self._bg
-        self._likelihood = np.divide(self._fg, total, out=np.full(total.shape, 0.5), where=total > 0)
+        first = self._fg is None or self._bg is None or self._likelihood is None
+        if self._fg is None or self._bg is None or self._likelihood is None:
+            self._fg, self._bg, self._likelihood = np.zeros(fg.size), np.zeros(fg.size), np.empty(fg.size)
+        # fg, bg /= their sums; the model blends them in at the learning rate; likelihood =
+        # fg / (fg + bg) per bin (0.5 where both are 0).
+        _core.colour_update(self._fg, self._bg, fg, bg, self.learning_rate, first, self._likelihood)
 
     def integral(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> tuple[FloatArray, int, int]:
         """Integral image of ``P(target | colour)`` over ``roi = (x0, y0, x1, y1)`` (clipped to the
