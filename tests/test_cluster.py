@@ -139,6 +139,53 @@ def test_dask_local_cluster_gives_the_serial_boxes(otb: Path, tmp_path: Path) ->
     assert len(rows_a) == 6 and rows_a == rows_b
 
 
+@pytest.mark.usefixtures("need_distributed")
+def test_dask_existing_cluster_by_scheduler_address(otb: Path, tmp_path: Path) -> None:
+    """--scheduler ADDRESS: a scheduler and a worker started apart from wmiltrack, as the README
+    shows (`dask scheduler`, `dask worker`), run the tasks and give the serial boxes."""
+    import subprocess
+    import time
+
+    sched_file = tmp_path / "scheduler.json"
+    env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler",
+                               "--scheduler-file", str(sched_file), "--port", "0",
+                               "--dashboard-address", ":0", "--host", "127.0.0.1"],
+                              env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert sched_file.exists(), "the scheduler did not start"
+        procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker",
+                                       "--scheduler-file", str(sched_file), "--nworkers", "1",
+                                       "--nthreads", "1", "--dashboard-address", ":0",
+                                       "--host", "127.0.0.1"],
+                                      env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        address = json.loads(sched_file.read_text())["address"]
+        from distributed import Client
+
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(1, timeout=60)
+        serial, dask_out = tmp_path / "serial", tmp_path / "dask"
+        common = ["--trackers", "rcwmil", "--no-progress", "--no-plots"]
+        assert main(["eval", str(otb), "--out", str(serial), *common]) == 0
+        assert main(["eval", str(otb), "--out", str(dask_out), "--executor", "dask",
+                     "--scheduler", address, *common]) == 0
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+    a, b = _files(serial / "boxes"), _files(dask_out / "boxes")
+    assert sorted(a) == sorted(b) and len(a) == 2
+    for k in a:
+        np.testing.assert_array_equal(a[k], b[k], err_msg=k)
+
+
 def _die_once(marker: str, task: Any) -> Any:
     """Kill the worker process the first time (a worker dying under a task), then run it."""
     import os
