@@ -136,8 +136,14 @@ class MultiTracker:
             if self._pool is None:
                 self._pool = ThreadPoolExecutor(max_workers=self._threads,
                                                 thread_name_prefix="wmiltrack")
-            outcomes = list(self._pool.map(lambda t: self._step(t, img, shared),
-                                           [t for _, t in items]))
+            # One task per worker, each a run of consecutive targets: fewer hand-overs through
+            # the executor's queue (they hold the GIL) than one task per target.
+            trackers = [t for _, t in items]
+            n_chunks = min(self._threads, len(trackers))
+            bounds = [len(trackers) * i // n_chunks for i in range(n_chunks + 1)]
+            chunks = [trackers[a:b] for a, b in zip(bounds, bounds[1:])]
+            outcomes = [o for part in self._pool.map(
+                lambda ts: [self._step(t, img, shared) for t in ts], chunks) for o in part]
         results: dict[int, TrackResult] = {}
         failed: list[str] = []
         for (target_id, _), outcome in zip(items, outcomes):
