@@ -202,3 +202,47 @@ def test_kernels_reject_bad_arguments_with_python_errors() -> None:
         _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 0, 1]], np.int32), np.ones(1))
     with pytest.raises(ValueError):
         _core.log_ratio(np.zeros((2, 3)), np.zeros(2), np.zeros(2), np.zeros(2), np.ones(2), 1e-30)
+
+
+@pytest.mark.parametrize("variant", ["rcwmil", "mil", "ct", "osil"])
+def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
+    """_core.learn = project, the Gaussian update of each class, log_ratio and (WMIL)
+    wmil_select one after the other: the same bits."""
+    import wmiltrack
+    from wmiltrack import _learn
+    from wmiltrack.engine.sampling import instance_weights
+
+    rng = np.random.default_rng(11)
+    frame = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
+    t = wmiltrack.Tracker(variant, seed=1)
+    t.init(frame, (60, 40, 32, 28))
+    p, pool, bank, ii = t.params, t._pool, t._bank, t._ii  # noqa: SLF001 (white-box)
+    pos, dist = t._track.positives(t._box, 160, 120)  # noqa: SLF001
+    neg = t._track.negatives(t._box, 160, 120, np.random.default_rng(0))  # noqa: SLF001
+    corners = np.concatenate((pos, neg))
+    n = pos.shape[0]
+    w = instance_weights(dist, p.instance_weights)
+    for select in ("none", "ratios", "wmil"):
+        got = _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1,
+                          pool.mu0, pool.sigma0, lam=p.learning_rate, first_pos=False,
+                          first_neg=False, direct_first=p.first_update == "direct",
+                          mil=p.classifier == "mil", sigma_floor=p.sigma_floor, guard=p.guard,
+                          select=select, w_pos=w if select == "wmil" else None,
+                          k=p.num_selected)
+        values = _core.project(ii, bank, corners[:, 0], corners[:, 1])
+        args = (p.learning_rate, False, p.first_update == "direct", p.classifier == "mil", p.sigma_floor)
+        mu1, s1 = _learn.gaussian_update(values[:, :n], pool.mu1, pool.sigma1, *args)
+        mu0, s0 = _learn.gaussian_update(values[:, n:], pool.mu0, pool.sigma0, *args)
+        for a, b in zip(got[:4], (mu1, s1, mu0, s0)):
+            np.testing.assert_array_equal(a, b)
+        h = _core.log_ratio(values, mu1, s1, mu0, s0, p.guard)
+        if select == "ratios":
+            np.testing.assert_array_equal(got[5], h)
+        elif select == "wmil":
+            np.testing.assert_array_equal(got[4], _learn.wmil_select(h[:, :n], h[:, n:], w, p.num_selected))
+        else:
+            assert got[4] is None and got[5] is None
+    with pytest.raises(ValueError, match="select"):
+        _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
+                    pool.sigma0, lam=0.85, first_pos=False, first_neg=False, direct_first=True,
+                    mil=False, sigma_floor=1e-6, guard=1e-30, select="milboost")

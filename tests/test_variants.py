@@ -132,8 +132,16 @@ def test_bag_model_and_selection(variant: str, expected, monkeypatch: pytest.Mon
         seen.append(("milboost", None, k))
         return real_m(h_pos, h_neg, k, **kw)
 
+    real_learn = tracker_mod._core.learn
+
+    def spy_learn(*args, **kw):  # the core's one-call learning step selects WMIL itself
+        if kw["select"] == "wmil":
+            seen.append(("wmil", kw["w_pos"], kw["k"]))
+        return real_learn(*args, **kw)
+
     monkeypatch.setattr(tracker_mod, "wmil_select", spy_w)
     monkeypatch.setattr(tracker_mod, "milboost_select", spy_m)
+    monkeypatch.setattr(tracker_mod._core, "learn", spy_learn)
     t, _ = bank(variant)
     t.update(FRAME)
     kind, weights, k = expected
@@ -180,12 +188,19 @@ def test_reference_compat_flags_change_what_they_name(monkeypatch: pytest.Monkey
     # instance_weights and gradient reach the selection, and change its inputs / result
     seen: list[tuple[np.ndarray, bool, np.ndarray, np.ndarray]] = []
     real = tracker_mod.wmil_select
+    real_learn = tracker_mod._core.learn
 
-    def spy(h_pos, h_neg, w, k, *, code_gradient=False):
-        seen.append((w, code_gradient, h_pos, h_neg))
-        return real(h_pos, h_neg, w, k, code_gradient=code_gradient)
+    def spy(*args, **kw):  # the core's one-call learning step runs the WMIL selection
+        out = real_learn(*args, **kw)
+        if kw["select"] == "wmil":  # the same step again, for the log ratios it selected on
+            h = real_learn(*args, **{**kw, "select": "ratios"})[5]
+            n_pos = args[4]
+            seen.append((kw["w_pos"], kw["code_gradient"], h[:, :n_pos], h[:, n_pos:]))
+            assert np.array_equal(out[4], real(h[:, :n_pos], h[:, n_pos:], kw["w_pos"], kw["k"],
+                                               code_gradient=kw["code_gradient"]))
+        return out
 
-    monkeypatch.setattr(tracker_mod, "wmil_select", spy)
+    monkeypatch.setattr(tracker_mod._core, "learn", spy)
     last = []
     for flags in ({}, {"instance_weights": "exp_sq", "gradient": "code"}):
         t = wmiltrack.Tracker(params=Params.for_variant("wmil", **flags), seed=0)

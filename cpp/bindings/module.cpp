@@ -9,4 +9,5 @@ PYBIND11_MODULE(_core, m) {
   wmiltrack::bindings::bind_haar(m);
   wmiltrack::bindings::bind_scoring(m);
   wmiltrack::bindings::bind_colour(m);
+  wmiltrack::bindings::bind_frame(m);
 }

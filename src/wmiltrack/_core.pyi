@@ -129,3 +129,10 @@ def colour_counts(frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int
 def colour_update(fg_model: _F64, bg_model: _F64, fg_counts: _F64, bg_counts: _F64, rate: float,
                   first: bool, likelihood: _F64) -> None:
     """One frame of the colour model's update, in place (all five: C-contiguous float64)."""
+
+def learn(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
+          mu1: _F64, sigma1: _F64, mu0: _F64, sigma0: _F64, *, lam: float, first_pos: bool,
+          first_neg: bool, direct_first: bool, mil: bool, sigma_floor: float, guard: float,
+          select: str, w_pos: _F64 | None = None, k: int = 0, code_gradient: bool = False,
+          ) -> tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None]:
+    """The learning half of a frame step in one call: (mu1, sigma1, mu0, sigma0, selected, h)."""

@@ -35,6 +35,18 @@ class GaussianPool:
         self.mu1, self.sigma1 = self._update_class(1, self.mu1, self.sigma1, positives, lam)
         self.mu0, self.sigma0 = self._update_class(0, self.mu0, self.sigma0, negatives, lam)
 
+    def first(self, cls: int) -> bool:
+        """Whether class ``cls`` (1 target, 0 background) has not been updated yet."""
+        return not self._seen[cls]
+
+    def assign(self, mu1: np.ndarray, sigma1: np.ndarray, mu0: np.ndarray, sigma0: np.ndarray,
+               updated_pos: bool, updated_neg: bool) -> None:
+        """Take the model that a frame's update computed elsewhere (the core's one-call
+        learning step, ``_core.learn``), with which classes it updated."""
+        self.mu1, self.sigma1, self.mu0, self.sigma0 = mu1, sigma1, mu0, sigma0
+        self._seen[1] = self._seen[1] or updated_pos
+        self._seen[0] = self._seen[0] or updated_neg
+
     def _update_class(self, cls: int, mu: np.ndarray, sigma: np.ndarray,
                       values: np.ndarray, lam: float) -> tuple[np.ndarray, np.ndarray]:
         if values.shape[1] == 0:  # no sample of this class in this frame: keep the model

@@ -625,6 +625,9 @@ class Tracker:
         neg = sampler.negatives(self._box, fw, fh, self._rng)
         self._bags = (pos, neg)
         n_pos = pos.shape[0]
+        if p.scale_negatives == 0 and self._scale_pool is None:
+            self._learn_in_one_call(pos, neg, dist, learning_rate)
+            return
         # Both bags in one projection (and one log-ratio call below): columns [0, n_pos) are
         # the positives, the rest the negatives.
         values = self._project(self._scale_index, np.concatenate((pos, neg)))
@@ -645,3 +648,31 @@ class Tracker:
                                          code_gradient=p.gradient == "code")
         else:
             self._selected = milboost_select(h_pos, h_neg, p.num_selected, guard=p.guard)
+
+    def _learn_in_one_call(self, pos: np.ndarray, neg: np.ndarray, dist: np.ndarray,
+                           learning_rate: float | None) -> None:
+        """:meth:`_learn`'s work after sampling, in one call to the core (``_core.learn``: the
+        same kernels in the same order, so the same bits, crossing into the core once)."""
+        p = self._params
+        pool = self._pool
+        n_pos, n_neg = pos.shape[0], neg.shape[0]
+        corners = np.concatenate((pos, neg))
+        if p.selection == "none" or n_pos == 0:
+            select = "none"
+        else:
+            select = "wmil" if p.selection == "wmil" else "ratios"
+        w = instance_weights(dist, p.instance_weights) if select == "wmil" else None
+        mu1, sigma1, mu0, sigma0, selected, h = _core.learn(
+            self._ii, self._bank_at(self._scale_index)[0], corners[:, 0], corners[:, 1], n_pos,
+            pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
+            lam=p.learning_rate if learning_rate is None else learning_rate,
+            first_pos=pool.first(1), first_neg=pool.first(0),
+            direct_first=p.first_update == "direct", mil=p.classifier == "mil",
+            sigma_floor=p.sigma_floor, guard=p.guard, select=select, w_pos=w,
+            k=p.num_selected, code_gradient=p.gradient == "code")
+        pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg > 0)
+        if selected is not None:
+            self._selected = selected
+        elif h is not None:
+            self._selected = milboost_select(h[:, :n_pos], h[:, n_pos:], p.num_selected,
+                                             guard=p.guard)

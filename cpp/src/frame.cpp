@@ -1,0 +1,55 @@
+#include "wmiltrack/frame.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+#include "wmiltrack/scoring.hpp"
+
+namespace wmiltrack {
+
+void learn_step(const IntegralImage& ii, const FeatureBank& bank, const LearnStep& step,
+                double* mu1, double* sigma1, double* mu0, double* sigma0,
+                std::int32_t* selected, double* h) {
+  const int M = bank.size(), P = step.n_pos, N = step.n_neg, B = P + N;
+  if (P < 0 || N < 0) throw std::invalid_argument("learn_step: negative bag size");
+  if (step.select == LearnSelect::kWmil && (P == 0 || step.w_pos == nullptr)) {
+    throw std::invalid_argument("learn_step: WMIL selection needs positives and their weights");
+  }
+  std::vector<double> values(static_cast<std::size_t>(M) * static_cast<std::size_t>(B));
+  project(ii, bank, nullptr, M, step.xs, step.ys, B, values.data());
+  // The Gaussian update of each class that has samples, into fresh arrays then copied back
+  // (the update reads the old model).
+  std::vector<double> new_mu(static_cast<std::size_t>(M)), new_sigma(new_mu.size()),
+      scratch(static_cast<std::size_t>(std::max(B, 1)));
+  const auto update = [&](int first_col, int n, bool first, double* mu, double* sigma) {
+    if (n == 0) return;
+    GaussianRule rule = step.rule;
+    rule.first = first;
+    const MatrixView v{values.data() + first_col, M, n, B, 1};
+    gaussian_update(v, mu, sigma, rule, new_mu.data(), new_sigma.data(), scratch.data());
+    std::copy(new_mu.begin(), new_mu.end(), mu);
+    std::copy(new_sigma.begin(), new_sigma.end(), sigma);
+  };
+  update(0, P, step.first_pos, mu1, sigma1);
+  update(P, N, step.first_neg, mu0, sigma0);
+  if (step.select == LearnSelect::kNone) return;
+  // Log ratios of every feature on both bags under the updated model.
+  std::vector<double> own;
+  double* hr = h;
+  if (step.select != LearnSelect::kRatios) {
+    own.resize(values.size());
+    hr = own.data();
+  }
+  const WeakGaussians weak(mu1, sigma1, mu0, sigma0, M, step.guard);
+  for (int m = 0; m < M; ++m) {
+    const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(m) * B;
+    weak.log_ratio(m, values.data() + row, B, hr + row, false, nullptr);
+  }
+  if (step.select == LearnSelect::kWmil) {
+    const MatrixView h_pos{hr, M, P, B, 1}, h_neg{hr + P, M, N, B, 1};
+    wmil_select(h_pos, h_neg, step.w_pos, step.k, step.code_gradient, selected);
+  }
+}
+
+}  // namespace wmiltrack
