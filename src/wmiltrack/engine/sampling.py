@@ -40,6 +40,7 @@ class BagSampler:
         self.pos_offsets = disc_offsets(pos_r)
         self.pos_dist = np.hypot(self.pos_offsets[:, 0], self.pos_offsets[:, 1])
         self.pos_dist.setflags(write=False)  # handed out as is by positives()
+        self._full_weights: dict[str, np.ndarray] = {}
         self.neg_offsets = annulus_offsets(inner, outer)
         self.neg_count = count
         self.mode = p.neg_sampling
@@ -72,6 +73,18 @@ class BagSampler:
             return self.pos_offsets + origin, self.pos_dist
         keep = self._inside(self.pos_offsets, box, frame_w, frame_h)
         return self.pos_offsets[keep] + origin, self.pos_dist[keep]
+
+    def weights(self, distances: np.ndarray, mode: str) -> np.ndarray:
+        """:func:`instance_weights` of a positive bag from :meth:`positives`; computed once for
+        the whole bag (the usual case: the box away from the frame's edges), read-only."""
+        if distances is not self.pos_dist:
+            return instance_weights(distances, mode)
+        w = self._full_weights.get(mode)
+        if w is None:
+            w = instance_weights(distances, mode)
+            w.setflags(write=False)
+            self._full_weights[mode] = w
+        return w
 
     def negatives(self, box: tuple[int, int, int, int], frame_w: int, frame_h: int,
                   rng: np.random.Generator) -> np.ndarray:

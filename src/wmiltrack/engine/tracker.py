@@ -626,7 +626,7 @@ class Tracker:
         self._bags = (pos, neg)
         n_pos = pos.shape[0]
         if p.scale_negatives == 0 and self._scale_pool is None:
-            self._learn_in_one_call(pos, neg, dist, learning_rate)
+            self._learn_in_one_call(sampler, pos, neg, dist, learning_rate)
             return
         # Both bags in one projection (and one log-ratio call below): columns [0, n_pos) are
         # the positives, the rest the negatives.
@@ -649,8 +649,8 @@ class Tracker:
         else:
             self._selected = milboost_select(h_pos, h_neg, p.num_selected, guard=p.guard)
 
-    def _learn_in_one_call(self, pos: np.ndarray, neg: np.ndarray, dist: np.ndarray,
-                           learning_rate: float | None) -> None:
+    def _learn_in_one_call(self, sampler: BagSampler, pos: np.ndarray, neg: np.ndarray,
+                           dist: np.ndarray, learning_rate: float | None) -> None:
         """:meth:`_learn`'s work after sampling, in one call to the core (``_core.learn``: the
         same kernels in the same order, so the same bits, crossing into the core once)."""
         p = self._params
@@ -661,7 +661,7 @@ class Tracker:
             select = "none"
         else:
             select = "wmil" if p.selection == "wmil" else "ratios"
-        w = instance_weights(dist, p.instance_weights) if select == "wmil" else None
+        w = sampler.weights(dist, p.instance_weights) if select == "wmil" else None
         mu1, sigma1, mu0, sigma0, selected, h = _core.learn(
             self._ii, self._bank_at(self._scale_index)[0], corners[:, 0], corners[:, 1], n_pos,
             pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
