@@ -109,7 +109,7 @@ def instrumented(clock: _Clock) -> Iterator[None]:
     patch(tracker, "milboost_select", "selection")
     patch(sampling.BagSampler, "positives", "sampling")
     patch(sampling.BagSampler, "negatives", "sampling")
-    patch(tracker, "instance_weights", "sampling")
+    patch(sampling.BagSampler, "weights", "sampling")
     patch(classifier.GaussianPool, "update", "gaussian update")
     patch(tracker.Tracker, "_scale_by_ratio", "scale")
     patch(tracker.Tracker, "_scale_by_likelihood", "scale")

@@ -30,7 +30,7 @@ from .features import (
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .params import CONFIDENCE_OFFSET, Params
 from .result import TrackResult
-from .sampling import BagSampler, instance_weights
+from .sampling import BagSampler
 from .selection import milboost_select, wmil_select
 
 Weak = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -643,7 +643,7 @@ class Tracker:
         h = _core.log_ratio(values, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard)
         h_pos, h_neg = h[:, :n_pos], h[:, n_pos:]
         if p.selection == "wmil":
-            w = instance_weights(dist, p.instance_weights)
+            w = sampler.weights(dist, p.instance_weights)
             self._selected = wmil_select(h_pos, h_neg, w, p.num_selected,
                                          code_gradient=p.gradient == "code")
         else:
