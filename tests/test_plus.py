@@ -61,7 +61,7 @@ def test_box_follows_growing_and_shrinking_target(zoom) -> None:
     peak = int(np.argmax(gt_areas))
     low = int(np.argmin(gt_areas[peak:])) + peak
     # the box grows with the target (2.56x its first area at the peak), then shrinks below its
-    # first size (0.49x); measured for seed 0: 1.6x and 0.44x
+    # first size (0.49x); measured for seed 0: 2.0x and 0.49x
     assert areas[peak] > 1.3 * areas[0]
     assert areas[low] < 0.85 * areas[0]
     assert np.mean(ov) > 0.6
@@ -95,8 +95,8 @@ def demo() -> tuple[list[np.ndarray], np.ndarray]:
 
 
 @pytest.mark.parametrize("overrides", [
-    {"scale_steps": 0}, {"scale_model": "ratio"}, {"scale_model": "likelihood"},
-    {"scale_negatives": 4}, {"colour_weight": 0.0}, {"colour_weight": 1.0}, {"channels": ("luma", "grad", "opp_rg", "opp_yb")},
+    {"scale_steps": 0, "scale_negatives": 0}, {"scale_model": "ratio"}, {"scale_model": "likelihood"},
+    {"scale_negatives": 0}, {"scale_negatives": 4}, {"colour_weight": 0.0}, {"colour_weight": 1.0}, {"channels": ("luma", "grad", "opp_rg", "opp_yb")},
     {"channels": ("luma", "grad")}, {"motion": "velocity"}, {"gate_threshold": 0.4},
     {"gate_drop": 1.0, "gate_learning_rate": 0.97}, {"recovery_radius": 40, "recovery_step": 5},
 ])
