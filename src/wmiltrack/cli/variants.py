@@ -52,6 +52,8 @@ def variant_table() -> str:
                 parts.append(f"colour {p.colour_weight:g}")
             if p.motion != "none":
                 parts.append(f"motion {p.motion}")
+            if p.score_colour > 0:
+                parts.append(f"score colour {p.score_colour:g}")
             if p.gate_threshold > 0 or p.gate_drop > 0:
                 parts.append("gated update")
             if p.recovery_radius:

@@ -25,7 +25,7 @@ import numpy.typing as npt
 
 from .. import _core
 
-__all__ = ["ColourModel", "is_colour"]
+__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -122,3 +122,34 @@ class ColourModel:
         s = table[cy + h, cx + w] - table[cy, cx + w] - table[cy + h, cx] + table[cy, cx]
         out: FloatArray = s / float(w * h)
         return out
+
+
+def box_sums_clipped(table: FloatArray, x0: int, y0: int, boxes: npt.NDArray[np.integer]
+                     ) -> tuple[FloatArray, FloatArray]:
+    """Sums and areas of boxes ``(n, 4)`` (x, y, w, h in frame coordinates) clipped to the
+    table's region (see :meth:`ColourModel.integral`)."""
+    th, tw = table.shape[0] - 1, table.shape[1] - 1
+    b = np.asarray(boxes, dtype=np.intp)
+    xa = np.clip(b[:, 0] - x0, 0, tw)
+    ya = np.clip(b[:, 1] - y0, 0, th)
+    xb = np.clip(b[:, 0] + b[:, 2] - x0, 0, tw)
+    yb = np.clip(b[:, 1] + b[:, 3] - y0, 0, th)
+    s: FloatArray = table[yb, xb] - table[ya, xb] - table[yb, xa] + table[ya, xa]
+    area: FloatArray = ((xb - xa) * (yb - ya)).astype(np.float64)
+    return s, area
+
+
+def colour_contrast(table: FloatArray, x0: int, y0: int, boxes: npt.NDArray[np.integer],
+                    ring: float = 0.25) -> FloatArray:
+    """Mean ``P(target | colour)`` inside each box minus its mean over a ring around it
+    ``ring * (w + h) / 2`` wide: largest for the box that holds the target's colours and no
+    more (a box too large lets background in, one too small leaves target in the ring)."""
+    b = np.asarray(boxes, dtype=np.intp)
+    pad = np.maximum(1, np.rint(ring * (b[:, 2] + b[:, 3]) / 2.0)).astype(np.intp)
+    outer = np.stack([b[:, 0] - pad, b[:, 1] - pad, b[:, 2] + 2 * pad, b[:, 3] + 2 * pad], axis=1)
+    s_in, a_in = box_sums_clipped(table, x0, y0, b)
+    s_out, a_out = box_sums_clipped(table, x0, y0, outer)
+    inner = s_in / np.maximum(a_in, 1.0)
+    ring_mean = (s_out - s_in) / np.maximum(a_out - a_in, 1.0)
+    out: FloatArray = inner - ring_mean
+    return out

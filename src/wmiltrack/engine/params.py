@@ -184,6 +184,15 @@ class Params:
         histograms, the mean P(target | colour) over a candidate box) merged into every
         translation search stage: ``(1 - w) * confidence + w * colour`` per candidate (0: off;
         also off for gray frames and BGR frames whose three channels are equal).
+    score_colour : float
+        With the colour model on, the reported confidence (``TrackResult.score``, and ``ok``
+        from it) is ``(1 - w) * logistic(raw / K - offset) + w * clip(0.5 + contrast, 0, 1)``
+        with ``w`` this weight and ``contrast`` the colour contrast of the box, the mean
+        ``P(target | colour)`` inside it minus that over a ring around it
+        (:func:`wmiltrack.engine.colour.colour_contrast`): a box on the target holds its
+        colours and its surroundings do not, while a lost box sees background on both
+        sides. Only the report changes: ``motion``, the gates and ``recovery_radius`` still
+        read the classifier's confidence. 0: off.
     gate_threshold : float
         Learn only from frames whose confidence is at least this (0: always learn).
     gate_drop : float
@@ -254,6 +263,7 @@ class Params:
     motion_smoothing: float = 0.5
     motion_max: float = 30.0
     colour_weight: float = 0.0
+    score_colour: float = 0.0
     gate_threshold: float = 0.0
     gate_drop: float = 0.0
     gate_learning_rate: float | None = None
@@ -376,6 +386,9 @@ class Params:
              f"motion_max must be in [0, {MAX_SEARCH_RADIUS}], got {self.motion_max}")
         need(0.0 <= self.colour_weight <= 1.0,
              f"colour_weight must be in [0, 1], got {self.colour_weight}")
+        need(isinstance(self.score_colour, (int, float)) and not isinstance(self.score_colour, bool)
+             and 0.0 <= self.score_colour <= 1.0,
+             f"score_colour must be in [0, 1], got {self.score_colour!r}")
         need(self.gate_drop >= 0.0, f"gate_drop must be >= 0, got {self.gate_drop}")
         need(0.0 <= self.gate_threshold <= 1.0,
              f"gate_threshold must be in [0, 1], got {self.gate_threshold}")
@@ -471,10 +484,12 @@ VARIANTS: dict[str, Params] = {
     "rcwmil-plus": Params(
         variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
+        scale_negatives=2, score_colour=0.5,
         description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into "
         "the search (0.7), a constant-velocity search centre, and scale search by scaled Haar "
         "rectangles (1.03^-1, 1, 1.03^+1; classifier score plus a slow target likelihood, "
-        "penalised away from the current scale).",
+        "penalised away from the current scale; boxes 1.03^+-2 off learnt as negatives); the "
+        "score also counts the box's colour contrast (0.5).",
     ),
 }
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import _core
 from .classifier import GaussianPool
-from .colour import ColourModel
+from .colour import ColourModel, colour_contrast
 from .features import (
     CHANNEL_IDS,
     BankArrays,
@@ -283,13 +283,16 @@ class Tracker:
                 empty = np.zeros((0, 2), dtype=np.int32)
                 self._bags = (empty, empty)
             self._score = score
+            if p.score_colour > 0 and self._colour_table is not None:
+                self._score = self._colour_score(score)
             if self._colour is not None:
                 self._colour.learn(img, self._box)
             self._follow(previous, tracked)
         finally:
             self._ii = own  # a shared table is only borrowed for this frame
         x, y, w, h = self._box
-        return TrackResult((float(x), float(y), float(w), float(h)), self._score, tracked)
+        return TrackResult((float(x), float(y), float(w), float(h)), self._score,
+                           self._score >= p.lost_threshold)
 
     def track(self, frames: Any, box: Any) -> np.ndarray:
         """Run over an iterable of frames starting with ``box`` on the first; (n, 4) boxes."""
@@ -540,6 +543,17 @@ class Tracker:
             else:
                 best = self._scale_by_ratio(best, sel, weak)
         return best
+
+    def _contrast(self, box: IntBox) -> float:
+        """The colour contrast of ``box`` (:func:`~wmiltrack.engine.colour.colour_contrast`)."""
+        assert self._colour_table is not None
+        table, x0, y0 = self._colour_table
+        return float(colour_contrast(table, x0, y0, np.array([box]))[0])
+
+    def _colour_score(self, conf: float) -> float:
+        """``(1 - w) conf + w clip(0.5 + contrast, 0, 1)`` of the box (``w``: ``score_colour``)."""
+        w = self._params.score_colour
+        return (1.0 - w) * conf + w * min(max(0.5 + self._contrast(self._box), 0.0), 1.0)
 
     def _likelihood(self, index: int, box: IntBox) -> float:
         """Minus the mean log(1 + z^2) of all M features of ``box`` under the scale model."""
