@@ -8,6 +8,9 @@ and the score distributions.
 
     python scripts/score_study.py [--otb ../shared/data/otb] [--variants rcwmil,rcwmil-plus] [--json out.json]
 
+``--variants`` takes tracker specs with overrides, as ``wmiltrack eval`` does
+(``rcwmil-plus:score_colour=0``).
+
 Signals (all computed from what one update already has):
 
 * ``logistic``: the former score, logistic(best raw score / K).
@@ -32,6 +35,7 @@ from wmiltrack import _core
 from wmiltrack.data.sequences import list_otb_sequences, load_otb_sequence
 from wmiltrack.data.synthetic import make_sequence
 from wmiltrack.eval.metrics import iou
+from wmiltrack.eval.peers import parse_spec
 
 
 def roc_auc(pos: np.ndarray, neg: np.ndarray) -> float:
@@ -93,7 +97,8 @@ class Probe(wmiltrack.Tracker):
 
 
 def run(frames: list[np.ndarray], gt: np.ndarray, visible: np.ndarray, variant: str) -> dict[str, Any]:
-    t = Probe(variant, seed=0)
+    name, overrides = parse_spec(variant)
+    t = Probe(name, seed=0, **overrides)
     t.init(frames[0], gt[0])
     k = len(t._selected)
     rows: dict[str, list[float]] = {"logistic": [], "margin": [], "rel": [], "ref_ratio": [],
@@ -215,7 +220,8 @@ def main() -> None:
             v = cat["score"]
             best = max(((0.5 * (np.mean(v[tracked] >= th) + np.mean(v[lost] < th)), th)
                         for th in np.linspace(0.0, 1.0, 101)), default=(math.nan, math.nan))
-            thr = wmiltrack.Params.for_variant(variant).lost_threshold
+            name, overrides = parse_spec(variant)
+            thr = wmiltrack.Params.for_variant(name, **overrides).lost_threshold
             at = 0.5 * (np.mean(v[tracked] >= thr) + np.mean(v[lost] < thr))
             print(f"   score: balanced accuracy at lost_threshold {thr:.2f}: {at:.3f}")
             entry["score_best_threshold"] = {"balanced_accuracy": best[0], "threshold": best[1]}
