@@ -484,12 +484,11 @@ VARIANTS: dict[str, Params] = {
     "rcwmil-plus": Params(
         variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
-        scale_negatives=2, score_colour=0.5,
+        scale_negatives=2,
         description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into "
         "the search (0.7), a constant-velocity search centre, and scale search by scaled Haar "
         "rectangles (1.03^-1, 1, 1.03^+1; classifier score plus a slow target likelihood, "
-        "penalised away from the current scale; boxes 1.03^+-2 off learnt as negatives); the "
-        "score also counts the box's colour contrast (0.5).",
+        "penalised away from the current scale; boxes 1.03^+-2 off learnt as negatives).",
     ),
 }
 
