@@ -81,9 +81,9 @@ def fit_logistic(x: np.ndarray, y: np.ndarray, iters: int = 200) -> tuple[float,
 class Probe(wmiltrack.Tracker):
     """A tracker that also records the grid statistics of each update (for this study)."""
 
-    def _detect(self, coarse: tuple[int, int]) -> float:
-        self.grid_mean = math.nan
-        p = self._params  # one core call for the luma and the multi-channel paths alike
+    def _coarse_grid_mean(self, coarse: tuple[int, int]) -> None:
+        """Mean raw score of the coarse grid around the search's origin (``self._box``)."""
+        p = self._params
         sel = self._selected
         pool = self._pool
         weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
@@ -92,7 +92,16 @@ class Probe(wmiltrack.Tracker):
                                             coarse[0], coarse[1], self._frame_wh, True)
         g = grid[np.isfinite(grid)]
         self.grid_mean = float(g.mean()) if g.size else math.nan
+
+    def _detect(self, coarse: tuple[int, int]) -> float:  # colour or scale search
+        self._coarse_grid_mean(coarse)
         self.raw_best = super()._detect(coarse)
+        return self.raw_best
+
+    def _apply_search(self, stages: list[tuple[int, int]],
+                      results: tuple[tuple[int, int, float, int], ...]) -> float:  # the plain path
+        self._coarse_grid_mean(stages[0])
+        self.raw_best = super()._apply_search(stages, results)
         return self.raw_best
 
 

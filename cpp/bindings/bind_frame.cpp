@@ -1,86 +1,298 @@
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <optional>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "common.hpp"
 #include "wmiltrack/frame.hpp"
+#include "wmiltrack/scoring.hpp"
 
 namespace wmiltrack::bindings {
 
+namespace {
+
+// ---- search -------------------------------------------------------------------------------
+
+// One target's search, its arguments checked and copied (so that it runs without the GIL).
+struct SearchJob {
+  SharedIntegralImage* ii = nullptr;
+  py::object keep;                 // the frame (and the objects below) stay alive meanwhile
+  std::optional<ImageView> frame;  // compute the integral image over roi first
+  Rect roi;
+  const FeatureBank* bank = nullptr;
+  Int32Array selected;
+  std::unique_ptr<WeakGaussians> weak;
+  Rect box;
+  std::vector<SearchStage> stages;
+  int fw = 0, fh = 0;
+  std::vector<GridResult> out;
+
+  void run() {
+    if (frame) ii->compute(*frame, roi);
+    const auto table = ii->snapshot();
+    if (!table) throw std::invalid_argument("the integral image has not been computed");
+    out = search(*table, *bank, selected.data(), static_cast<int>(selected.size()), *weak, box,
+                 stages, fw, fh);
+  }
+};
+
+SearchJob make_search(SharedIntegralImage& ii, const py::object& frame,
+                      const std::optional<std::tuple<int, int, int, int>>& roi,
+                      const FeatureBank& bank, const py::object& selected_obj,
+                      const CArray<double>& mu1, const CArray<double>& sigma1,
+                      const CArray<double>& mu0, const CArray<double>& sigma0, double guard,
+                      std::tuple<int, int, int, int> box,
+                      const std::vector<std::tuple<int, int>>& stages,
+                      std::tuple<int, int> frame_size) {
+  SearchJob job;
+  job.ii = &ii;
+  for (const auto& [radius, step] : stages) {
+    require(radius >= 1 && radius <= kMaxSearchRadius,
+            "radius must be in 1 .. " + std::to_string(kMaxSearchRadius) + ", got " +
+                std::to_string(radius));
+    require(step >= 1, "step must be >= 1, got " + std::to_string(step));
+    job.stages.push_back(SearchStage{radius, step});
+  }
+  const auto [x, y, w, h] = box;
+  require(w > 0 && h > 0, "box must have positive size");
+  job.box = Rect{x, y, w, h};
+  std::tie(job.fw, job.fh) = frame_size;
+  job.selected = int32_array(selected_obj, "selected");
+  require(job.selected.ndim() == 1 && job.selected.size() > 0,
+          "selected must be a non-empty 1-D array");
+  const py::ssize_t m = mu1.ndim() == 1 ? mu1.shape(0) : -1;
+  for (const auto* a : {&mu1, &sigma1, &mu0, &sigma0}) {
+    require(a->ndim() == 1 && a->shape(0) == m,
+            "mu1, sigma1, mu0, sigma0 must be 1-D with one entry per feature of the pool");
+  }
+  // The weak classifiers of the selected features, in selection order.
+  std::vector<double> g[4];
+  const CArray<double>* src[4] = {&mu1, &sigma1, &mu0, &sigma0};
+  for (int a = 0; a < 4; ++a) {
+    for (py::ssize_t k = 0; k < job.selected.size(); ++k) {
+      const std::int32_t f = job.selected.data()[k];
+      require(f >= 0 && f < m,
+              "selected index " + std::to_string(f) + " outside the pool of " + std::to_string(m));
+      g[a].push_back(src[a]->data()[f]);
+    }
+  }
+  job.weak = std::make_unique<WeakGaussians>(g[0].data(), g[1].data(), g[2].data(), g[3].data(),
+                                             static_cast<int>(job.selected.size()), guard);
+  job.bank = &bank;
+  if (!frame.is_none()) {
+    require(roi.has_value(), "a frame needs its roi");
+    job.frame = image_view(py::reinterpret_borrow<py::array>(frame));
+    const auto [rx, ry, rw, rh] = *roi;
+    job.roi = Rect{rx, ry, rw, rh};
+    job.keep = frame;
+    if (bank.planes_needed() > 1) {
+      throw py::value_error("the feature bank sums over several planes: compute_channels first");
+    }
+  } else {
+    require_planes(*computed_table(ii), bank);
+  }
+  return job;
+}
+
+py::tuple search_result(const SearchJob& job) {
+  py::tuple out(job.out.size());
+  for (std::size_t i = 0; i < job.out.size(); ++i) {
+    const GridResult& r = job.out[i];
+    out[i] = py::make_tuple(r.dx, r.dy, r.score, r.candidates);
+  }
+  return out;
+}
+
+// ---- learn --------------------------------------------------------------------------------
+
+struct LearnJob {
+  std::shared_ptr<const IntegralImage> table;
+  const FeatureBank* bank = nullptr;
+  Int32Array xs, ys;
+  LearnStep step;
+  CArray<double> w_pos;
+  CArray<double> model[4];
+  py::object selected = py::none(), h = py::none();
+  std::int32_t* sel_ptr = nullptr;
+  double* h_ptr = nullptr;
+
+  void run() {
+    step.xs = xs.data();
+    step.ys = ys.data();
+    learn_step(*table, *bank, step, model[0].mutable_data(), model[1].mutable_data(),
+               model[2].mutable_data(), model[3].mutable_data(), sel_ptr, h_ptr);
+  }
+};
+
+LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
+                    const py::object& xs_obj, const py::object& ys_obj, int n_pos,
+                    const CArray<double>& mu1, const CArray<double>& sigma1,
+                    const CArray<double>& mu0, const CArray<double>& sigma0, double lam,
+                    bool first_pos, bool first_neg, bool direct_first, bool mil,
+                    double sigma_floor, double guard, const std::string& select,
+                    const py::object& w_pos_obj, int k, bool code_gradient) {
+  LearnJob job;
+  job.xs = int32_array(xs_obj, "xs");
+  job.ys = int32_array(ys_obj, "ys");
+  require(job.xs.ndim() == 1 && job.ys.ndim() == 1 && job.xs.size() == job.ys.size(),
+          "xs and ys must be 1-D of one length");
+  const int B = static_cast<int>(job.xs.size());
+  require(n_pos >= 0 && n_pos <= B, "n_pos must be in 0..len(xs)");
+  const py::ssize_t M = bank.size();
+  for (const auto* a : {&mu1, &sigma1, &mu0, &sigma0}) {
+    require(a->ndim() == 1 && a->shape(0) == M,
+            "mu1, sigma1, mu0, sigma0 must hold one entry per feature of the bank");
+  }
+  LearnStep& step = job.step;
+  step.n_pos = n_pos;
+  step.n_neg = B - n_pos;
+  step.rule.lam = lam;
+  step.rule.direct_first = direct_first;
+  step.rule.mil = mil;
+  step.rule.sigma_floor = sigma_floor;
+  step.first_pos = first_pos;
+  step.first_neg = first_neg;
+  step.guard = guard;
+  if (select == "none") {
+    step.select = LearnSelect::kNone;
+  } else if (select == "wmil") {
+    step.select = LearnSelect::kWmil;
+    job.w_pos = CArray<double>::ensure(w_pos_obj);
+    require(job.w_pos && job.w_pos.ndim() == 1 && job.w_pos.shape(0) == n_pos && n_pos > 0,
+            "w_pos must hold one weight per positive");
+    require(k >= 1 && k <= M, "k must be in 1.." + std::to_string(M));
+    step.w_pos = job.w_pos.data();
+    step.k = k;
+    step.code_gradient = code_gradient;
+  } else if (select == "ratios") {
+    step.select = LearnSelect::kRatios;
+  } else {
+    throw py::value_error("select must be 'none', 'wmil' or 'ratios', got '" + select + "'");
+  }
+  job.table = computed_table(shared);
+  require_planes(*job.table, bank);
+  job.bank = &bank;
+  // The model out: copies of the model in, updated in place by the core.
+  const CArray<double>* in[4] = {&mu1, &sigma1, &mu0, &sigma0};
+  for (int a = 0; a < 4; ++a) {
+    job.model[a] = CArray<double>(M);
+    std::copy(in[a]->data(), in[a]->data() + M, job.model[a].mutable_data());
+  }
+  if (step.select == LearnSelect::kWmil) {
+    py::array_t<std::int32_t> s(k);
+    job.sel_ptr = s.mutable_data();
+    job.selected = s;
+  } else if (step.select == LearnSelect::kRatios) {
+    CArray<double> hh({M, static_cast<py::ssize_t>(B)});
+    job.h_ptr = hh.mutable_data();
+    job.h = hh;
+  }
+  return job;
+}
+
+py::tuple learn_result(const LearnJob& job) {
+  return py::make_tuple(job.model[0], job.model[1], job.model[2], job.model[3], job.selected,
+                        job.h);
+}
+
+using SearchArgs =
+    std::tuple<SharedIntegralImage*, const FeatureBank*, py::object, CArray<double>,
+               CArray<double>, CArray<double>, CArray<double>, double,
+               std::tuple<int, int, int, int>, std::vector<std::tuple<int, int>>,
+               std::tuple<int, int>, py::object, std::optional<std::tuple<int, int, int, int>>>;
+using LearnArgs =
+    std::tuple<const SharedIntegralImage*, const FeatureBank*, py::object, py::object, int,
+               CArray<double>, CArray<double>, CArray<double>, CArray<double>, double, bool,
+               bool, bool, bool, double, double, std::string, py::object, int, bool>;
+
+void require_threads(int threads) {
+  require(threads >= 1, "threads must be >= 1, got " + std::to_string(threads));
+}
+
+}  // namespace
+
 void bind_frame(py::module_& m) {
   m.def(
-      "learn",
-      [](const SharedIntegralImage& shared, const FeatureBank& bank, const py::object& xs_obj,
-         const py::object& ys_obj, int n_pos, const CArray<double>& mu1,
-         const CArray<double>& sigma1, const CArray<double>& mu0, const CArray<double>& sigma0,
-         double lam, bool first_pos, bool first_neg, bool direct_first, bool mil,
-         double sigma_floor, double guard, const std::string& select,
-         const py::object& w_pos_obj, int k, bool code_gradient) -> py::tuple {
-        const Int32Array xs = int32_array(xs_obj, "xs"), ys = int32_array(ys_obj, "ys");
-        require(xs.ndim() == 1 && ys.ndim() == 1 && xs.size() == ys.size(),
-                "xs and ys must be 1-D of one length");
-        const int B = static_cast<int>(xs.size());
-        require(n_pos >= 0 && n_pos <= B, "n_pos must be in 0..len(xs)");
-        const py::ssize_t M = bank.size();
-        for (const auto* a : {&mu1, &sigma1, &mu0, &sigma0}) {
-          require(a->ndim() == 1 && a->shape(0) == M,
-                  "mu1, sigma1, mu0, sigma0 must hold one entry per feature of the bank");
-        }
-        LearnStep step;
-        step.xs = xs.data();
-        step.ys = ys.data();
-        step.n_pos = n_pos;
-        step.n_neg = B - n_pos;
-        step.rule.lam = lam;
-        step.rule.direct_first = direct_first;
-        step.rule.mil = mil;
-        step.rule.sigma_floor = sigma_floor;
-        step.first_pos = first_pos;
-        step.first_neg = first_neg;
-        step.guard = guard;
-        CArray<double> w_pos;
-        if (select == "none") {
-          step.select = LearnSelect::kNone;
-        } else if (select == "wmil") {
-          step.select = LearnSelect::kWmil;
-          w_pos = CArray<double>::ensure(w_pos_obj);
-          require(w_pos && w_pos.ndim() == 1 && w_pos.shape(0) == n_pos && n_pos > 0,
-                  "w_pos must hold one weight per positive");
-          require(k >= 1 && k <= M, "k must be in 1.." + std::to_string(M));
-          step.w_pos = w_pos.data();
-          step.k = k;
-          step.code_gradient = code_gradient;
-        } else if (select == "ratios") {
-          step.select = LearnSelect::kRatios;
-        } else {
-          throw py::value_error("select must be 'none', 'wmil' or 'ratios', got '" + select + "'");
-        }
-        const auto ii = computed_table(shared);
-        require_planes(*ii, bank);
-        // The model out: copies of the model in, updated in place by the core.
-        CArray<double> out[4] = {CArray<double>(M), CArray<double>(M), CArray<double>(M),
-                                 CArray<double>(M)};
-        const CArray<double>* in[4] = {&mu1, &sigma1, &mu0, &sigma0};
-        for (int a = 0; a < 4; ++a) {
-          std::copy(in[a]->data(), in[a]->data() + M, out[a].mutable_data());
-        }
-        py::object selected = py::none(), h = py::none();
-        std::int32_t* sel_ptr = nullptr;
-        double* h_ptr = nullptr;
-        if (step.select == LearnSelect::kWmil) {
-          py::array_t<std::int32_t> s(k);
-          sel_ptr = s.mutable_data();
-          selected = s;
-        } else if (step.select == LearnSelect::kRatios) {
-          CArray<double> hh({M, static_cast<py::ssize_t>(B)});
-          h_ptr = hh.mutable_data();
-          h = hh;
-        }
-        double* o[4] = {out[0].mutable_data(), out[1].mutable_data(), out[2].mutable_data(),
-                        out[3].mutable_data()};
+      "search",
+      [](SharedIntegralImage& ii, const FeatureBank& bank, const py::object& selected,
+         const CArray<double>& mu1, const CArray<double>& sigma1, const CArray<double>& mu0,
+         const CArray<double>& sigma0, double guard, std::tuple<int, int, int, int> box,
+         const std::vector<std::tuple<int, int>>& stages, std::tuple<int, int> frame_size,
+         const py::object& frame, std::optional<std::tuple<int, int, int, int>> roi) {
+        SearchJob job = make_search(ii, frame, roi, bank, selected, mu1, sigma1, mu0, sigma0,
+                                    guard, box, stages, frame_size);
         {
           py::gil_scoped_release release;
-          learn_step(*ii, bank, step, o[0], o[1], o[2], o[3], sel_ptr, h_ptr);
+          job.run();
         }
-        return py::make_tuple(out[0], out[1], out[2], out[3], selected, h);
+        return search_result(job);
+      },
+      py::arg("ii"), py::arg("bank"), py::arg("selected"), py::arg("mu1"), py::arg("sigma1"),
+      py::arg("mu0"), py::arg("sigma0"), py::arg("guard"), py::arg("box"), py::arg("stages"),
+      py::arg("frame_size"), py::arg("frame") = py::none(), py::arg("roi") = py::none(),
+      "A coarse-to-fine search in one call: score_grid for each (radius, step) of `stages`, each\n"
+      "centred where the previous one moved the box.\n\n"
+      "mu1, sigma1, mu0, sigma0 are the whole pool's Gaussians; `selected` picks the features\n"
+      "(the strong classifier). With `frame` (and `roi`), `ii` is first recomputed over roi\n"
+      "(luma), in the same call. Returns one (dx, dy, best_score, n_candidates) per stage,\n"
+      "dx/dy relative to that stage's centre (a stage with no candidate does not move the box).");
+
+  m.def(
+      "search_many",
+      [](const std::vector<SearchArgs>& jobs_in, int threads) {
+        require_threads(threads);
+        std::vector<SearchJob> jobs;
+        jobs.reserve(jobs_in.size());
+        for (const SearchArgs& a : jobs_in) {
+          require(std::get<0>(a) != nullptr && std::get<1>(a) != nullptr,
+                  "every job needs an IntegralImage and a FeatureBank");
+          jobs.push_back(make_search(*std::get<0>(a), std::get<11>(a), std::get<12>(a),
+                                     *std::get<1>(a), std::get<2>(a), std::get<3>(a),
+                                     std::get<4>(a), std::get<5>(a), std::get<6>(a),
+                                     std::get<7>(a), std::get<8>(a), std::get<9>(a),
+                                     std::get<10>(a)));
+        }
+        for (std::size_t i = 0; i < jobs.size(); ++i) {
+          for (std::size_t j = 0; j < jobs.size(); ++j) {
+            require(i == j || !jobs[i].frame || jobs[i].ii != jobs[j].ii,
+                    "job " + std::to_string(i) + " computes an IntegralImage that job " +
+                        std::to_string(j) + " also uses");
+          }
+        }
+        {
+          py::gil_scoped_release release;
+          parallel_for(static_cast<int>(jobs.size()), threads,
+                       [&jobs](int i) { jobs[static_cast<std::size_t>(i)].run(); });
+        }
+        py::list out;
+        for (const SearchJob& job : jobs) out.append(search_result(job));
+        return out;
+      },
+      py::arg("jobs"), py::arg("threads"),
+      "search() for several targets in one call, on up to `threads` threads with the GIL\n"
+      "released once: each job is the tuple of search()'s arguments in order (ii, bank,\n"
+      "selected, mu1, sigma1, mu0, sigma0, guard, box, stages, frame_size, frame, roi). A job\n"
+      "that computes its integral image (frame not None) needs one no other job uses\n"
+      "(ValueError). Returns the results in order; the first error is raised after all ran.");
+
+  m.def(
+      "learn",
+      [](const SharedIntegralImage& shared, const FeatureBank& bank, const py::object& xs,
+         const py::object& ys, int n_pos, const CArray<double>& mu1, const CArray<double>& sigma1,
+         const CArray<double>& mu0, const CArray<double>& sigma0, double lam, bool first_pos,
+         bool first_neg, bool direct_first, bool mil, double sigma_floor, double guard,
+         const std::string& select, const py::object& w_pos, int k, bool code_gradient) {
+        LearnJob job = make_learn(shared, bank, xs, ys, n_pos, mu1, sigma1, mu0, sigma0, lam,
+                                  first_pos, first_neg, direct_first, mil, sigma_floor, guard,
+                                  select, w_pos, k, code_gradient);
+        {
+          py::gil_scoped_release release;
+          job.run();
+        }
+        return learn_result(job);
       },
       py::arg("ii"), py::arg("bank"), py::arg("xs"), py::arg("ys"), py::arg("n_pos"),
       py::arg("mu1"), py::arg("sigma1"), py::arg("mu0"), py::arg("sigma0"), py::kw_only(),
@@ -93,6 +305,38 @@ void bind_frame(py::module_& m) {
       "sigma0, selected, h): the updated model (new arrays; a class without samples keeps\n"
       "its model), the WMIL selection (select='wmil'; else None) and the log ratios of both\n"
       "bags, M x len(xs) (select='ratios'; else None).");
+
+  m.def(
+      "learn_many",
+      [](const std::vector<LearnArgs>& jobs_in, int threads) {
+        require_threads(threads);
+        std::vector<LearnJob> jobs;
+        jobs.reserve(jobs_in.size());
+        for (const LearnArgs& a : jobs_in) {
+          require(std::get<0>(a) != nullptr && std::get<1>(a) != nullptr,
+                  "every job needs an IntegralImage and a FeatureBank");
+          jobs.push_back(make_learn(
+              *std::get<0>(a), *std::get<1>(a), std::get<2>(a), std::get<3>(a), std::get<4>(a),
+              std::get<5>(a), std::get<6>(a), std::get<7>(a), std::get<8>(a), std::get<9>(a),
+              std::get<10>(a), std::get<11>(a), std::get<12>(a), std::get<13>(a),
+              std::get<14>(a), std::get<15>(a), std::get<16>(a), std::get<17>(a),
+              std::get<18>(a), std::get<19>(a)));
+        }
+        {
+          py::gil_scoped_release release;
+          parallel_for(static_cast<int>(jobs.size()), threads,
+                       [&jobs](int i) { jobs[static_cast<std::size_t>(i)].run(); });
+        }
+        py::list out;
+        for (const LearnJob& job : jobs) out.append(learn_result(job));
+        return out;
+      },
+      py::arg("jobs"), py::arg("threads"),
+      "learn() for several targets in one call, on up to `threads` threads with the GIL\n"
+      "released once: each job is the tuple of learn()'s arguments in order (ii, bank, xs, ys,\n"
+      "n_pos, mu1, sigma1, mu0, sigma0, lam, first_pos, first_neg, direct_first, mil,\n"
+      "sigma_floor, guard, select, w_pos, k, code_gradient). Returns the results in order; the\n"
+      "first error is raised after all jobs ran.");
 }
 
 }  // namespace wmiltrack::bindings

@@ -1,7 +1,11 @@
 #include "wmiltrack/frame.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <exception>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "wmiltrack/scoring.hpp"
@@ -50,6 +54,30 @@ void learn_step(const IntegralImage& ii, const FeatureBank& bank, const LearnSte
     const MatrixView h_pos{hr, M, P, B, 1}, h_neg{hr + P, M, N, B, 1};
     wmil_select(h_pos, h_neg, step.w_pos, step.k, step.code_gradient, selected);
   }
+}
+
+void parallel_for(int n, int threads, const std::function<void(int)>& fn) {
+  if (n <= 0) return;
+  const int workers = std::max(1, std::min(threads, n));
+  std::atomic<int> next{0};
+  std::exception_ptr first_error;
+  std::mutex error_mutex;
+  const auto work = [&] {
+    for (int i = next++; i < n; i = next++) {
+      try {
+        fn(i);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (!first_error) first_error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(workers - 1));
+  for (int t = 1; t < workers; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (first_error) std::rethrow_exception(first_error);
 }
 
 }  // namespace wmiltrack

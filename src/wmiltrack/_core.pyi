@@ -113,7 +113,9 @@ def score_grid(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.Ar
 def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayLike,
            sigma1: npt.ArrayLike, mu0: npt.ArrayLike, sigma0: npt.ArrayLike, guard: float,
            box: tuple[int, int, int, int], stages: Sequence[tuple[int, int]],
-           frame_size: tuple[int, int]) -> tuple[tuple[int, int, float, int], ...]:
+           frame_size: tuple[int, int], frame: npt.NDArray[np.uint8] | None = None,
+           roi: tuple[int, int, int, int] | None = None,
+           ) -> tuple[tuple[int, int, float, int], ...]:
     """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage."""
 
 
@@ -136,3 +138,11 @@ def learn(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
           select: str, w_pos: _F64 | None = None, k: int = 0, code_gradient: bool = False,
           ) -> tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None]:
     """The learning half of a frame step in one call: (mu1, sigma1, mu0, sigma0, selected, h)."""
+
+def search_many(jobs: Sequence[tuple[object, ...]], threads: int
+                ) -> list[tuple[tuple[int, int, float, int], ...]]:
+    """search() for several targets in one call, on up to `threads` threads."""
+
+def learn_many(jobs: Sequence[tuple[object, ...]], threads: int
+               ) -> list[tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None]]:
+    """learn() for several targets in one call, on up to `threads` threads."""

@@ -6,14 +6,15 @@ the same frame with the same box. What the targets share is the per-frame work t
 depend on the target: the frame is checked and converted once; one integral image is built over
 the union of the targets' search regions when that covers fewer pixels than their separate
 regions (many or close targets: up to the whole frame), and every target reads it, with the
-same result as its own table; and the targets' updates run in a thread pool (the compiled core
-releases the GIL, so targets proceed in parallel on several cores).
+same result as its own table; and the targets' calls into the compiled core are made together,
+one call per step of the frame for all targets, which spreads them over ``threads`` threads with
+the GIL released once (:func:`wmiltrack.engine.tracker.update_many`): the Python part of each
+target's step runs in the calling thread, the core's part in parallel.
 """
 
 from __future__ import annotations
 
 import os
-from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -22,7 +23,7 @@ from .. import _core
 from .frames import as_frame
 from .params import Params
 from .result import TrackResult
-from .tracker import Tracker
+from .tracker import Tracker, update_many
 
 __all__ = ["MultiTracker"]
 
@@ -37,8 +38,8 @@ class MultiTracker:
     seed : int
         Target ``i`` uses seed ``seed + i``.
     threads : int, optional
-        Worker threads for :meth:`update`; ``None`` = one per core (``os.cpu_count()``),
-        ``1`` = update the targets one after the other in the calling thread.
+        Threads for the targets' core work in :meth:`update`; ``None`` = one per core
+        (``os.cpu_count()``), ``1`` = all in the calling thread.
     share : {"auto", "always", "never"}
         One integral image for all targets: when it covers fewer pixels than the targets'
         separate regions (``"auto"``), always, or never. Boxes are the same either way.
@@ -55,7 +56,7 @@ class MultiTracker:
     >>> results = mt.update(frame1)                    # {0: TrackResult, 1: TrackResult}
     >>> mt.remove(a)                                   # doctest: +SKIP
 
-    One ``MultiTracker`` must not be used from two threads at once (it runs its own pool).
+    One ``MultiTracker`` must not be used from two threads at once (``RuntimeError``).
     """
 
     def __init__(self, variant: str = "rcwmil", *, seed: int = 0, threads: int | None = None,
@@ -78,7 +79,6 @@ class MultiTracker:
         self._threads = threads if threads is not None else (os.cpu_count() or 1)
         self._targets: dict[int, Tracker] = {}
         self._next_id = 0
-        self._pool: ThreadPoolExecutor | None = None
 
     # -- public API ------------------------------------------------------------------------
     @property
@@ -129,21 +129,14 @@ class MultiTracker:
         items = list(self._targets.items())
         if not items:
             return {}
-        shared = self._prepare(img, [t for _, t in items])
-        if self._threads == 1 or len(items) == 1:
-            outcomes = [self._step(t, img, shared) for _, t in items]
-        else:
-            if self._pool is None:
-                self._pool = ThreadPoolExecutor(max_workers=self._threads,
-                                                thread_name_prefix="wmiltrack")
-            # One task per worker, each a run of consecutive targets: fewer hand-overs through
-            # the executor's queue (they hold the GIL) than one task per target.
-            trackers = [t for _, t in items]
-            n_chunks = min(self._threads, len(trackers))
-            bounds = [len(trackers) * i // n_chunks for i in range(n_chunks + 1)]
-            chunks = [trackers[a:b] for a, b in zip(bounds, bounds[1:])]
-            outcomes = [o for part in self._pool.map(
-                lambda ts: [self._step(t, img, shared) for t in ts], chunks) for o in part]
+        trackers = [t for _, t in items]
+        shared = self._prepare(img, trackers)
+        # Each target runs its own frame step; their calls into the core go together, on up
+        # to `threads` threads with the GIL released once per step.
+        outcomes = update_many(trackers, img, integral=shared, threads=self._threads)
+        for outcome in outcomes:
+            if isinstance(outcome, RuntimeError):
+                raise outcome
         results: dict[int, TrackResult] = {}
         failed: list[str] = []
         for (target_id, _), outcome in zip(items, outcomes):
@@ -156,21 +149,14 @@ class MultiTracker:
         return results
 
     def close(self) -> None:
-        """Shut the thread pool down (it is created again if :meth:`update` is called)."""
-        if self._pool is not None:
-            self._pool.shutdown(wait=True)
-            self._pool = None
+        """Release what the tracker holds between frames: nothing since the core's threads live
+        for one call only (kept so that ``with MultiTracker(...)`` and ``close()`` still work)."""
 
     def __enter__(self) -> MultiTracker:
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
-
-    def __del__(self) -> None:
-        pool = getattr(self, "_pool", None)
-        if pool is not None:
-            pool.shutdown(wait=False)
 
     def __repr__(self) -> str:
         return (f"MultiTracker({self._params.variant!r}, seed={self._seed}, "
@@ -200,11 +186,3 @@ class MultiTracker:
         self._shared.compute(img, (ux0, uy0, ux1 - ux0, uy1 - uy0))
         self.last_shared = True
         return self._shared
-
-    @staticmethod
-    def _step(tracker: Tracker, img: np.ndarray,
-              shared: _core.IntegralImage | None) -> TrackResult | Exception:
-        try:
-            return tracker.update(img, integral=shared)
-        except (ValueError, TypeError) as exc:  # reported per target by update()
-            return exc

@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 import math
 import threading
+from collections.abc import Generator
 from typing import Any, Callable, TypeVar
 
 import numpy as np
@@ -35,6 +36,39 @@ from .selection import milboost_select, wmil_select
 
 Weak = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 """mu1, sigma1, mu0, sigma0 of the selected features."""
+
+
+class _Search(tuple):  # type: ignore[type-arg]
+    """A request for the core's search (``_core.search``'s arguments, in order)."""
+
+
+class _Learn(tuple):  # type: ignore[type-arg]
+    """A request for the core's learning step (``_core.learn``'s arguments, in order)."""
+
+
+_LEARN_KEYS = ("lam", "first_pos", "first_neg", "direct_first", "mil", "sigma_floor", "guard",
+               "select", "w_pos", "k", "code_gradient")
+
+Steps = Generator[tuple[Any, ...], Any, Any]
+"""A frame step written as a generator: it yields requests for the core (:class:`_Search`,
+:class:`_Learn`) and receives their results, so that one tracker runs them one by one
+(:func:`_drive`) and :func:`update_many` runs those of many trackers in parallel."""
+
+
+def _run(request: tuple[Any, ...]) -> Any:
+    if isinstance(request, _Search):
+        return _core.search(*request)
+    return _core.learn(*request[:9], **dict(zip(_LEARN_KEYS, request[9:])))
+
+
+def _drive(steps: Steps) -> Any:
+    """Run a frame step's core requests one by one; its return value."""
+    try:
+        request = next(steps)
+        while True:
+            request = steps.send(_run(request))
+    except StopIteration as stop:
+        return stop.value
 
 
 class NotInitializedError(ValueError):
@@ -250,21 +284,35 @@ class Tracker:
         """
         self._require_init()
         img = as_frame(frame)
+        result: TrackResult = _drive(self._update_steps(img, integral))
+        return result
+
+    def _check_frame(self, img: np.ndarray) -> None:
         wh = frame_size(img)
         if wh != self._frame_wh:
             raise ValueError(
                 f"frame size changed from {self._frame_wh[0]}x{self._frame_wh[1]} to {wh[0]}x{wh[1]}; "
                 "call init() to restart on frames of the new size"
             )
+
+    def _update_steps(self, img: np.ndarray, integral: _core.IntegralImage | None) -> Steps:
+        """:meth:`update` on a checked frame, as a generator of core requests (see ``Steps``)."""
+        self._check_frame(img)
+        wh = self._frame_wh
         p = self._params
         previous = self._box
         origin, coarse = self._search_origin()
         margin = p.search_reach + self._track.reach + self._scale_margin()
         own = self._ii
         roi = self._roi(origin, margin)
-        if integral is not None and self._chan_names is None and _covers(integral, roi, wh):
+        shared = integral is not None and self._chan_names is None and _covers(integral, roi, wh)
+        # The plain path (no colour model, no scale search): the integral image and the search
+        # in one request to the core; the others compute it here and search step by step.
+        plain = self._colour is None and p.scale_steps == 0 and self._chan_names is None
+        if shared:
+            assert integral is not None
             self._ii = integral
-        else:
+        elif not plain:
             self._compute_integral(img, origin, margin)
         try:
             if self._colour is not None:
@@ -272,13 +320,23 @@ class Tracker:
                 m = margin + 1
                 self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
             self._box = origin
-            raw = self._detect(coarse)
+            if plain:
+                stages = self._stages(coarse)
+                pool = self._pool
+                results = yield _Search((self._ii, self._bank_at(self._scale_index)[0],
+                                         self._selected, pool.mu1, pool.sigma1, pool.mu0,
+                                         pool.sigma0, p.guard, self._box, stages, wh,
+                                         None if shared else img, None if shared else roi))
+                raw = self._apply_search(stages, results)
+                self._scale_boxes = []
+            else:
+                raw = self._detect(coarse)
             score = confidence(raw, len(self._selected), p.confidence_offset)
             tracked = score >= p.lost_threshold
             k = max(len(self._selected), 1)
             if score >= p.gate_threshold and self._level_ok(raw / k):
                 slow = not tracked and p.gate_learning_rate is not None
-                self._learn(self._track, p.gate_learning_rate if slow else None)
+                yield from self._learn_steps(self._track, p.gate_learning_rate if slow else None)
             else:
                 empty = np.zeros((0, 2), dtype=np.int32)
                 self._bags = (empty, empty)
@@ -500,44 +558,50 @@ class Tracker:
             vx, vy = vx * p.motion_max / speed, vy * p.motion_max / speed
         self._velocity = (vx, vy)
 
+    def _stages(self, coarse: tuple[int, int]) -> list[tuple[int, int]]:
+        """The search's (radius, step) stages: the coarse grid, then the fine one if any."""
+        p = self._params
+        return [coarse, (p.fine_radius, p.fine_step)] if p.fine_radius > 0 else [coarse]
+
+    def _move(self, found: tuple[int, int, float, int], best: float) -> float:
+        """Move the box by one stage's ``(dx, dy, score, n)``; the best raw score so far."""
+        dx, dy, score, n = found
+        if n == 0:  # no candidate fitted in the frame: stay
+            return best
+        x, y, w, h = self._box
+        self._box = (x + dx, y + dy, w, h)
+        return score
+
+    def _apply_search(self, stages: list[tuple[int, int]],
+                      results: tuple[tuple[int, int, float, int], ...]) -> float:
+        """Move the box by the results of a whole search made in one core call."""
+        best = -math.inf
+        self._search_origins = []
+        self._search_stages = stages
+        for found in results:
+            self._search_origins.append(self._box)
+            best = self._move(found, best)
+        return best
+
     def _detect(self, coarse: tuple[int, int]) -> float:
         """Coarse, fine, then scale search from ``self._box``; moves it; returns the best raw score."""
         p = self._params
         sel = self._selected
         pool = self._pool
+        stages = self._stages(coarse)
+        weak: Weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
         best = -math.inf
-        stages = [coarse]
-        if p.fine_radius > 0:
-            stages.append((p.fine_radius, p.fine_step))
         self._search_origins = []
         self._search_stages = stages
-        weak: Weak | None = None
-        if self._colour_table is None and p.scale_steps == 0:
-            # The whole coarse-to-fine search in one call to the core.
-            results = _core.search(self._ii, self._bank_at(self._scale_index)[0], sel, pool.mu1,
-                                   pool.sigma1, pool.mu0, pool.sigma0, p.guard, self._box, stages,
-                                   self._frame_wh)
-        else:
-            weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
-            results = None
-        for i, (radius, step) in enumerate(stages):
+        for radius, step in stages:  # stage by stage: each searches where the last one moved to
             self._search_origins.append(self._box)
-            if results is not None:
-                dx, dy, score, n = results[i]
-            elif self._colour_table is not None:
-                assert weak is not None
-                dx, dy, score, n = self._colour_stage(sel, weak, radius, step)
+            if self._colour_table is not None:
+                found = self._colour_stage(sel, weak, radius, step)
             else:
-                assert weak is not None
-                dx, dy, score, n = self._score_grid(self._scale_index, sel, weak, self._box, radius,
-                                                    step)
-            if n > 0:
-                x, y, w, h = self._box
-                self._box = (x + dx, y + dy, w, h)
-                best = score
+                found = self._score_grid(self._scale_index, sel, weak, self._box, radius, step)
+            best = self._move(found, best)
         self._scale_boxes = []
         if p.scale_steps > 0 and math.isfinite(best):
-            assert weak is not None
             if p.scale_model == "likelihood":
                 self._scale_by_likelihood()
             else:
@@ -633,6 +697,10 @@ class Tracker:
 
     def _learn(self, sampler: BagSampler, learning_rate: float | None = None) -> None:
         """Sample the bags around the current box, update the Gaussians, reselect features."""
+        _drive(self._learn_steps(sampler, learning_rate))
+
+    def _learn_steps(self, sampler: BagSampler, learning_rate: float | None) -> Steps:
+        """:meth:`_learn` as a generator of core requests (see ``Steps``)."""
         p = self._params
         fw, fh = self._frame_wh
         pos, dist = sampler.positives(self._box, fw, fh)
@@ -640,7 +708,7 @@ class Tracker:
         self._bags = (pos, neg)
         n_pos = pos.shape[0]
         if p.scale_negatives == 0 and self._scale_pool is None:
-            self._learn_in_one_call(sampler, pos, neg, dist, learning_rate)
+            yield from self._learn_in_one_call(sampler, pos, neg, dist, learning_rate)
             return
         # Both bags in one projection (and one log-ratio call below): columns [0, n_pos) are
         # the positives, the rest the negatives.
@@ -664,8 +732,8 @@ class Tracker:
             self._selected = milboost_select(h_pos, h_neg, p.num_selected, guard=p.guard)
 
     def _learn_in_one_call(self, sampler: BagSampler, pos: np.ndarray, neg: np.ndarray,
-                           dist: np.ndarray, learning_rate: float | None) -> None:
-        """:meth:`_learn`'s work after sampling, in one call to the core (``_core.learn``: the
+                           dist: np.ndarray, learning_rate: float | None) -> Steps:
+        """:meth:`_learn`'s work after sampling, in one request to the core (``_core.learn``: the
         same kernels in the same order, so the same bits, crossing into the core once)."""
         p = self._params
         pool = self._pool
@@ -676,17 +744,77 @@ class Tracker:
         else:
             select = "wmil" if p.selection == "wmil" else "ratios"
         w = sampler.weights(dist, p.instance_weights) if select == "wmil" else None
-        mu1, sigma1, mu0, sigma0, selected, h = _core.learn(
+        mu1, sigma1, mu0, sigma0, selected, h = yield _Learn((
             self._ii, self._bank_at(self._scale_index)[0], corners[:, 0], corners[:, 1], n_pos,
             pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
-            lam=p.learning_rate if learning_rate is None else learning_rate,
-            first_pos=pool.first(1), first_neg=pool.first(0),
-            direct_first=p.first_update == "direct", mil=p.classifier == "mil",
-            sigma_floor=p.sigma_floor, guard=p.guard, select=select, w_pos=w,
-            k=p.num_selected, code_gradient=p.gradient == "code")
+            p.learning_rate if learning_rate is None else learning_rate,
+            pool.first(1), pool.first(0), p.first_update == "direct", p.classifier == "mil",
+            p.sigma_floor, p.guard, select, w, p.num_selected, p.gradient == "code"))
         pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg > 0)
         if selected is not None:
             self._selected = selected
         elif h is not None:
             self._selected = milboost_select(h[:, :n_pos], h[:, n_pos:], p.num_selected,
                                              guard=p.guard)
+
+
+def update_many(trackers: list[Tracker], frame: np.ndarray, *,
+                integral: _core.IntegralImage | None = None,
+                threads: int = 1) -> list[TrackResult | Exception]:
+    """:meth:`Tracker.update` of several trackers on one frame, their core work in parallel.
+
+    Every tracker runs its own frame step, unchanged (the same boxes as ``update``), but the
+    requests they make to the core at the same point of the step (integral image and search,
+    then the learning step) go to the core together and run on up to ``threads`` threads with
+    the GIL released once, instead of once per tracker and call. ``integral``: as for
+    :meth:`Tracker.update`, a luma table of this frame the trackers may borrow. Returns, in
+    order, each tracker's :class:`TrackResult` or the ``ValueError``/``TypeError`` its update
+    raised (the others are not affected); a tracker in use by another thread gets a
+    ``RuntimeError``.
+    """
+    img = as_frame(frame)
+    out: list[TrackResult | Exception | None] = [None] * len(trackers)
+    locked: list[Tracker] = []
+    active: dict[int, tuple[Steps, tuple[Any, ...]]] = {}
+
+    def advance(i: int, steps: Steps, value: Any, first: bool = False) -> None:
+        try:
+            request = next(steps) if first else steps.send(value)
+            active[i] = (steps, request)
+        except StopIteration as stop:
+            out[i] = stop.value
+            active.pop(i, None)
+        except (ValueError, TypeError) as exc:
+            out[i] = exc
+            active.pop(i, None)
+
+    try:
+        for i, t in enumerate(trackers):
+            if not t._busy.acquire(blocking=False):
+                out[i] = RuntimeError("this Tracker is in use by another thread")
+                continue
+            locked.append(t)
+            try:
+                t._require_init()
+            except NotInitializedError as exc:
+                out[i] = exc
+                continue
+            advance(i, t._update_steps(img, integral), None, first=True)
+        while active:
+            order = list(active)
+            searches = [i for i in order if isinstance(active[i][1], _Search)]
+            learns = [i for i in order if isinstance(active[i][1], _Learn)]
+            results: dict[int, Any] = {}
+            if searches:
+                found = _core.search_many([active[i][1] for i in searches], threads)
+                results.update(zip(searches, found))
+            if learns:
+                jobs = [tuple(active[i][1]) for i in learns]
+                learnt = _core.learn_many(jobs, threads)
+                results.update(zip(learns, learnt))
+            for i in order:
+                advance(i, active[i][0], results[i])
+    finally:
+        for t in locked:
+            t._busy.release()
+    return [r if r is not None else RuntimeError("no result") for r in out]
