@@ -296,14 +296,14 @@ def test_tracker_refuses_concurrent_use() -> None:
     t = wmiltrack.Tracker("ct", seed=0)
     t.init(frames[0], tuple(gt[0]))
     inside, release = threading.Event(), threading.Event()
-    orig = t._detect
+    orig = t._apply_search  # the plain path (no colour, no scale) moves the box here
 
-    def slow_detect(*args: object) -> float:
+    def slow_search(*args: object) -> float:
         inside.set()
         release.wait(10)
-        return orig(*args)
+        return orig(*args)  # type: ignore[arg-type]
 
-    t._detect = slow_detect  # type: ignore[method-assign]
+    t._apply_search = slow_search  # type: ignore[method-assign]
     errors: list[BaseException] = []
     th = threading.Thread(target=lambda: t.update(frames[1]))
     th.start()

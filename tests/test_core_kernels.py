@@ -246,3 +246,36 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
         _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
                     pool.sigma0, lam=0.85, first_pos=False, first_neg=False, direct_first=True,
                     mil=False, sigma_floor=1e-6, guard=1e-30, select="milboost")
+
+
+def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table() -> None:
+    """search_many / learn_many: the results of search / learn called one by one, whatever
+    the threads; two jobs may not compute into one IntegralImage; threads >= 1."""
+    import wmiltrack
+
+    rng = np.random.default_rng(5)
+    frame = rng.integers(0, 256, (160, 200, 3), dtype=np.uint8)
+    trackers = []
+    for i, box in enumerate([(30, 30, 30, 26), (120, 90, 28, 32), (80, 50, 24, 24)]):
+        t = wmiltrack.Tracker("rcwmil", seed=i)
+        t.init(frame, box)
+        trackers.append(t)
+
+    def job(t, ii):  # noqa: ANN001, ANN202
+        p, pool = t.params, t._pool  # noqa: SLF001 (white-box)
+        roi = (t.box[0] - 40, t.box[1] - 40, t.box[2] + 80, t.box[3] + 80)
+        return (ii, t._bank, t._selected, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,  # noqa: SLF001
+                tuple(int(v) for v in t.box), [(25, 4), (10, 1)], (200, 160), frame,
+                tuple(int(v) for v in roi))
+
+    single = [_core.search(*job(t, _core.IntegralImage())) for t in trackers]
+    for threads in (1, 2, 3):
+        many = _core.search_many([job(t, _core.IntegralImage()) for t in trackers], threads)
+        assert list(many) == single
+    shared = _core.IntegralImage()
+    with pytest.raises(ValueError, match="also uses"):
+        _core.search_many([job(trackers[0], shared), job(trackers[1], shared)], 2)
+    with pytest.raises(ValueError, match="threads"):
+        _core.search_many([job(trackers[0], _core.IntegralImage())], 0)
+    assert _core.search_many([], 2) == []
+    assert _core.learn_many([], 2) == []
