@@ -93,15 +93,14 @@ class Probe(wmiltrack.Tracker):
         g = grid[np.isfinite(grid)]
         self.grid_mean = float(g.mean()) if g.size else math.nan
 
-    def _detect(self, coarse: tuple[int, int]) -> float:  # colour or scale search
-        self._coarse_grid_mean(coarse)
-        self.raw_best = super()._detect(coarse)
-        return self.raw_best
-
     def _apply_search(self, stages: list[tuple[int, int]],
-                      results: tuple[tuple[int, int, float, int], ...]) -> float:  # the plain path
+                      results: tuple[tuple[int, int, float, int], ...]) -> float:
         self._coarse_grid_mean(stages[0])
         self.raw_best = super()._apply_search(stages, results)
+        return self.raw_best
+
+    def _scale_search(self, raw: float) -> float:  # the chosen scale's raw score, if it moved
+        self.raw_best = super()._scale_search(raw)
         return self.raw_best
 
 

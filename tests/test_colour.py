@@ -52,7 +52,7 @@ def test_integral_matches_brute_force_and_is_clipped() -> None:
     s = 8 - cm.bits
     idx = ((img[5:, :70, 0] >> s).astype(int) << 8) | ((img[5:, :70, 1] >> s).astype(int) << 4) | (
         img[5:, :70, 2] >> s).astype(int)
-    f, b = cm._fg[idx], cm._bg[idx]  # noqa: SLF001 (white-box check of the formula)
+    f, b = cm.histograms.foreground[idx], cm.histograms.background[idx]
     p = np.where(f + b > 0, f / np.where(f + b > 0, f + b, 1), 0.5)
     got = ColourModel.box_means(table, x0, y0, np.array([3]), np.array([9]), 11, 7)[0]
     assert got == pytest.approx(p[4:11, 3:14].mean(), rel=1e-12)
@@ -88,30 +88,79 @@ def _bins_numpy(patch: np.ndarray, bits: int) -> np.ndarray:
     return (b << (2 * bits)) | (g << bits) | r
 
 
-@pytest.mark.parametrize("bits", [1, 3, 5, 8])
+class _NumpyHistograms:
+    """The colour model's update over every bin, in numpy: what the core must equal bit for bit."""
+
+    def __init__(self, bits: int, rate: float) -> None:
+        n = 1 << (3 * bits)
+        self.bits, self.rate = bits, rate
+        self.fg, self.bg, self.lik = np.zeros(n), np.zeros(n), np.full(n, 0.5)
+        self.first = True
+
+    def learn(self, frame: np.ndarray, region: tuple[int, int, int, int],
+              inside: tuple[int, int, int, int], core: tuple[int, int, int, int]) -> None:
+        x, y, w, h = region
+        idx = _bins_numpy(frame[y:y + h, x:x + w], self.bits)
+        m_in = np.zeros(idx.shape, bool)
+        m_in[inside[0]:inside[1], inside[2]:inside[3]] = True
+        m_core = np.zeros(idx.shape, bool)
+        m_core[core[0]:core[1], core[2]:core[3]] = True
+        n = self.fg.size
+        fc = np.bincount(idx[m_core], minlength=n).astype(float)
+        bc = np.bincount(idx[~m_in], minlength=n).astype(float)
+        f, b = fc / max(fc.sum(), 1.0), bc / max(bc.sum(), 1.0)
+        keep = 1.0 - self.rate
+        self.fg = f if self.first else keep * self.fg + self.rate * f
+        self.bg = b if self.first else keep * self.bg + self.rate * b
+        total = self.fg + self.bg
+        self.lik = np.where(total > 0, self.fg / np.where(total > 0, total, 1.0), 0.5)
+        self.first = False
+
+
+@pytest.mark.parametrize("bits", [1, 3, 5, 6])
 @pytest.mark.parametrize("channels", [3, 4])
-def test_colour_kernels_match_numpy(bits: int, channels: int) -> None:
-    """The core's per-pixel bins, likelihood map and histogram counts are numpy's."""
+def test_core_histograms_match_numpy_bit_for_bit(bits: int, channels: int) -> None:
+    """Counts, blend and likelihood over several frames, and the likelihood's integral image,
+    equal a numpy pass over every bin (the core only visits the bins seen) and cv2.integral."""
+    import cv2
+
     from wmiltrack import _core
 
     rng = np.random.default_rng(bits * 10 + channels)
-    frame = rng.integers(0, 256, (37, 53, channels), dtype=np.uint8)
-    likelihood = rng.random(1 << (3 * bits))
-    x, y, w, h = 5, 3, 41, 30
-    want = likelihood[_bins_numpy(frame[y:y + h, x:x + w], bits)]
-    np.testing.assert_array_equal(_core.colour_map(frame, (x, y, w, h), bits, likelihood), want)
-    idx = _bins_numpy(frame[y:y + h, x:x + w], bits)
-    inside, core = (4, 20, 6, 30), (6, 18, 9, 27)  # (row0, row1, col0, col1) in the region
-    m_in = np.zeros(idx.shape, bool)
-    m_in[4:20, 6:30] = True
-    m_core = np.zeros(idx.shape, bool)
-    m_core[6:18, 9:27] = True
-    fg, bg = _core.colour_counts(frame, (x, y, w, h), inside, core, bits)
-    np.testing.assert_array_equal(fg, np.bincount(idx[m_core], minlength=1 << (3 * bits)))
-    np.testing.assert_array_equal(bg, np.bincount(idx[~m_in], minlength=1 << (3 * bits)))
+    frames = [rng.integers(0, 256, (37, 53, channels), dtype=np.uint8) for _ in range(4)]
+    frames[2][:] = frames[1]  # a frame with no new colour
+    frames[3] = np.ascontiguousarray(frames[3][:, ::-1])[:, ::-1]  # a strided view
+    core_h = _core.ColourHistograms(bits, 0.3)
+    ref = _NumpyHistograms(bits, 0.3)
+    spans = [((4, 20, 6, 30), (6, 18, 9, 27)), ((0, 30, 0, 41), (2, 5, 3, 4)),
+             ((10, 10, 5, 5), (0, 0, 0, 0)), ((30, 40, 40, 50), (1, 29, 1, 40))]
+    region = (5, 3, 41, 30)
+    for frame, (inside, core) in zip(frames, spans):
+        core_h.learn(frame, region, inside, core)
+        ref.learn(frame, region, inside, core)
+        np.testing.assert_array_equal(core_h.foreground, ref.fg)
+        np.testing.assert_array_equal(core_h.background, ref.bg)
+        np.testing.assert_array_equal(core_h.likelihood, ref.lik)
+        x, y, w, h = 2, 1, 47, 33
+        want = cv2.integral(ref.lik[_bins_numpy(frame[y:y + h, x:x + w], bits)], sdepth=cv2.CV_64F)
+        np.testing.assert_array_equal(core_h.likelihood_integral(frame, (x, y, w, h)), want)
+
+
+def test_core_histograms_refuse_bad_input() -> None:
+    from wmiltrack import _core
+
+    frame = np.zeros((20, 30, 3), np.uint8)
+    h = _core.ColourHistograms(5, 0.04)
+    with pytest.raises(ValueError, match="learn"):
+        h.likelihood_integral(frame, (0, 0, 10, 10))
     with pytest.raises(ValueError):
-        _core.colour_map(frame[..., 0], (x, y, w, h), bits, likelihood)  # gray
+        h.learn(frame[..., 0], (0, 0, 10, 10), (0, 5, 0, 5), (1, 4, 1, 4))  # gray
     with pytest.raises(ValueError):
-        _core.colour_map(frame, (x, y, 60, h), bits, likelihood)  # outside the frame
-    with pytest.raises(ValueError):
-        _core.colour_map(frame, (x, y, w, h), bits, likelihood[:-1])  # wrong table size
+        h.learn(frame, (25, 0, 10, 10), (0, 5, 0, 5), (1, 4, 1, 4))  # outside the frame
+    with pytest.raises(ValueError, match="bits"):
+        _core.ColourHistograms(0, 0.04)
+    with pytest.raises(ValueError, match="rate"):
+        _core.ColourHistograms(5, 0.0)
+    assert not h.learnt
+    h.learn(frame, (0, 0, 10, 10), (0, 5, 0, 5), (1, 4, 1, 4))
+    assert h.learnt and h.foreground.sum() == 1.0

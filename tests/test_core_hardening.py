@@ -319,7 +319,7 @@ def test_tracker_refuses_concurrent_use() -> None:
         release.set()
         th.join()
     assert not errors, errors
-    t._detect = orig  # type: ignore[method-assign]
+    t._apply_search = orig  # type: ignore[method-assign]
     t.update(frames[2])  # usable again once the other call returned
 
 

@@ -279,3 +279,49 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
         _core.search_many([job(trackers[0], _core.IntegralImage())], 0)
     assert _core.search_many([], 2) == []
     assert _core.learn_many([], 2) == []
+
+
+def test_search_with_a_colour_cue_takes_the_merged_first_maximum() -> None:
+    """search(colour=...) picks, stage by stage, the first maximum in row-major order of
+    (1 - w) logistic(raw / K - offset) + w * (box mean of the cue), reports that candidate's
+    raw score, and refuses a candidate outside the cue's table."""
+    rng = np.random.default_rng(11)
+    frame = rng.integers(0, 256, size=(120, 150), dtype=np.uint8)
+    starts, rects, weights = random_bank(rng, 6, 20)
+    bank = _core.FeatureBank(starts, rects, weights)
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 150, 120))
+    sel = np.array([4, 1, 2], dtype=np.int32)
+    mu1, mu0 = rng.normal(0, 300, 6), rng.normal(0, 300, 6)
+    s1, s0 = rng.uniform(100, 400, 6), rng.uniform(100, 400, 6)
+    cue_map = rng.random((100, 130))
+    table = cv2.integral(cue_map, sdepth=cv2.CV_64F)  # region starts at frame pixel (10, 5)
+    x0, y0, weight, offset = 10, 5, 0.7, 0.3
+    box, stages = (60, 50, 20, 20), [(25, 4), (10, 1)]
+    got = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
+                       colour=(table, x0, y0, weight, offset))
+    at = box
+    for (radius, step), (dx, dy, raw, n) in zip(stages, got):
+        _, _, _, _, grid = _core.score_grid(ii, bank, sel, mu1[sel], s1[sel], mu0[sel], s0[sel],
+                                            1e-30, at, radius, step, (150, 120), True)
+        half = (grid.shape[0] - 1) // 2
+        rows, cols = np.nonzero(np.isfinite(grid))
+        xs, ys = at[0] + (cols - half) * step - x0, at[1] + (rows - half) * step - y0
+        mean = (table[ys + 20, xs + 20] - table[ys, xs + 20] - table[ys + 20, xs] + table[ys, xs]) / 400.0
+        conf = 0.5 * (1.0 + np.tanh(0.5 * (grid[rows, cols] / 3 - offset)))
+        best = int(np.argmax((1.0 - weight) * conf + weight * mean))
+        assert (dx, dy) == ((cols[best] - half) * step, (rows[best] - half) * step)
+        assert raw == grid[rows[best], cols[best]] and n == rows.size
+        at = (at[0] + dx, at[1] + dy, 20, 20)
+    # the plain search may choose otherwise; a weight of 0 is the plain choice
+    plain = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120))
+    zero = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
+                        colour=(table, x0, y0, 0.0, offset))
+    assert [r[:2] for r in zero] == [r[:2] for r in plain]
+    small = np.ascontiguousarray(table[:60, :60])  # candidates reach beyond it
+    with pytest.raises(IndexError, match="cue"):
+        _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
+                     colour=(small, x0, y0, weight, offset))
+    with pytest.raises(ValueError, match="weight"):
+        _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
+                     colour=(table, x0, y0, 1.5, offset))

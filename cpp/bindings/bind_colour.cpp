@@ -1,4 +1,6 @@
+#include <mutex>
 #include <tuple>
+#include <vector>
 
 #include "common.hpp"
 #include "wmiltrack/colour.hpp"
@@ -21,87 +23,87 @@ void require_colour(const ImageView& view, int bits) {
   require(bits >= 1 && bits <= 8, "bits must be in 1..8, got " + std::to_string(bits));
 }
 
+// The core's histograms with a lock: a Python object may be reached from several threads,
+// and its methods run without the GIL.
+struct LockedHistograms {
+  ColourHistograms hist;
+  std::mutex lock;
+  LockedHistograms(int bits, double rate) : hist(bits, rate) {}
+};
+
+py::array_t<double> copy_of(const std::vector<double>& v) {
+  py::array_t<double> out(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+Span span_of(std::tuple<int, int, int, int> t) {
+  const auto [r0, r1, c0, c1] = t;
+  return Span{r0, r1, c0, c1};
+}
+
 }  // namespace
 
 void bind_colour(py::module_& m) {
-  m.def(
-      "colour_map",
-      [](const py::array& frame, std::tuple<int, int, int, int> region_in, int bits,
-         const CArray<double>& likelihood) {
-        const ImageView view = image_view(frame);
-        require_colour(view, bits);
-        const Rect region = region_of(view, region_in);
-        require(likelihood.ndim() == 1 && likelihood.shape(0) == (py::ssize_t{1} << (3 * bits)),
-                "likelihood must hold 2**(3 * bits) values");
-        CArray<double> out({region.h, region.w});
-        double* o = out.mutable_data();
-        const double* l = likelihood.data();
-        {
-          py::gil_scoped_release release;
-          colour_map(view, region, bits, l, o);
-        }
-        return out;
-      },
-      py::arg("frame"), py::arg("region"), py::arg("bits"), py::arg("likelihood"),
-      "likelihood[bin] of every pixel of region = (x, y, w, h) (inside the frame): an h x w\n"
-      "float64 array. bin = (b >> s) << 2 bits | (g >> s) << bits | (r >> s), s = 8 - bits.");
-
-  m.def(
-      "colour_counts",
-      [](const py::array& frame, std::tuple<int, int, int, int> region_in,
-         std::tuple<int, int, int, int> inside_in, std::tuple<int, int, int, int> core_in,
-         int bits) {
-        const ImageView view = image_view(frame);
-        require_colour(view, bits);
-        const Rect region = region_of(view, region_in);
-        const auto span = [](std::tuple<int, int, int, int> t) {
-          const auto [r0, r1, c0, c1] = t;
-          return Span{r0, r1, c0, c1};
-        };
-        const Span inside = span(inside_in), core = span(core_in);
-        const py::ssize_t n = py::ssize_t{1} << (3 * bits);
-        CArray<double> fg(n), bg(n);
-        double* f = fg.mutable_data();
-        double* b = bg.mutable_data();
-        {
-          py::gil_scoped_release release;
-          std::fill(f, f + n, 0.0);
-          std::fill(b, b + n, 0.0);
-          colour_counts(view, region, inside, core, bits, f, b);
-        }
-        return py::make_tuple(fg, bg);
-      },
-      py::arg("frame"), py::arg("region"), py::arg("inside"), py::arg("core"), py::arg("bits"),
-      "Colour histogram counts of region = (x, y, w, h): (fg, bg), 2**(3 * bits) float64 each;\n"
-      "fg counts the pixels in core, bg those outside inside (both (row0, row1, col0, col1)\n"
-      "relative to the region, half-open).");
-
-  m.def(
-      "colour_update",
-      [](py::array_t<double, py::array::c_style> fg_model, py::array_t<double, py::array::c_style> bg_model,
-         py::array_t<double, py::array::c_style> fg_counts, py::array_t<double, py::array::c_style> bg_counts,
-         double rate, bool first, py::array_t<double, py::array::c_style> likelihood) {
-        const py::ssize_t n = fg_model.size();
-        for (const auto* a : {&fg_model, &bg_model, &fg_counts, &bg_counts, &likelihood}) {
-          require(a->ndim() == 1 && a->size() == n, "all five arrays must be 1-D of one length");
-          require(a->writeable(), "the arrays must be writeable float64");
-        }
-        require(rate > 0.0 && rate <= 1.0, "rate must be in (0, 1]");
-        double* f = fg_model.mutable_data();
-        double* b = bg_model.mutable_data();
-        double* fc = fg_counts.mutable_data();
-        double* bc = bg_counts.mutable_data();
-        double* l = likelihood.mutable_data();
-        py::gil_scoped_release release;
-        colour_update(f, b, fc, bc, static_cast<int>(n), rate, first, l);
-      },
-      py::arg("fg_model").noconvert(), py::arg("bg_model").noconvert(),
-      py::arg("fg_counts").noconvert(), py::arg("bg_counts").noconvert(), py::arg("rate"),
-      py::arg("first"), py::arg("likelihood").noconvert(),
-      "One frame of the colour model's update, in place: the counts normalised to sum 1, the\n"
-      "model blended ((1 - rate) model + rate counts; the counts when first), and likelihood =\n"
-      "fg / (fg + bg) (0.5 where both are 0). All five arrays: C-contiguous float64 of one\n"
-      "length (TypeError otherwise: a converted copy would be updated instead).");
+  py::class_<LockedHistograms>(
+      m, "ColourHistograms",
+      "Foreground and background colour histograms (2**(3 * bits) bins each, blended over\n"
+      "frames at `rate`) and the per-bin likelihood fg / (fg + bg), 0.5 where both are 0.\n"
+      "bin = (b >> s) << 2 bits | (g >> s) << bits | (r >> s), s = 8 - bits.")
+      .def(py::init<int, double>(), py::arg("bits"), py::arg("rate"))
+      .def_property_readonly("bits", [](const LockedHistograms& h) { return h.hist.bits(); })
+      .def_property_readonly("rate", [](const LockedHistograms& h) { return h.hist.rate(); })
+      .def_property_readonly("learnt", [](LockedHistograms& h) {
+        std::lock_guard<std::mutex> guard(h.lock);
+        return h.hist.learnt();
+      })
+      .def(
+          "learn",
+          [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in,
+             std::tuple<int, int, int, int> inside, std::tuple<int, int, int, int> core) {
+            const ImageView view = image_view(frame);
+            require_colour(view, h.hist.bits());
+            const Rect region = region_of(view, region_in);
+            py::gil_scoped_release release;
+            std::lock_guard<std::mutex> guard(h.lock);
+            h.hist.learn(view, region, span_of(inside), span_of(core));
+          },
+          py::arg("frame"), py::arg("region"), py::arg("inside"), py::arg("core"),
+          "Fold in one frame: the pixels of core count for the foreground, those of region =\n"
+          "(x, y, w, h) outside inside for the background (inside, core: (row0, row1, col0,\n"
+          "col1) relative to the region, half-open); each count histogram is normalised to sum\n"
+          "1 and blended in ((1 - rate) model + rate counts; the counts on the first frame).")
+      .def(
+          "likelihood_integral",
+          [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in) {
+            const ImageView view = image_view(frame);
+            require_colour(view, h.hist.bits());
+            const Rect region = region_of(view, region_in);
+            CArray<double> out({region.h + 1, region.w + 1});
+            double* o = out.mutable_data();
+            {
+              py::gil_scoped_release release;
+              std::lock_guard<std::mutex> guard(h.lock);
+              if (!h.hist.learnt()) throw py::value_error("call learn() before likelihood_integral()");
+              h.hist.likelihood_integral(view, region, o);
+            }
+            return out;
+          },
+          py::arg("frame"), py::arg("region"),
+          "Integral image (h + 1) x (w + 1), zero first row and column, of the likelihood of\n"
+          "every pixel of region = (x, y, w, h) (inside the frame); the sums of cv2.integral.")
+      .def_property_readonly("foreground", [](LockedHistograms& h) {
+        std::lock_guard<std::mutex> guard(h.lock);
+        return copy_of(h.hist.foreground());
+      }, "A copy of the foreground histogram (sums to 1 once learnt).")
+      .def_property_readonly("background", [](LockedHistograms& h) {
+        std::lock_guard<std::mutex> guard(h.lock);
+        return copy_of(h.hist.background());
+      }, "A copy of the background histogram.")
+      .def_property_readonly("likelihood", [](LockedHistograms& h) {
+        std::lock_guard<std::mutex> guard(h.lock);
+        return copy_of(h.hist.likelihood());
+      }, "A copy of P(target | bin).");
 }
 
 }  // namespace wmiltrack::bindings

@@ -28,6 +28,8 @@ struct SearchJob {
   Rect box;
   std::vector<SearchStage> stages;
   int fw = 0, fh = 0;
+  CArray<double> cue_table;  // the colour cue's integral image (with `cue`)
+  std::optional<BoxMeanCue> cue;
   std::vector<GridResult> out;
 
   void run() {
@@ -35,7 +37,7 @@ struct SearchJob {
     const auto table = ii->snapshot();
     if (!table) throw std::invalid_argument("the integral image has not been computed");
     out = search(*table, *bank, selected.data(), static_cast<int>(selected.size()), *weak, box,
-                 stages, fw, fh);
+                 stages, fw, fh, cue ? &*cue : nullptr);
   }
 };
 
@@ -46,7 +48,7 @@ SearchJob make_search(SharedIntegralImage& ii, const py::object& frame,
                       const CArray<double>& mu0, const CArray<double>& sigma0, double guard,
                       std::tuple<int, int, int, int> box,
                       const std::vector<std::tuple<int, int>>& stages,
-                      std::tuple<int, int> frame_size) {
+                      std::tuple<int, int> frame_size, const py::object& colour) {
   SearchJob job;
   job.ii = &ii;
   for (const auto& [radius, step] : stages) {
@@ -93,6 +95,24 @@ SearchJob make_search(SharedIntegralImage& ii, const py::object& frame,
     }
   } else {
     require_planes(*computed_table(ii), bank);
+  }
+  if (!colour.is_none()) {
+    const auto [table, x0, y0, weight, offset] =
+        colour.cast<std::tuple<CArray<double>, int, int, double, double>>();
+    require(table.ndim() == 2 && table.shape(0) >= 1 && table.shape(1) >= 1,
+            "colour: the table must be a 2-D integral image (rows + 1) x (cols + 1)");
+    require(weight >= 0.0 && weight <= 1.0, "colour: the weight must be in [0, 1]");
+    job.cue_table = table;
+    BoxMeanCue cue;
+    cue.table = job.cue_table.data();
+    cue.rows = static_cast<int>(table.shape(0) - 1);
+    cue.cols = static_cast<int>(table.shape(1) - 1);
+    cue.x0 = x0;
+    cue.y0 = y0;
+    cue.weight = weight;
+    cue.offset = offset;
+    cue.k = static_cast<int>(job.selected.size());
+    job.cue = cue;
   }
   return job;
 }
@@ -202,7 +222,8 @@ using SearchArgs =
     std::tuple<SharedIntegralImage*, const FeatureBank*, py::object, CArray<double>,
                CArray<double>, CArray<double>, CArray<double>, double,
                std::tuple<int, int, int, int>, std::vector<std::tuple<int, int>>,
-               std::tuple<int, int>, py::object, std::optional<std::tuple<int, int, int, int>>>;
+               std::tuple<int, int>, py::object, std::optional<std::tuple<int, int, int, int>>,
+               py::object>;
 using LearnArgs =
     std::tuple<const SharedIntegralImage*, const FeatureBank*, py::object, py::object, int,
                CArray<double>, CArray<double>, CArray<double>, CArray<double>, double, bool,
@@ -221,9 +242,10 @@ void bind_frame(py::module_& m) {
          const CArray<double>& mu1, const CArray<double>& sigma1, const CArray<double>& mu0,
          const CArray<double>& sigma0, double guard, std::tuple<int, int, int, int> box,
          const std::vector<std::tuple<int, int>>& stages, std::tuple<int, int> frame_size,
-         const py::object& frame, std::optional<std::tuple<int, int, int, int>> roi) {
+         const py::object& frame, std::optional<std::tuple<int, int, int, int>> roi,
+         const py::object& colour) {
         SearchJob job = make_search(ii, frame, roi, bank, selected, mu1, sigma1, mu0, sigma0,
-                                    guard, box, stages, frame_size);
+                                    guard, box, stages, frame_size, colour);
         {
           py::gil_scoped_release release;
           job.run();
@@ -233,12 +255,18 @@ void bind_frame(py::module_& m) {
       py::arg("ii"), py::arg("bank"), py::arg("selected"), py::arg("mu1"), py::arg("sigma1"),
       py::arg("mu0"), py::arg("sigma0"), py::arg("guard"), py::arg("box"), py::arg("stages"),
       py::arg("frame_size"), py::arg("frame") = py::none(), py::arg("roi") = py::none(),
+      py::arg("colour") = py::none(),
       "A coarse-to-fine search in one call: score_grid for each (radius, step) of `stages`, each\n"
       "centred where the previous one moved the box.\n\n"
       "mu1, sigma1, mu0, sigma0 are the whole pool's Gaussians; `selected` picks the features\n"
       "(the strong classifier). With `frame` (and `roi`), `ii` is first recomputed over roi\n"
       "(luma), in the same call. Returns one (dx, dy, best_score, n_candidates) per stage,\n"
-      "dx/dy relative to that stage's centre (a stage with no candidate does not move the box).");
+      "dx/dy relative to that stage's centre (a stage with no candidate does not move the box).\n"
+      "colour = (table, x0, y0, weight, offset) merges a cue into every stage's choice: the\n"
+      "candidate with the largest (1 - weight) logistic(score / len(selected) - offset) +\n"
+      "weight * (mean of the integral image `table`, whose region starts at frame pixel\n"
+      "(x0, y0), over the box) wins; its score is reported, and n counts the candidates with a\n"
+      "finite score. A candidate outside the table raises IndexError.");
 
   m.def(
       "search_many",
@@ -253,7 +281,7 @@ void bind_frame(py::module_& m) {
                                      *std::get<1>(a), std::get<2>(a), std::get<3>(a),
                                      std::get<4>(a), std::get<5>(a), std::get<6>(a),
                                      std::get<7>(a), std::get<8>(a), std::get<9>(a),
-                                     std::get<10>(a)));
+                                     std::get<10>(a), std::get<13>(a)));
         }
         for (std::size_t i = 0; i < jobs.size(); ++i) {
           for (std::size_t j = 0; j < jobs.size(); ++j) {
@@ -274,7 +302,8 @@ void bind_frame(py::module_& m) {
       py::arg("jobs"), py::arg("threads"),
       "search() for several targets in one call, on up to `threads` threads with the GIL\n"
       "released once: each job is the tuple of search()'s arguments in order (ii, bank,\n"
-      "selected, mu1, sigma1, mu0, sigma0, guard, box, stages, frame_size, frame, roi). A job\n"
+      "selected, mu1, sigma1, mu0, sigma0, guard, box, stages, frame_size, frame, roi,\n"
+      "colour). A job\n"
       "that computes its integral image (frame not None) needs one no other job uses\n"
       "(ValueError). Returns the results in order; the first error is raised after all ran.");
 

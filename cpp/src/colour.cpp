@@ -19,55 +19,102 @@ void check(const ImageView& image, const Rect& region, int bits) {
   }
 }
 
-template <class F>
-void for_region(const ImageView& image, const Rect& region, int bits, F&& f) {
-  const std::ptrdiff_t cs = image.channel_stride;
+}  // namespace
+
+ColourHistograms::ColourHistograms(int bits, double rate) : bits_(bits), rate_(rate) {
+  if (bits < 1 || bits > 8) throw std::invalid_argument("colour model: bits must be in 1..8");
+  if (!(rate > 0.0 && rate <= 1.0)) {
+    throw std::invalid_argument("colour model: rate must be in (0, 1]");
+  }
+  const std::size_t n = std::size_t{1} << (3 * bits);
+  fg_.assign(n, 0.0);
+  bg_.assign(n, 0.0);
+  lik_.assign(n, 0.5);
+  fg_count_.assign(n, 0.0);
+  bg_count_.assign(n, 0.0);
+  is_seen_.assign(n, 0);
+}
+
+void ColourHistograms::count(const ImageView& image, const Rect& region, const Span& inside,
+                             const Span& core) {
+  const std::ptrdiff_t cs = image.channel_stride, step = image.col_stride;
+  const auto add = [&](std::vector<double>& counts, std::uint32_t bin) {
+    if (fg_count_[bin] == 0.0 && bg_count_[bin] == 0.0) counted_.push_back(bin);
+    counts[bin] += 1.0;
+  };
+  // Columns [c0, c1) of row r, clipped to the region.
+  const auto run = [&](int r, int c0, int c1, std::vector<double>& counts) {
+    c0 = std::max(c0, 0);
+    c1 = std::min(c1, region.w);
+    const std::uint8_t* p = image.data +
+                            static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
+                            static_cast<std::ptrdiff_t>(region.x + c0) * step;
+    for (int c = c0; c < c1; ++c, p += step) add(counts, colour_bin(p[0], p[cs], p[2 * cs], bits_));
+  };
   for (int r = 0; r < region.h; ++r) {
-    const std::uint8_t* p = image.data + static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
-                            static_cast<std::ptrdiff_t>(region.x) * image.col_stride;
-    for (int c = 0; c < region.w; ++c, p += image.col_stride) {
-      f(r, c, colour_bin(p[0], p[cs], p[2 * cs], bits));
+    if (r >= core.r0 && r < core.r1) run(r, core.c0, core.c1, fg_count_);
+    if (r >= inside.r0 && r < inside.r1 && inside.c0 < inside.c1) {
+      run(r, 0, inside.c0, bg_count_);  // left and right of the inside span
+      run(r, inside.c1, region.w, bg_count_);
+    } else {
+      run(r, 0, region.w, bg_count_);
     }
   }
 }
 
-}  // namespace
-
-void colour_map(const ImageView& image, const Rect& region, int bits, const double* likelihood,
-                double* out) {
-  check(image, region, bits);
-  const std::ptrdiff_t w = region.w;
-  for_region(image, region, bits,
-             [&](int r, int c, std::uint32_t bin) { out[r * w + c] = likelihood[bin]; });
+void ColourHistograms::blend(std::uint32_t i, double fd, double bd, bool first) {
+  const double keep = 1.0 - rate_;
+  const double f = fg_count_[i] / fd, b = bg_count_[i] / bd;
+  fg_[i] = first ? f : keep * fg_[i] + rate_ * f;
+  bg_[i] = first ? b : keep * bg_[i] + rate_ * b;
+  const double total = fg_[i] + bg_[i];
+  lik_[i] = total > 0 ? fg_[i] / total : 0.5;
 }
 
-void colour_counts(const ImageView& image, const Rect& region, const Span& inside,
-                   const Span& core, int bits, double* fg, double* bg) {
-  check(image, region, bits);
-  for_region(image, region, bits, [&](int r, int c, std::uint32_t bin) {
-    if (core.holds(r, c)) fg[bin] += 1.0;
-    if (!inside.holds(r, c)) bg[bin] += 1.0;
-  });
-}
-
-void colour_update(double* fg_model, double* bg_model, double* fg_counts, double* bg_counts,
-                   int n, double rate, bool first, double* likelihood) {
+void ColourHistograms::learn(const ImageView& image, const Rect& region, const Span& inside,
+                             const Span& core) {
+  check(image, region, bits_);
+  count(image, region, inside, core);
   // Sums of whole counts (< 2^53): exact in any order.
   double fg_sum = 0.0, bg_sum = 0.0;
-  for (int i = 0; i < n; ++i) {
-    fg_sum += fg_counts[i];
-    bg_sum += bg_counts[i];
+  for (const std::uint32_t bin : counted_) {
+    fg_sum += fg_count_[bin];
+    bg_sum += bg_count_[bin];
   }
   const double fd = std::max(fg_sum, 1.0), bd = std::max(bg_sum, 1.0);
-  const double keep = 1.0 - rate;
-  for (int i = 0; i < n; ++i) {
-    const double f = fg_counts[i] / fd, b = bg_counts[i] / bd;
-    fg_counts[i] = f;
-    bg_counts[i] = b;
-    fg_model[i] = first ? f : keep * fg_model[i] + rate * f;
-    bg_model[i] = first ? b : keep * bg_model[i] + rate * b;
-    const double total = fg_model[i] + bg_model[i];
-    likelihood[i] = total > 0 ? fg_model[i] / total : 0.5;
+  for (const std::uint32_t bin : counted_) {
+    if (!is_seen_[bin]) {
+      is_seen_[bin] = 1;
+      seen_.push_back(bin);
+    }
+  }
+  const bool first = !learnt_;
+  for (const std::uint32_t bin : seen_) blend(bin, fd, bd, first);
+  for (const std::uint32_t bin : counted_) fg_count_[bin] = bg_count_[bin] = 0.0;
+  counted_.clear();
+  learnt_ = true;
+}
+
+void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& region,
+                                           double* table) const {
+  if (!learnt_) throw std::logic_error("colour model: learn() before likelihood_integral()");
+  check(image, region, bits_);
+  const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(region.w) + 1;
+  std::fill(table, table + stride, 0.0);
+  const std::ptrdiff_t cs = image.channel_stride, step = image.col_stride;
+  const double* lik = lik_.data();
+  for (int r = 0; r < region.h; ++r) {
+    const double* above = table + r * stride;
+    double* row = table + (r + 1) * stride;
+    row[0] = 0.0;
+    const std::uint8_t* p = image.data +
+                            static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
+                            static_cast<std::ptrdiff_t>(region.x) * step;
+    double s = 0.0;
+    for (int c = 0; c < region.w; ++c, p += step) {
+      s += lik[colour_bin(p[0], p[cs], p[2 * cs], bits_)];
+      row[c + 1] = above[c + 1] + s;
+    }
   }
 }
 

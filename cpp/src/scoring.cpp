@@ -78,9 +78,45 @@ void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool a
   }
 }
 
+namespace {
+
+// The candidate chosen by the merged score of BoxMeanCue (-1 when no raw score is finite);
+// `finite` receives the number of candidates with a finite raw score.
+int merged_best(const BoxMeanCue& cue, const Rect& box, const std::vector<int>& dx,
+                const std::vector<int>& dy, const std::vector<double>& raw, int& finite) {
+  const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(cue.cols) + 1;
+  const double area = static_cast<double>(box.w) * static_cast<double>(box.h);
+  const double k = static_cast<double>(std::max(cue.k, 1));
+  int best = -1;
+  double best_value = 0.0;
+  finite = 0;
+  for (std::size_t q = 0; q < raw.size(); ++q) {
+    if (!std::isfinite(raw[q])) continue;
+    ++finite;
+    const std::int64_t cx = static_cast<std::int64_t>(box.x) + dx[q] - cue.x0;
+    const std::int64_t cy = static_cast<std::int64_t>(box.y) + dy[q] - cue.y0;
+    if (cx < 0 || cy < 0 || cx + box.w > cue.cols || cy + box.h > cue.rows) {
+      throw std::out_of_range("score_grid: a candidate box lies outside the cue's table");
+    }
+    const double* top = cue.table + cy * stride + cx;
+    const double* bottom = top + static_cast<std::ptrdiff_t>(box.h) * stride;
+    const double s = bottom[box.w] - top[box.w] - bottom[0] + top[0];
+    const double conf = 0.5 * (1.0 + std::tanh(0.5 * (raw[q] / k - cue.offset)));
+    const double value = (1.0 - cue.weight) * conf + cue.weight * (s / area);
+    if (best < 0 || value > best_value) {
+      best = static_cast<int>(q);
+      best_value = value;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* selected,
                       int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
-                      int step, int frame_width, int frame_height, double* scores) {
+                      int step, int frame_width, int frame_height, double* scores,
+                      const BoxMeanCue* cue) {
   if (!ii.computed()) throw std::invalid_argument("score_grid: the integral image has not been computed");
   if (radius < 1 || step < 1) throw std::invalid_argument("score_grid: radius and step must be >= 1");
   if (radius > kMaxSearchRadius) {
@@ -173,11 +209,19 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   }
 
   int best = -1;
-  for (int q = 0; q < c; ++q) {
-    if (std::isnan(total[q])) continue;
-    if (best < 0 || total[q] > total[best]) best = q;
+  if (cue != nullptr) {
+    best = merged_best(*cue, box, cand_dx, cand_dy, total, result.candidates);
+    if (best < 0) {
+      result.candidates = 0;
+      return result;
+    }
+  } else {
+    for (int q = 0; q < c; ++q) {
+      if (std::isnan(total[q])) continue;
+      if (best < 0 || total[q] > total[best]) best = q;
+    }
+    if (best < 0) throw std::runtime_error("score_grid: every candidate scored NaN");
   }
-  if (best < 0) throw std::runtime_error("score_grid: every candidate scored NaN");
   result.dx = cand_dx[best];
   result.dy = cand_dy[best];
   result.score = total[best];
@@ -193,12 +237,12 @@ std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
                                const std::int32_t* selected, int n_selected,
                                const WeakGaussians& weak, Rect box,
                                const std::vector<SearchStage>& stages, int frame_width,
-                               int frame_height) {
+                               int frame_height, const BoxMeanCue* cue) {
   std::vector<GridResult> out;
   out.reserve(stages.size());
   for (const SearchStage& stage : stages) {
     const GridResult r = score_grid(ii, bank, selected, n_selected, weak, box, stage.radius,
-                                    stage.step, frame_width, frame_height, nullptr);
+                                    stage.step, frame_width, frame_height, nullptr, cue);
     if (r.candidates > 0) {
       box.x += r.dx;
       box.y += r.dy;

@@ -115,22 +115,33 @@ def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayL
            box: tuple[int, int, int, int], stages: Sequence[tuple[int, int]],
            frame_size: tuple[int, int], frame: npt.NDArray[np.uint8] | None = None,
            roi: tuple[int, int, int, int] | None = None,
+           colour: tuple[_F64, int, int, float, float] | None = None,
            ) -> tuple[tuple[int, int, float, int], ...]:
-    """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage."""
+    """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage;
+    colour = (table, x0, y0, weight, offset) merges a box-mean cue into each stage's choice."""
 
 
-def colour_map(frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int], bits: int,
-               likelihood: npt.ArrayLike) -> _F64:
-    """likelihood[bin] of every pixel of region = (x, y, w, h): an h x w float64 array."""
-
-def colour_counts(frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int],
-                  inside: tuple[int, int, int, int], core: tuple[int, int, int, int],
-                  bits: int) -> tuple[_F64, _F64]:
-    """Colour histogram counts of region: (fg over core, bg outside inside)."""
-
-def colour_update(fg_model: _F64, bg_model: _F64, fg_counts: _F64, bg_counts: _F64, rate: float,
-                  first: bool, likelihood: _F64) -> None:
-    """One frame of the colour model's update, in place (all five: C-contiguous float64)."""
+class ColourHistograms:
+    """Foreground/background colour histograms blended over frames, and P(target | bin)."""
+    def __init__(self, bits: int, rate: float) -> None: ...
+    @property
+    def bits(self) -> int: ...
+    @property
+    def rate(self) -> float: ...
+    @property
+    def learnt(self) -> bool: ...
+    def learn(self, frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int],
+              inside: tuple[int, int, int, int], core: tuple[int, int, int, int]) -> None:
+        """Fold in one frame (core: target pixels; region outside inside: background)."""
+    def likelihood_integral(self, frame: npt.NDArray[np.uint8],
+                            region: tuple[int, int, int, int]) -> _F64:
+        """(h + 1) x (w + 1) integral image of the per-pixel likelihood over region."""
+    @property
+    def foreground(self) -> _F64: ...
+    @property
+    def background(self) -> _F64: ...
+    @property
+    def likelihood(self) -> _F64: ...
 
 def learn(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
           mu1: _F64, sigma1: _F64, mu0: _F64, sigma0: _F64, *, lam: float, first_pos: bool,

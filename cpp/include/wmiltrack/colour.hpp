@@ -1,9 +1,10 @@
-// The pixel work of rcwmil-plus's colour model (Staple-style foreground/background colour
-// histograms; wmiltrack.engine.colour keeps the histograms and merges the cue): the bin of
-// every pixel of a region, its foreground probability, and the histogram counts of a frame.
+// rcwmil-plus's colour model (Staple-style foreground/background colour histograms;
+// wmiltrack.engine.colour wraps it and the search merges the cue): the histograms, their
+// update from a frame, and the integral image of the per-pixel foreground probability.
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "wmiltrack/integral.hpp"
 
@@ -24,24 +25,53 @@ struct Span {
   bool holds(int r, int c) const { return r >= r0 && r < r1 && c >= c0 && c < c1; }
 };
 
-// out[r * region.w + c] = likelihood[bin of the pixel at (region.x + c, region.y + r)] for
-// the region (inside the frame; 3 or 4 channels, BGR(A)). Throws std::invalid_argument for
-// a gray frame, bits outside 1..8 or a region outside the frame.
-void colour_map(const ImageView& image, const Rect& region, int bits, const double* likelihood,
-                double* out);
+// The colour model's state: foreground and background histograms of 2^(3 bits) bins blended
+// over frames, and P(target | bin) = fg / (fg + bg) (0.5 where both are 0).
+//
+// A frame's work is proportional to the pixels it looks at and the bins seen so far, not to
+// all 32 768 bins of the default 5 bits: a bin never counted holds 0 in both histograms and
+// 0.5 in the likelihood for ever (its blend, (1 - rate) 0 + rate 0, stays 0), so only the
+// bins seen are blended. The arithmetic per bin is that of a pass over every bin: count /
+// sum, (1 - rate) model + rate normalised count, then fg / (fg + bg), in that order.
+class ColourHistograms {
+ public:
+  // bits in 1..8, rate in (0, 1]; std::invalid_argument otherwise.
+  ColourHistograms(int bits, double rate);
 
-// Colour histogram counts of a region: every pixel of `core` (relative to the region) adds
-// 1 to fg[bin], every pixel outside `inside` adds 1 to bg[bin]. fg and bg hold 2^(3 bits)
-// entries and are added to (zero them first). Same errors as colour_map().
-void colour_counts(const ImageView& image, const Rect& region, const Span& inside,
-                   const Span& core, int bits, double* fg, double* bg);
+  int bits() const { return bits_; }
+  double rate() const { return rate_; }
+  int bins() const { return static_cast<int>(fg_.size()); }
+  bool learnt() const { return learnt_; }
 
-// One frame of the model's update, on n bins: each count histogram is divided by its sum
-// (at least 1), blended into the model (model = (1 - rate) model + rate counts; the counts
-// themselves when `first`), and likelihood = fg / (fg + bg) (0.5 where both are 0). The same
-// operations in the same order as the numpy code it replaced (the same bits). The counts are
-// overwritten.
-void colour_update(double* fg_model, double* bg_model, double* fg_counts, double* bg_counts,
-                   int n, double rate, bool first, double* likelihood);
+  // Folds in one frame: every pixel of `core` (rows/columns relative to `region`) counts for
+  // the foreground, every pixel of the region outside `inside` for the background; each
+  // histogram of counts is divided by its sum (at least 1) and blended in at the rate (taken
+  // as it is on the first frame). Throws std::invalid_argument for a gray frame (fewer than 3
+  // channels) or a region outside the frame.
+  void learn(const ImageView& image, const Rect& region, const Span& inside, const Span& core);
+
+  // The (region.h + 1) x (region.w + 1) integral image (row-major, zero first row and column)
+  // of the likelihood of every pixel of `region`: table[r + 1][c + 1] = table[r][c + 1] + the
+  // row's running sum up to column c (the order of cv::integral). Needs learn() first
+  // (std::logic_error); the same errors as learn() otherwise.
+  void likelihood_integral(const ImageView& image, const Rect& region, double* table) const;
+
+  const std::vector<double>& foreground() const { return fg_; }
+  const std::vector<double>& background() const { return bg_; }
+  const std::vector<double>& likelihood() const { return lik_; }
+
+ private:
+  void count(const ImageView& image, const Rect& region, const Span& inside, const Span& core);
+  void blend(std::uint32_t bin, double fd, double bd, bool first);
+
+  int bits_;
+  double rate_;
+  bool learnt_ = false;
+  std::vector<double> fg_, bg_, lik_;       // the model
+  std::vector<double> fg_count_, bg_count_;  // this frame's counts; zero between frames
+  std::vector<std::uint32_t> counted_;       // bins with a count this frame
+  std::vector<std::uint32_t> seen_;          // bins ever counted
+  std::vector<std::uint8_t> is_seen_;
+};
 
 }  // namespace wmiltrack

@@ -19,7 +19,6 @@ alone.
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -63,9 +62,12 @@ class ColourModel:
         self.learning_rate = learning_rate
         self.pad = pad
         self.shrink = shrink
-        self._fg: FloatArray | None = None
-        self._bg: FloatArray | None = None
-        self._likelihood: FloatArray | None = None  # P(target | bin), after each learn()
+        self._hist = _core.ColourHistograms(bits, learning_rate)
+
+    @property
+    def histograms(self) -> _core.ColourHistograms:
+        """The core's histograms and per-bin likelihood (read-only copies on access)."""
+        return self._hist
 
     @staticmethod
     def usable(frame: np.ndarray) -> bool:
@@ -89,27 +91,19 @@ class ColourModel:
         sx, sy = max(1, int(self.shrink * w)), max(1, int(self.shrink * h))
         core = span(max(0, y - y0 + sy), max(0, y - y0 + h - sy), max(0, x - x0 + sx),
                     max(0, x - x0 + w - sx))
-        # Counts of the core's bins (target) and of the bins outside the box (background).
-        fg, bg = _core.colour_counts(frame, (x0, y0, rw, rh), inside, core, self.bits)
-        first = self._fg is None or self._bg is None or self._likelihood is None
-        if self._fg is None or self._bg is None or self._likelihood is None:
-            self._fg, self._bg, self._likelihood = np.zeros(fg.size), np.zeros(fg.size), np.empty(fg.size)
-        # fg, bg /= their sums; the model blends them in at the learning rate; likelihood =
-        # fg / (fg + bg) per bin (0.5 where both are 0).
-        _core.colour_update(self._fg, self._bg, fg, bg, self.learning_rate, first, self._likelihood)
+        # The core's pixels count for the target, the pixels outside the box for the background.
+        self._hist.learn(frame, (x0, y0, rw, rh), inside, core)
 
     def integral(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> tuple[FloatArray, int, int]:
         """Integral image of ``P(target | colour)`` over ``roi = (x0, y0, x1, y1)`` (clipped to the
         frame): ``(table, x0, y0)``, the table ``(y1 - y0 + 1) x (x1 - x0 + 1)`` with a zero
         first row and column."""
-        if self._likelihood is None:
+        if not self._hist.learnt:
             raise ValueError("call learn() before integral()")
         fh, fw = frame.shape[:2]
         x0, y0 = max(0, roi[0]), max(0, roi[1])
         x1, y1 = min(fw, roi[2]), min(fh, roi[3])
-        p = _core.colour_map(frame, (x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)), self.bits,
-                             self._likelihood)
-        table: FloatArray = np.asarray(cv2.integral(p, sdepth=cv2.CV_64F), dtype=np.float64)
+        table = self._hist.likelihood_integral(frame, (x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)))
         return table, x0, y0
 
     @staticmethod

@@ -306,31 +306,32 @@ class Tracker:
         own = self._ii
         roi = self._roi(origin, margin)
         shared = integral is not None and self._chan_names is None and _covers(integral, roi, wh)
-        # The plain path (no colour model, no scale search): the integral image and the search
-        # in one request to the core; the others compute it here and search step by step.
-        plain = self._colour is None and p.scale_steps == 0 and self._chan_names is None
+        # Luma-only trackers compute their integral image in the search's call to the core;
+        # several channels are computed here first.
+        direct = self._chan_names is None and not shared
         if shared:
             assert integral is not None
             self._ii = integral
-        elif not plain:
+        elif not direct:
             self._compute_integral(img, origin, margin)
         try:
+            cue = None
             if self._colour is not None:
                 x, y, w, h = origin
                 m = margin + 1
                 self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
+                cue = (*self._colour_table, p.colour_weight, p.confidence_offset)
             self._box = origin
-            if plain:
-                stages = self._stages(coarse)
-                pool = self._pool
-                results = yield _Search((self._ii, self._bank_at(self._scale_index)[0],
-                                         self._selected, pool.mu1, pool.sigma1, pool.mu0,
-                                         pool.sigma0, p.guard, self._box, stages, wh,
-                                         None if shared else img, None if shared else roi))
-                raw = self._apply_search(stages, results)
-                self._scale_boxes = []
-            else:
-                raw = self._detect(coarse)
+            stages = self._stages(coarse)
+            pool = self._pool
+            results = yield _Search((self._ii, self._bank_at(self._scale_index)[0], self._selected,
+                                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,
+                                     self._box, stages, wh, img if direct else None,
+                                     roi if direct else None, cue))
+            raw = self._apply_search(stages, results)
+            self._scale_boxes = []
+            if p.scale_steps > 0 and math.isfinite(raw):
+                raw = self._scale_search(raw)
             score = confidence(raw, len(self._selected), p.confidence_offset)
             tracked = score >= p.lost_threshold
             k = max(len(self._selected), 1)
@@ -425,41 +426,6 @@ class Tracker:
         dx, dy, score, n = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, guard,
                                             box, radius, step, self._frame_wh)
         return int(dx), int(dy), float(score), int(n)
-
-    def _raw_grid(self, index: int, sel: np.ndarray, weak: Weak, box: IntBox, radius: int,
-                  step: int) -> np.ndarray | None:
-        """The full grid of raw scores around ``box`` (``-inf``: not a candidate)."""
-        out = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, self._params.guard,
-                               box, radius, step, self._frame_wh, True)
-        grid: np.ndarray = out[4]  # type: ignore[misc]
-        return grid
-
-    def _colour_stage(self, sel: np.ndarray, weak: Weak, radius: int,
-                      step: int) -> tuple[int, int, float, int]:
-        """One search stage choosing by ``(1 - w) * confidence + w * colour`` per candidate."""
-        p = self._params
-        assert self._colour_table is not None
-        grid = self._raw_grid(self._scale_index, sel, weak, self._box, radius, step)
-        if grid is None:
-            return 0, 0, -math.inf, 0
-        valid = np.isfinite(grid)
-        n = int(np.count_nonzero(valid))
-        if n == 0:
-            return 0, 0, -math.inf, 0
-        side = grid.shape[0]
-        half = (side - 1) // 2
-        rows, cols = np.nonzero(valid)  # row-major order
-        raw = grid[rows, cols]
-        k = max(len(sel), 1)
-        conf = 0.5 * (1.0 + np.tanh(0.5 * (raw / k - p.confidence_offset)))
-        x, y, w, h = self._box
-        xs = x + (cols - half) * step
-        ys = y + (rows - half) * step
-        table, x0, y0 = self._colour_table
-        colour = ColourModel.box_means(table, x0, y0, xs, ys, w, h)
-        total = (1.0 - p.colour_weight) * conf + p.colour_weight * colour
-        best = int(np.argmax(total))
-        return int((cols[best] - half) * step), int((rows[best] - half) * step), float(raw[best]), n
 
     def _project(self, index: int, corners: np.ndarray) -> np.ndarray:
         """Feature values ``(M, n)`` of the boxes at scale ``index`` with these top-left corners."""
@@ -583,30 +549,16 @@ class Tracker:
             best = self._move(found, best)
         return best
 
-    def _detect(self, coarse: tuple[int, int]) -> float:
-        """Coarse, fine, then scale search from ``self._box``; moves it; returns the best raw score."""
+    def _scale_search(self, raw: float) -> float:
+        """Try the other scales around the searched box; moves it; returns the chosen raw score."""
         p = self._params
+        if p.scale_model == "likelihood":
+            self._scale_by_likelihood()
+            return raw
         sel = self._selected
         pool = self._pool
-        stages = self._stages(coarse)
         weak: Weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
-        best = -math.inf
-        self._search_origins = []
-        self._search_stages = stages
-        for radius, step in stages:  # stage by stage: each searches where the last one moved to
-            self._search_origins.append(self._box)
-            if self._colour_table is not None:
-                found = self._colour_stage(sel, weak, radius, step)
-            else:
-                found = self._score_grid(self._scale_index, sel, weak, self._box, radius, step)
-            best = self._move(found, best)
-        self._scale_boxes = []
-        if p.scale_steps > 0 and math.isfinite(best):
-            if p.scale_model == "likelihood":
-                self._scale_by_likelihood()
-            else:
-                best = self._scale_by_ratio(best, sel, weak)
-        return best
+        return self._scale_by_ratio(raw, sel, weak)
 
     def _contrast(self, box: IntBox) -> float:
         """The colour contrast of ``box`` (:func:`~wmiltrack.engine.colour.colour_contrast`)."""
