@@ -242,6 +242,29 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
             np.testing.assert_array_equal(got[4], _learn.wmil_select(h[:, :n], h[:, n:], w, p.num_selected))
         else:
             assert got[4] is None and got[5] is None
+        assert got[6] is None and got[7] is None
+    # rcwmil-plus's extras: negatives given as values (appended after the projected ones) and
+    # a second target model updated from the positives with its own lambda.
+    extra = rng.normal(100, 30, (values.shape[0], 2))
+    mu2, s2 = rng.normal(100, 30, values.shape[0]), rng.uniform(5, 20, values.shape[0])
+    got = _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1,
+                      pool.mu0, pool.sigma0, lam=p.learning_rate, first_pos=False,
+                      first_neg=False, direct_first=p.first_update == "direct",
+                      mil=p.classifier == "mil", sigma_floor=p.sigma_floor, guard=p.guard,
+                      select="wmil", w_pos=w, k=p.num_selected, extra_neg=extra,
+                      second=(mu2, s2, 0.975, False))
+    values = np.concatenate((_core.project(ii, bank, corners[:, 0], corners[:, 1]), extra), axis=1)
+    mu1, s1 = _learn.gaussian_update(values[:, :n], pool.mu1, pool.sigma1, *args)
+    mu0, s0 = _learn.gaussian_update(values[:, n:], pool.mu0, pool.sigma0, *args)
+    want_mu2, want_s2 = _learn.gaussian_update(values[:, :n], mu2, s2, 0.975, *args[1:])
+    h = _core.log_ratio(values, mu1, s1, mu0, s0, p.guard)
+    for a, b in zip(got, (mu1, s1, mu0, s0, _learn.wmil_select(h[:, :n], h[:, n:], w, p.num_selected),
+                          None, want_mu2, want_s2)):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(ValueError, match="extra_neg"):
+        _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
+                    pool.sigma0, lam=0.85, first_pos=False, first_neg=False, direct_first=True,
+                    mil=False, sigma_floor=1e-6, guard=1e-30, select="none", extra_neg=extra[1:])
     with pytest.raises(ValueError, match="select"):
         _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
                     pool.sigma0, lam=0.85, first_pos=False, first_neg=False, direct_first=True,
@@ -266,7 +289,7 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
         roi = (t.box[0] - 40, t.box[1] - 40, t.box[2] + 80, t.box[3] + 80)
         return (ii, t._bank, t._selected, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,  # noqa: SLF001
                 tuple(int(v) for v in t.box), [(25, 4), (10, 1)], (200, 160), frame,
-                tuple(int(v) for v in roi))
+                tuple(int(v) for v in roi), None)
 
     single = [_core.search(*job(t, _core.IntegralImage())) for t in trackers]
     for threads in (1, 2, 3):

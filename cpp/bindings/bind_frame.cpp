@@ -135,6 +135,9 @@ struct LearnJob {
   LearnStep step;
   CArray<double> w_pos;
   CArray<double> model[4];
+  CArray<double> extra_neg;
+  CArray<double> second[2];
+  bool has_second = false;
   py::object selected = py::none(), h = py::none();
   std::int32_t* sel_ptr = nullptr;
   double* h_ptr = nullptr;
@@ -142,6 +145,11 @@ struct LearnJob {
   void run() {
     step.xs = xs.data();
     step.ys = ys.data();
+    if (step.n_extra > 0) step.extra_neg = extra_neg.data();
+    if (has_second) {
+      step.second_mu = second[0].mutable_data();
+      step.second_sigma = second[1].mutable_data();
+    }
     learn_step(*table, *bank, step, model[0].mutable_data(), model[1].mutable_data(),
                model[2].mutable_data(), model[3].mutable_data(), sel_ptr, h_ptr);
   }
@@ -153,7 +161,8 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
                     const CArray<double>& mu0, const CArray<double>& sigma0, double lam,
                     bool first_pos, bool first_neg, bool direct_first, bool mil,
                     double sigma_floor, double guard, const std::string& select,
-                    const py::object& w_pos_obj, int k, bool code_gradient) {
+                    const py::object& w_pos_obj, int k, bool code_gradient,
+                    const py::object& extra_neg, const py::object& second) {
   LearnJob job;
   job.xs = int32_array(xs_obj, "xs");
   job.ys = int32_array(ys_obj, "ys");
@@ -192,6 +201,26 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
   } else {
     throw py::value_error("select must be 'none', 'wmil' or 'ratios', got '" + select + "'");
   }
+  if (!extra_neg.is_none()) {
+    job.extra_neg = CArray<double>::ensure(extra_neg);
+    require(job.extra_neg && job.extra_neg.ndim() == 2 && job.extra_neg.shape(0) == M,
+            "extra_neg must be a 2-D array of feature values, one row per feature of the bank");
+    step.n_extra = static_cast<int>(job.extra_neg.shape(1));
+  }
+  if (!second.is_none()) {
+    const auto [mu, sigma, lam2, first2] =
+        second.cast<std::tuple<CArray<double>, CArray<double>, double, bool>>();
+    require(mu.ndim() == 1 && mu.shape(0) == M && sigma.ndim() == 1 && sigma.shape(0) == M,
+            "second: mu and sigma must hold one entry per feature of the bank");
+    job.has_second = true;
+    job.second[0] = CArray<double>(M);
+    job.second[1] = CArray<double>(M);
+    std::copy(mu.data(), mu.data() + M, job.second[0].mutable_data());
+    std::copy(sigma.data(), sigma.data() + M, job.second[1].mutable_data());
+    step.second_rule = step.rule;
+    step.second_rule.lam = lam2;
+    step.second_rule.first = first2;
+  }
   job.table = computed_table(shared);
   require_planes(*job.table, bank);
   job.bank = &bank;
@@ -206,7 +235,7 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
     job.sel_ptr = s.mutable_data();
     job.selected = s;
   } else if (step.select == LearnSelect::kRatios) {
-    CArray<double> hh({M, static_cast<py::ssize_t>(B)});
+    CArray<double> hh({M, static_cast<py::ssize_t>(B + step.n_extra)});
     job.h_ptr = hh.mutable_data();
     job.h = hh;
   }
@@ -214,8 +243,13 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
 }
 
 py::tuple learn_result(const LearnJob& job) {
+  py::object mu2 = py::none(), sigma2 = py::none();
+  if (job.has_second) {
+    mu2 = job.second[0];
+    sigma2 = job.second[1];
+  }
   return py::make_tuple(job.model[0], job.model[1], job.model[2], job.model[3], job.selected,
-                        job.h);
+                        job.h, mu2, sigma2);
 }
 
 using SearchArgs =
@@ -227,7 +261,8 @@ using SearchArgs =
 using LearnArgs =
     std::tuple<const SharedIntegralImage*, const FeatureBank*, py::object, py::object, int,
                CArray<double>, CArray<double>, CArray<double>, CArray<double>, double, bool,
-               bool, bool, bool, double, double, std::string, py::object, int, bool>;
+               bool, bool, bool, double, double, std::string, py::object, int, bool, py::object,
+               py::object>;
 
 void require_threads(int threads) {
   require(threads >= 1, "threads must be >= 1, got " + std::to_string(threads));
@@ -313,10 +348,11 @@ void bind_frame(py::module_& m) {
          const py::object& ys, int n_pos, const CArray<double>& mu1, const CArray<double>& sigma1,
          const CArray<double>& mu0, const CArray<double>& sigma0, double lam, bool first_pos,
          bool first_neg, bool direct_first, bool mil, double sigma_floor, double guard,
-         const std::string& select, const py::object& w_pos, int k, bool code_gradient) {
+         const std::string& select, const py::object& w_pos, int k, bool code_gradient,
+         const py::object& extra_neg, const py::object& second) {
         LearnJob job = make_learn(shared, bank, xs, ys, n_pos, mu1, sigma1, mu0, sigma0, lam,
                                   first_pos, first_neg, direct_first, mil, sigma_floor, guard,
-                                  select, w_pos, k, code_gradient);
+                                  select, w_pos, k, code_gradient, extra_neg, second);
         {
           py::gil_scoped_release release;
           job.run();
@@ -328,12 +364,16 @@ void bind_frame(py::module_& m) {
       py::arg("lam"), py::arg("first_pos"), py::arg("first_neg"), py::arg("direct_first"),
       py::arg("mil"), py::arg("sigma_floor"), py::arg("guard"), py::arg("select"),
       py::arg("w_pos") = py::none(), py::arg("k") = 0, py::arg("code_gradient") = false,
+      py::arg("extra_neg") = py::none(), py::arg("second") = py::none(),
       "The learning half of a frame step in one call (the same bits as project, the Gaussian\n"
       "update of each class, log_ratio and wmil_select called one by one).\n\n"
-      "Boxes (xs[i], ys[i]): n_pos positives, then negatives. Returns (mu1, sigma1, mu0,\n"
-      "sigma0, selected, h): the updated model (new arrays; a class without samples keeps\n"
-      "its model), the WMIL selection (select='wmil'; else None) and the log ratios of both\n"
-      "bags, M x len(xs) (select='ratios'; else None).");
+      "Boxes (xs[i], ys[i]): n_pos positives, then negatives; extra_neg (M x e feature\n"
+      "values) adds e negatives after them. second = (mu, sigma, lam, first): a second target\n"
+      "model updated from the positives alone with its own lambda. Returns (mu1, sigma1, mu0,\n"
+      "sigma0, selected, h, mu2, sigma2): the updated model (new arrays; a class without\n"
+      "samples keeps its model), the WMIL selection (select='wmil'; else None), the log ratios\n"
+      "of both bags, M x (len(xs) + e) (select='ratios'; else None), and the second model\n"
+      "updated (None without one).");
 
   m.def(
       "learn_many",
@@ -349,7 +389,7 @@ void bind_frame(py::module_& m) {
               std::get<5>(a), std::get<6>(a), std::get<7>(a), std::get<8>(a), std::get<9>(a),
               std::get<10>(a), std::get<11>(a), std::get<12>(a), std::get<13>(a),
               std::get<14>(a), std::get<15>(a), std::get<16>(a), std::get<17>(a),
-              std::get<18>(a), std::get<19>(a)));
+              std::get<18>(a), std::get<19>(a), std::get<20>(a), std::get<21>(a)));
         }
         {
           py::gil_scoped_release release;
@@ -364,7 +404,8 @@ void bind_frame(py::module_& m) {
       "learn() for several targets in one call, on up to `threads` threads with the GIL\n"
       "released once: each job is the tuple of learn()'s arguments in order (ii, bank, xs, ys,\n"
       "n_pos, mu1, sigma1, mu0, sigma0, lam, first_pos, first_neg, direct_first, mil,\n"
-      "sigma_floor, guard, select, w_pos, k, code_gradient). Returns the results in order; the\n"
+      "sigma_floor, guard, select, w_pos, k, code_gradient, extra_neg, second). Returns the\n"
+      "results in order; the\n"
       "first error is raised after all jobs ran.");
 }
 

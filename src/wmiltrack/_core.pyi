@@ -147,13 +147,18 @@ def learn(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
           mu1: _F64, sigma1: _F64, mu0: _F64, sigma0: _F64, *, lam: float, first_pos: bool,
           first_neg: bool, direct_first: bool, mil: bool, sigma_floor: float, guard: float,
           select: str, w_pos: _F64 | None = None, k: int = 0, code_gradient: bool = False,
-          ) -> tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None]:
-    """The learning half of a frame step in one call: (mu1, sigma1, mu0, sigma0, selected, h)."""
+          extra_neg: _F64 | None = None, second: tuple[_F64, _F64, float, bool] | None = None,
+          ) -> tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
+                     _F64 | None, _F64 | None]:
+    """The learning half of a frame step in one call: (mu1, sigma1, mu0, sigma0, selected, h,
+    mu2, sigma2); extra_neg adds negatives as feature values, second is a second target model
+    (mu, sigma, lam, first) updated from the positives alone."""
 
 def search_many(jobs: Sequence[tuple[object, ...]], threads: int
                 ) -> list[tuple[tuple[int, int, float, int], ...]]:
     """search() for several targets in one call, on up to `threads` threads."""
 
 def learn_many(jobs: Sequence[tuple[object, ...]], threads: int
-               ) -> list[tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None]]:
+               ) -> list[tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
+                               _F64 | None, _F64 | None]]:
     """learn() for several targets in one call, on up to `threads` threads."""

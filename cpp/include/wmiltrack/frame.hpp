@@ -37,11 +37,21 @@ struct LearnStep {
   const double* w_pos = nullptr;  // n_pos instance weights (kWmil)
   int k = 0;                      // features to select (kWmil)
   bool code_gradient = false;
+  // Negatives given as feature values (M x n_extra, row-major), taken after the projected
+  // negatives as if they were more negative boxes (rcwmil-plus: the target's box at wrong
+  // scales, projected with another bank).
+  const double* extra_neg = nullptr;
+  int n_extra = 0;
+  // A second target model (M each, in place), updated from the positives alone by its own
+  // rule after the main model (rcwmil-plus's scale likelihood); none when null.
+  double* second_mu = nullptr;
+  double* second_sigma = nullptr;
+  GaussianRule second_rule;
 };
 
 // Runs the step on the bank's M features. mu1, sigma1, mu0, sigma0 (M each): the model in,
 // the updated model out (in place). selected (k entries) is written for kWmil; h (M x
-// (n_pos + n_neg), row-major) for kRatios. Throws as the separate kernels do.
+// (n_pos + n_neg + n_extra), row-major) for kRatios. Throws as the separate kernels do.
 void learn_step(const IntegralImage& ii, const FeatureBank& bank, const LearnStep& step,
                 double* mu1, double* sigma1, double* mu0, double* sigma0,
                 std::int32_t* selected, double* h);

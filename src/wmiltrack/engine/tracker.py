@@ -32,7 +32,7 @@ from .frames import IntBox, as_frame, clip_box, frame_size
 from .params import CONFIDENCE_OFFSET, Params
 from .result import TrackResult
 from .sampling import BagSampler
-from .selection import milboost_select, wmil_select
+from .selection import milboost_select
 
 Weak = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 """mu1, sigma1, mu0, sigma0 of the selected features."""
@@ -47,7 +47,7 @@ class _Learn(tuple):  # type: ignore[type-arg]
 
 
 _LEARN_KEYS = ("lam", "first_pos", "first_neg", "direct_first", "mil", "sigma_floor", "guard",
-               "select", "w_pos", "k", "code_gradient")
+               "select", "w_pos", "k", "code_gradient", "extra_neg", "second")
 
 Steps = Generator[tuple[Any, ...], Any, Any]
 """A frame step written as a generator: it yields requests for the core (:class:`_Search`,
@@ -659,34 +659,13 @@ class Tracker:
         neg = sampler.negatives(self._box, fw, fh, self._rng)
         self._bags = (pos, neg)
         n_pos = pos.shape[0]
-        if p.scale_negatives == 0 and self._scale_pool is None:
-            yield from self._learn_in_one_call(sampler, pos, neg, dist, learning_rate)
-            return
-        # Both bags in one projection (and one log-ratio call below): columns [0, n_pos) are
-        # the positives, the rest the negatives.
-        values = self._project(self._scale_index, np.concatenate((pos, neg)))
-        if p.scale_negatives > 0:
-            values = np.concatenate([values, *self._wrong_scale_values()], axis=1)
-        v_pos, v_neg = values[:, :n_pos], values[:, n_pos:]
-        pool = self._pool
-        pool.update(v_pos, v_neg, learning_rate)
-        if self._scale_pool is not None:
-            self._scale_pool.update(v_pos, v_neg[:, :0])
-        if p.selection == "none" or n_pos == 0:
-            return
-        h = _core.log_ratio(values, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard)
-        h_pos, h_neg = h[:, :n_pos], h[:, n_pos:]
-        if p.selection == "wmil":
-            w = sampler.weights(dist, p.instance_weights)
-            self._selected = wmil_select(h_pos, h_neg, w, p.num_selected,
-                                         code_gradient=p.gradient == "code")
-        else:
-            self._selected = milboost_select(h_pos, h_neg, p.num_selected, guard=p.guard)
+        yield from self._learn_in_one_call(sampler, pos, neg, dist, learning_rate)
 
     def _learn_in_one_call(self, sampler: BagSampler, pos: np.ndarray, neg: np.ndarray,
                            dist: np.ndarray, learning_rate: float | None) -> Steps:
         """:meth:`_learn`'s work after sampling, in one request to the core (``_core.learn``: the
-        same kernels in the same order, so the same bits, crossing into the core once)."""
+        same kernels in the same order as separate calls, so the same bits, crossing into the
+        core once)."""
         p = self._params
         pool = self._pool
         n_pos, n_neg = pos.shape[0], neg.shape[0]
@@ -696,13 +675,22 @@ class Tracker:
         else:
             select = "wmil" if p.selection == "wmil" else "ratios"
         w = sampler.weights(dist, p.instance_weights) if select == "wmil" else None
-        mu1, sigma1, mu0, sigma0, selected, h = yield _Learn((
+        # rcwmil-plus: the box at wrong scales as more negatives, and the scale model.
+        wrong = self._wrong_scale_values() if p.scale_negatives > 0 else []
+        extra = np.concatenate(wrong, axis=1) if wrong else None
+        scale_pool = self._scale_pool
+        second = None if scale_pool is None else (scale_pool.mu1, scale_pool.sigma1,
+                                                  p.scale_learning_rate, scale_pool.first(1))
+        mu1, sigma1, mu0, sigma0, selected, h, mu2, sigma2 = yield _Learn((
             self._ii, self._bank_at(self._scale_index)[0], corners[:, 0], corners[:, 1], n_pos,
             pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
             p.learning_rate if learning_rate is None else learning_rate,
             pool.first(1), pool.first(0), p.first_update == "direct", p.classifier == "mil",
-            p.sigma_floor, p.guard, select, w, p.num_selected, p.gradient == "code"))
-        pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg > 0)
+            p.sigma_floor, p.guard, select, w, p.num_selected, p.gradient == "code", extra,
+            second))
+        pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg + len(wrong) > 0)
+        if scale_pool is not None:
+            scale_pool.assign(mu2, sigma2, scale_pool.mu0, scale_pool.sigma0, n_pos > 0, False)
         if selected is not None:
             self._selected = selected
         elif h is not None:
