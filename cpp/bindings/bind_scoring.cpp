@@ -48,6 +48,21 @@ void bind_scoring(py::module_& m) {
       "Per-feature Gaussian log-likelihood ratio h(x) = ln(p1 + guard) - ln(p0 + guard).");
 
   m.def(
+      "template_fit",
+      [](const SharedIntegralImage& shared, const FeatureBank& bank, int x, int y,
+         const CArray<double>& mu, const CArray<double>& sigma) {
+        const py::ssize_t n = bank.size();
+        require(mu.ndim() == 1 && mu.shape(0) == n && sigma.ndim() == 1 && sigma.shape(0) == n,
+                "mu and sigma must hold one entry per feature of the bank");
+        const auto table = computed_table(shared);
+        require_planes(*table, bank);
+        return template_fit(*table, bank, x, y, mu.data(), sigma.data());
+      },
+      py::arg("ii"), py::arg("bank"), py::arg("x"), py::arg("y"), py::arg("mu"), py::arg("sigma"),
+      "How well the box with top-left corner (x, y) fits the target model (mu, sigma) over all\n"
+      "features of the bank: -mean(log1p(z**2)), z = (value - mu) / sigma.");
+
+  m.def(
       "score_grid",
       [](const SharedIntegralImage& shared, const FeatureBank& bank, const py::object& selected_obj,
          CArray<double> mu1, CArray<double> sigma1, CArray<double> mu0, CArray<double> sigma0,

@@ -103,18 +103,46 @@ void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& r
   std::fill(table, table + stride, 0.0);
   const std::ptrdiff_t cs = image.channel_stride, step = image.col_stride;
   const double* lik = lik_.data();
-  for (int r = 0; r < region.h; ++r) {
-    const double* above = table + r * stride;
+  // First each row's running sums (rows in groups of four, whose independent sums overlap in
+  // the pipeline), then each row plus the row above: table[r + 1][c + 1] = table[r][c + 1] +
+  // s, the same additions as one pass would make.
+  const auto pixels = [&](int r) {
+    return image.data + static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
+           static_cast<std::ptrdiff_t>(region.x) * step;
+  };
+  const auto value = [&](const std::uint8_t* p) {
+    return lik[colour_bin(p[0], p[cs], p[2 * cs], bits_)];
+  };
+  int r = 0;
+  for (; r + 4 <= region.h; r += 4) {
+    const std::uint8_t* p[4] = {pixels(r), pixels(r + 1), pixels(r + 2), pixels(r + 3)};
+    double* row[4];
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int i = 0; i < 4; ++i) {
+      row[i] = table + (r + i + 1) * stride;
+      row[i][0] = 0.0;
+    }
+    for (std::ptrdiff_t c = 0; c < region.w; ++c) {
+      for (int i = 0; i < 4; ++i) {
+        s[i] += value(p[i] + c * step);
+        row[i][c + 1] = s[i];
+      }
+    }
+  }
+  for (; r < region.h; ++r) {
+    const std::uint8_t* p = pixels(r);
     double* row = table + (r + 1) * stride;
     row[0] = 0.0;
-    const std::uint8_t* p = image.data +
-                            static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
-                            static_cast<std::ptrdiff_t>(region.x) * step;
     double s = 0.0;
-    for (int c = 0; c < region.w; ++c, p += step) {
-      s += lik[colour_bin(p[0], p[cs], p[2 * cs], bits_)];
-      row[c + 1] = above[c + 1] + s;
+    for (std::ptrdiff_t c = 0; c < region.w; ++c) {
+      s += value(p + c * step);
+      row[c + 1] = s;
     }
+  }
+  for (r = 1; r < region.h; ++r) {
+    const double* above = table + r * stride;
+    double* row = table + (r + 1) * stride;
+    for (std::ptrdiff_t c = 1; c < stride; ++c) row[c] = above[c] + row[c];
   }
 }
 

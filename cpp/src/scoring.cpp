@@ -1,5 +1,7 @@
 #include "wmiltrack/scoring.hpp"
 
+#include "wmiltrack/learning.hpp"
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -231,6 +233,18 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
     }
   }
   return result;
+}
+
+double template_fit(const IntegralImage& ii, const FeatureBank& bank, int x, int y,
+                    const double* mu, const double* sigma) {
+  const int m = bank.size();
+  std::vector<double> t(static_cast<std::size_t>(m));
+  project(ii, bank, nullptr, m, &x, &y, 1, t.data());
+  for (int k = 0; k < m; ++k) {
+    const double z = (t[k] - mu[k]) / sigma[k];
+    t[k] = std::log1p(z * z);
+  }
+  return -((0.0 + pairwise_sum(t.data(), m, 1)) / static_cast<double>(m));
 }
 
 std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,

@@ -110,6 +110,10 @@ def score_grid(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.Ar
                box: tuple[int, int, int, int], radius: int, step: int,
                frame_size: tuple[int, int], return_scores: bool,
                ) -> tuple[int, int, float, int] | tuple[int, int, float, int, _F64]: ...
+def template_fit(ii: IntegralImage, bank: FeatureBank, x: int, y: int, mu: npt.ArrayLike,
+                 sigma: npt.ArrayLike) -> float:
+    """-mean(log1p(z**2)) of the box's features, z = (value - mu) / sigma."""
+
 def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayLike,
            sigma1: npt.ArrayLike, mu0: npt.ArrayLike, sigma0: npt.ArrayLike, guard: float,
            box: tuple[int, int, int, int], stages: Sequence[tuple[int, int]],

@@ -74,6 +74,13 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
                       int step, int frame_width, int frame_height, double* scores,
                       const BoxMeanCue* cue = nullptr);
 
+// How well the box with top-left corner (x, y) fits a target model over all the bank's
+// features: minus the mean of log(1 + z^2), z = (value - mu[k]) / sigma[k] (a heavy-tailed
+// template fit; rcwmil-plus compares scales with it). The mean is numpy's (pairwise sum /
+// M). Throws as project() does for a box outside the integral image.
+double template_fit(const IntegralImage& ii, const FeatureBank& bank, int x, int y,
+                    const double* mu, const double* sigma);
+
 // One stage of a coarse-to-fine search: a grid of this radius and step.
 struct SearchStage {
   int radius;

@@ -575,9 +575,8 @@ class Tracker:
         """Minus the mean log(1 + z^2) of all M features of ``box`` under the scale model."""
         pool = self._scale_pool
         assert pool is not None
-        v = self._project(index, np.array([[box[0], box[1]]], dtype=np.int32))[:, 0]
-        z = (v - pool.mu1) / pool.sigma1
-        return -float(np.mean(np.log1p(z * z)))
+        return _core.template_fit(self._ii, self._bank_at(index)[0], box[0], box[1], pool.mu1,
+                                  pool.sigma1)
 
     def _scale_by_ratio(self, best: float, sel: np.ndarray, weak: Weak) -> float:
         """Try the other scales with the strong classifier; returns the chosen raw score."""
@@ -652,21 +651,14 @@ class Tracker:
         _drive(self._learn_steps(sampler, learning_rate))
 
     def _learn_steps(self, sampler: BagSampler, learning_rate: float | None) -> Steps:
-        """:meth:`_learn` as a generator of core requests (see ``Steps``)."""
+        """:meth:`_learn` as a generator of core requests (see ``Steps``): after sampling, one
+        request (``_core.learn``: projection, Gaussian updates, log ratios and WMIL selection
+        in the order of separate calls, so the same bits, crossing into the core once)."""
         p = self._params
         fw, fh = self._frame_wh
         pos, dist = sampler.positives(self._box, fw, fh)
         neg = sampler.negatives(self._box, fw, fh, self._rng)
         self._bags = (pos, neg)
-        n_pos = pos.shape[0]
-        yield from self._learn_in_one_call(sampler, pos, neg, dist, learning_rate)
-
-    def _learn_in_one_call(self, sampler: BagSampler, pos: np.ndarray, neg: np.ndarray,
-                           dist: np.ndarray, learning_rate: float | None) -> Steps:
-        """:meth:`_learn`'s work after sampling, in one request to the core (``_core.learn``: the
-        same kernels in the same order as separate calls, so the same bits, crossing into the
-        core once)."""
-        p = self._params
         pool = self._pool
         n_pos, n_neg = pos.shape[0], neg.shape[0]
         corners = np.concatenate((pos, neg))
