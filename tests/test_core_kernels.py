@@ -348,3 +348,25 @@ def test_search_with_a_colour_cue_takes_the_merged_first_maximum() -> None:
     with pytest.raises(ValueError, match="weight"):
         _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
                      colour=(table, x0, y0, 1.5, offset))
+
+
+def test_template_fit_is_numpy_mean_of_log1p_z_squared() -> None:
+    """template_fit = -mean(log1p(((values - mu) / sigma) ** 2)) of the box's features (the
+    scale model's fit in rcwmil-plus; numpy's log1p may be a vectorised one, so to rounding),
+    and refuses a model of the wrong size."""
+    rng = np.random.default_rng(3)
+    frame = rng.integers(0, 256, size=(90, 110), dtype=np.uint8)
+    starts, rects, weights = random_bank(rng, 100, 24)
+    bank = _core.FeatureBank(starts, rects, weights)
+    ii = _core.IntegralImage()
+    ii.compute(frame, (0, 0, 110, 90))
+    mu, sigma = rng.normal(0, 50, 100), rng.uniform(5, 60, 100)
+    for x, y in [(0, 0), (40, 30), (86, 66)]:
+        v = _core.project(ii, bank, np.array([x]), np.array([y]))[:, 0]
+        z = (v - mu) / sigma
+        want = -float(np.mean(np.log1p(z * z)))
+        assert _core.template_fit(ii, bank, x, y, mu, sigma) == pytest.approx(want, rel=1e-13)
+    with pytest.raises(ValueError, match="one entry per feature"):
+        _core.template_fit(ii, bank, 0, 0, mu[:-1], sigma[:-1])
+    with pytest.raises((IndexError, ValueError)):
+        _core.template_fit(ii, bank, 100, 80, mu, sigma)  # the box leaves the table
