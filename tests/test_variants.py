@@ -122,11 +122,7 @@ def test_search_grids(variant: str, monkeypatch: pytest.MonkeyPatch) -> None:
 ])
 def test_bag_model_and_selection(variant: str, expected, monkeypatch: pytest.MonkeyPatch) -> None:
     seen = []
-    real_w, real_m = tracker_mod.wmil_select, tracker_mod.milboost_select
-
-    def spy_w(h_pos, h_neg, w, k, **kw):
-        seen.append(("wmil", w, k))
-        return real_w(h_pos, h_neg, w, k, **kw)
+    real_m = tracker_mod.milboost_select
 
     def spy_m(h_pos, h_neg, k, **kw):
         seen.append(("milboost", None, k))
@@ -139,7 +135,6 @@ def test_bag_model_and_selection(variant: str, expected, monkeypatch: pytest.Mon
             seen.append(("wmil", kw["w_pos"], kw["k"]))
         return real_learn(*args, **kw)
 
-    monkeypatch.setattr(tracker_mod, "wmil_select", spy_w)
     monkeypatch.setattr(tracker_mod, "milboost_select", spy_m)
     monkeypatch.setattr(tracker_mod._core, "learn", spy_learn)
     t, _ = bank(variant)
@@ -187,7 +182,8 @@ def test_reference_compat_flags_change_what_they_name(monkeypatch: pytest.Monkey
 
     # instance_weights and gradient reach the selection, and change its inputs / result
     seen: list[tuple[np.ndarray, bool, np.ndarray, np.ndarray]] = []
-    real = tracker_mod.wmil_select
+    from wmiltrack.engine.selection import wmil_select as real
+
     real_learn = tracker_mod._core.learn
 
     def spy(*args, **kw):  # the core's one-call learning step runs the WMIL selection
