@@ -143,13 +143,21 @@ def test_log_ratio_matches_the_guarded_reference_formula(guard: float) -> None:
     np.testing.assert_allclose(_core.log_ratio(v, mu1, s1, mu0, s0, guard), ref, rtol=1e-9, atol=1e-9)
 
 
-def test_score_grid_matches_brute_force_first_maximum_in_row_major_order() -> None:
-    rng = np.random.default_rng(5)
+def grid_scene(seed: int) -> tuple[np.random.Generator, np.ndarray, tuple[np.ndarray, ...],
+                                   _core.FeatureBank, _core.IntegralImage]:
+    """A random 150x120 gray frame, a random bank of 6 features for a 20-px box, and the
+    frame's integral image (with the generator, to draw the rest from)."""
+    rng = np.random.default_rng(seed)
     frame = rng.integers(0, 256, size=(120, 150), dtype=np.uint8)
-    starts, rects, weights = random_bank(rng, 6, 20)
-    bank = _core.FeatureBank(starts, rects, weights)
+    arrays = random_bank(rng, 6, 20)
+    bank = _core.FeatureBank(*arrays)
     ii = _core.IntegralImage()
     ii.compute(frame, (0, 0, 150, 120))
+    return rng, frame, arrays, bank, ii
+
+
+def test_score_grid_matches_brute_force_first_maximum_in_row_major_order() -> None:
+    rng, frame, (starts, rects, weights), bank, ii = grid_scene(5)
     sel = np.array([4, 1, 2], dtype=np.int32)
     mu1, mu0 = rng.normal(0, 300, 3), rng.normal(0, 300, 3)
     s1, s0 = rng.uniform(100, 400, 3), rng.uniform(100, 400, 3)
@@ -308,12 +316,7 @@ def test_search_with_a_colour_cue_takes_the_merged_first_maximum() -> None:
     """search(colour=...) picks, stage by stage, the first maximum in row-major order of
     (1 - w) logistic(raw / K - offset) + w * (box mean of the cue), reports that candidate's
     raw score, and refuses a candidate outside the cue's table."""
-    rng = np.random.default_rng(11)
-    frame = rng.integers(0, 256, size=(120, 150), dtype=np.uint8)
-    starts, rects, weights = random_bank(rng, 6, 20)
-    bank = _core.FeatureBank(starts, rects, weights)
-    ii = _core.IntegralImage()
-    ii.compute(frame, (0, 0, 150, 120))
+    rng, _, _, bank, ii = grid_scene(11)
     sel = np.array([4, 1, 2], dtype=np.int32)
     mu1, mu0 = rng.normal(0, 300, 6), rng.normal(0, 300, 6)
     s1, s0 = rng.uniform(100, 400, 6), rng.uniform(100, 400, 6)
