@@ -25,7 +25,7 @@ import numpy.typing as npt
 
 from .. import _core
 
-__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour"]
+__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour", "luma3"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -36,6 +36,18 @@ def is_colour(frame: np.ndarray) -> bool:
         return False
     b, g, r = frame[..., 0], frame[..., 1], frame[..., 2]
     return not (np.array_equal(b, g) and np.array_equal(g, r))
+
+
+def luma3(frame: np.ndarray) -> np.ndarray:
+    """The frame's luma (OpenCV's BGR weights; gray frames as they are) repeated in three
+    channels, so that a :class:`ColourModel` on it is a histogram of intensities (32 levels at
+    5 bits)."""
+    if frame.ndim == 3 and frame.shape[2] >= 3:
+        code = cv2.COLOR_BGRA2GRAY if frame.shape[2] == 4 else cv2.COLOR_BGR2GRAY
+        gray = cv2.cvtColor(np.ascontiguousarray(frame), code)
+    else:
+        gray = frame.reshape(frame.shape[0], frame.shape[1])
+    return np.ascontiguousarray(np.repeat(gray[:, :, None], 3, axis=2))
 
 
 class ColourModel:
@@ -97,6 +109,14 @@ class ColourModel:
         # fg, bg /= their sums; the model blends them in at the learning rate; likelihood =
         # fg / (fg + bg) per bin (0.5 where both are 0).
         _core.colour_update(self._fg, self._bg, fg, bg, self.learning_rate, first, self._likelihood)
+
+    def copy(self) -> ColourModel:
+        """An independent copy (its histograms no longer change with this model's)."""
+        out = ColourModel(self.bits, self.learning_rate, self.pad, self.shrink)
+        for name in ("_fg", "_bg", "_likelihood"):
+            value = getattr(self, name)
+            setattr(out, name, None if value is None else value.copy())
+        return out
 
     def integral(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> tuple[FloatArray, int, int]:
         """Integral image of ``P(target | colour)`` over ``roi = (x0, y0, x1, y1)`` (clipped to the
