@@ -47,7 +47,8 @@ def luma3(frame: np.ndarray) -> np.ndarray:
         gray = cv2.cvtColor(np.ascontiguousarray(frame), code)
     else:
         gray = frame.reshape(frame.shape[0], frame.shape[1])
-    return np.ascontiguousarray(np.repeat(gray[:, :, None], 3, axis=2))
+    out: np.ndarray = cv2.merge([gray, gray, gray])
+    return out
 
 
 class ColourModel:
@@ -131,6 +132,26 @@ class ColourModel:
                              self._likelihood)
         table: FloatArray = np.asarray(cv2.integral(p, sdepth=cv2.CV_64F), dtype=np.float64)
         return table, x0, y0
+
+    def contrast(self, frame: np.ndarray, box: tuple[int, int, int, int], ring: float = 0.25) -> float:
+        """:func:`colour_contrast` of one box (inside and ring clipped to the frame), from the
+        probabilities of the pixels around it alone (no integral image)."""
+        if self._likelihood is None:
+            raise ValueError("call learn() before contrast()")
+        fh, fw = frame.shape[:2]
+        x, y, w, h = box
+        pad = max(1, int(np.rint(ring * (w + h) / 2.0)))
+        x0, y0 = max(0, x - pad), max(0, y - pad)
+        x1, y1 = min(fw, x + w + pad), min(fh, y + h + pad)
+        if x1 <= x0 or y1 <= y0:
+            return 0.0
+        p = _core.colour_map(frame, (x0, y0, x1 - x0, y1 - y0), self.bits, self._likelihood)
+        ix0, iy0 = max(x, x0) - x0, max(y, y0) - y0
+        ix1, iy1 = min(x + w, x1) - x0, min(y + h, y1) - y0
+        s_in = float(p[iy0:iy1, ix0:ix1].sum()) if ix1 > ix0 and iy1 > iy0 else 0.0
+        a_in = max(ix1 - ix0, 0) * max(iy1 - iy0, 0)
+        a_out = p.shape[0] * p.shape[1]
+        return float(s_in / max(a_in, 1) - (float(p.sum()) - s_in) / max(a_out - a_in, 1))
 
     @staticmethod
     def box_means(table: FloatArray, x0: int, y0: int, xs: npt.NDArray[np.integer],

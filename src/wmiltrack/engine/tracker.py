@@ -635,17 +635,16 @@ class Tracker:
                         luma: bool = False) -> float:
         """The contrast of ``box`` under one of the first frame's histograms (``luma``: the
         intensity one, read on the luma of the box's neighbourhood)."""
+        if not luma:
+            return model.contrast(img, box)
         x, y, w, h = box
-        m = int(round(0.25 * (w + h) / 2.0)) + 2  # colour_contrast's ring, and a margin
-        if luma:
-            fw, fh = self._frame_wh
-            x0, y0 = max(0, x - m), max(0, y - m)
-            x1, y1 = min(fw, x + w + m), min(fh, y + h + m)
-            crop = luma3(img[y0:max(y1, y0 + 1), x0:max(x1, x0 + 1)])
-            table, _, _ = model.integral(crop, (0, 0, crop.shape[1], crop.shape[0]))
-        else:
-            table, x0, y0 = model.integral(img, (x - m, y - m, x + w + m, y + h + m))
-        return float(colour_contrast(table, x0, y0, np.array([box]))[0])
+        m = int(round(0.25 * (w + h) / 2.0)) + 1  # the contrast's ring, and a margin
+        fw, fh = self._frame_wh
+        x0, y0 = max(0, x - m), max(0, y - m)
+        x1, y1 = min(fw, x + w + m), min(fh, y + h + m)
+        if x1 <= x0 or y1 <= y0:
+            return 0.0
+        return model.contrast(luma3(img[y0:y1, x0:x1]), (x - x0, y - y0, w, h))
 
     def _colour_score(self, conf: float, img: np.ndarray) -> float:
         """``(1 - w - v) conf + w clip(0.5 + colour contrast, 0, 1) + v clip(0.5 + luma
