@@ -6,10 +6,13 @@ candidate confidence signals and the IoU with the ground truth, and prints for e
 the ROC AUC of "target tracked" (IoU > 0) against "lost" (IoU == 0, or target not visible)
 and the score distributions.
 
-    python scripts/score_study.py [--otb ../shared/data/otb] [--variants rcwmil,rcwmil-plus] [--json out.json]
+    python scripts/score_study.py [--otb ../shared/data/otb] [--variants rcwmil,rcwmil-plus]
+        [--seeds 0,1,2] [--json out.json]
 
 ``--variants`` takes tracker specs with overrides, as ``wmiltrack eval`` does
-(``rcwmil-plus:score_colour=0``).
+(``rcwmil-plus:score_colour=0``). ``--seeds`` runs each variant with each tracker seed (the
+feature bank and negative sampling); the figures are printed per seed, then for the frames of
+all seeds pooled, since the frames a tracker loses differ from seed to seed.
 
 Signals (all computed from what one update already has):
 
@@ -104,9 +107,10 @@ class Probe(wmiltrack.Tracker):
         return self.raw_best
 
 
-def run(frames: list[np.ndarray], gt: np.ndarray, visible: np.ndarray, variant: str) -> dict[str, Any]:
+def run(frames: list[np.ndarray], gt: np.ndarray, visible: np.ndarray, variant: str,
+        seed: int = 0) -> dict[str, Any]:
     name, overrides = parse_spec(variant)
-    t = Probe(name, seed=0, **overrides)
+    t = Probe(name, seed=seed, **overrides)
     t.init(frames[0], gt[0])
     k = len(t._selected)
     rows: dict[str, list[float]] = {"logistic": [], "margin": [], "rel": [], "ref_ratio": [],
@@ -163,77 +167,93 @@ def synthetic_cases(seed: int) -> list[tuple[str, list[np.ndarray], np.ndarray, 
     return out
 
 
+def summarise(report: dict[str, Any], key: str, variant: str, tag: str,
+              acc: dict[str, dict[str, list[np.ndarray]]], signals: tuple[str, ...]) -> None:
+    """Print and store (``report[key/group]``) the figures of one variant's frames."""
+    for group in ("otb", "synthetic", "all"):
+        if group == "all":
+            cat = {k: np.concatenate(acc["otb"][k] + acc["synthetic"][k]) for k in acc["otb"]}
+        else:
+            cat = {k: np.concatenate(v) for k, v in acc[group].items()}
+        tracked = cat["iou"] > 0
+        good = cat["iou"] > 0.5
+        lost = ~tracked
+        entry: dict[str, Any] = {"frames": int(tracked.size), "lost": int(lost.sum())}
+        for s in signals:
+            v = cat[s]
+            entry[s] = {
+                "auc_iou>0_vs_0": roc_auc(v[tracked], v[lost]),
+                "auc_iou>0.5_vs_0": roc_auc(v[good], v[lost]),
+                "median_iou>0.5": float(np.nanmedian(v[good])) if good.any() else math.nan,
+                "median_iou==0": float(np.nanmedian(v[lost])) if lost.any() else math.nan,
+                "q10_iou>0.5": float(np.nanpercentile(v[good], 10)) if good.any() else math.nan,
+                "q90_iou==0": float(np.nanpercentile(v[lost], 90)) if lost.any() else math.nan,
+            }
+        if group == "all":
+            a, b = fit_logistic(cat["mean_k"], tracked)
+            entry["fit"] = {"gain": a, "offset": b}
+            print(f"   balanced logistic fit of P(IoU>0 | raw/K): gain {a:.3f} offset {b:.3f}")
+        report[f"{key}/{group}"] = entry
+        print(f"== {variant} {tag} {group}: {entry['frames']} frames, {entry['lost']} lost")
+        for s in signals:
+            e = entry[s]
+            print(f"   {s:9s} AUC(IoU>0 vs 0) {e['auc_iou>0_vs_0']:.3f}  AUC(IoU>.5 vs 0) "
+                  f"{e['auc_iou>0.5_vs_0']:.3f}  median tracked {e['median_iou>0.5']:.3f} "
+                  f"lost {e['median_iou==0']:.3f}  q10 tracked {e['q10_iou>0.5']:.3f} "
+                  f"q90 lost {e['q90_iou==0']:.3f}")
+        # best threshold for ok = score >= thr (balanced accuracy) on the current score
+        v = cat["score"]
+        best = max(((0.5 * (np.mean(v[tracked] >= th) + np.mean(v[lost] < th)), th)
+                    for th in np.linspace(0.0, 1.0, 101)), default=(math.nan, math.nan))
+        name, overrides = parse_spec(variant)
+        thr = wmiltrack.Params.for_variant(name, **overrides).lost_threshold
+        at = 0.5 * (np.mean(v[tracked] >= thr) + np.mean(v[lost] < thr))
+        print(f"   score: balanced accuracy at lost_threshold {thr:.2f}: {at:.3f}")
+        entry["score_best_threshold"] = {"balanced_accuracy": best[0], "threshold": best[1]}
+        print(f"   score: best threshold {best[1]:.2f} (balanced accuracy {best[0]:.3f})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--otb", type=Path, default=Path("../shared/data/otb"))
     ap.add_argument("--variants", default="rcwmil")
+    ap.add_argument("--seeds", default="0", help="tracker seeds, comma-separated (default 0)")
     ap.add_argument("--synthetic-seeds", type=int, default=3)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
     signals = ("logistic", "margin", "rel", "ref_ratio", "ref_diff", "score")
     report: dict[str, Any] = {}
+    seeds = [int(v) for v in args.seeds.split(",")]
+    cases: list[tuple[str, str, list[np.ndarray], np.ndarray, np.ndarray]] = []
+    for path in list_otb_sequences(args.otb):
+        seq = load_otb_sequence(path)
+        frames = seq.load()
+        gt = np.asarray(seq.groundtruth, dtype=np.float64)
+        n = min(len(frames), len(gt))
+        frames, gt = frames[:n], gt[:n]
+        vis = np.all(np.isfinite(gt), axis=1)
+        cases.append(("otb", seq.name, frames, gt, vis))
+    for s in range(args.synthetic_seeds):
+        for name, fr, gt, vis in synthetic_cases(s):
+            cases.append(("synthetic", name, fr, gt, vis))
     for variant in args.variants.split(","):
-        acc: dict[str, dict[str, list[np.ndarray]]] = {"otb": {}, "synthetic": {}}
-        cases: list[tuple[str, str, list[np.ndarray], np.ndarray, np.ndarray]] = []
-        for path in list_otb_sequences(args.otb):
-            seq = load_otb_sequence(path)
-            frames = seq.load()
-            gt = np.asarray(seq.groundtruth, dtype=np.float64)
-            n = min(len(frames), len(gt))
-            frames, gt = frames[:n], gt[:n]
-            vis = np.all(np.isfinite(gt), axis=1)
-            cases.append(("otb", seq.name, frames, gt, vis))
-        for s in range(args.synthetic_seeds):
-            for name, fr, gt, vis in synthetic_cases(s):
-                cases.append(("synthetic", name, fr, gt, vis))
-        for group, name, frames, gt, vis in cases:
-            rows = run(frames, gt, vis, variant)
-            for key, v in rows.items():
-                acc[group].setdefault(key, []).append(v)
-            ok = rows["iou"] > 0
-            print(f"{variant:11s} {name:18s} frames {len(ok):4d} lost(IoU=0) {np.sum(~ok):4d} "
-                  + " ".join(f"{s}={roc_auc(rows[s][ok], rows[s][~ok]):.2f}" for s in signals))
-        for group in ("otb", "synthetic", "all"):
-            if group == "all":
-                cat = {k: np.concatenate(acc["otb"][k] + acc["synthetic"][k]) for k in acc["otb"]}
+        pooled: dict[str, dict[str, list[np.ndarray]]] = {"otb": {}, "synthetic": {}}
+        for seed in seeds + ([-1] if len(seeds) > 1 else []):
+            if seed >= 0:
+                acc: dict[str, dict[str, list[np.ndarray]]] = {"otb": {}, "synthetic": {}}
+                for group, name, frames, gt, vis in cases:
+                    rows = run(frames, gt, vis, variant, seed)
+                    for key, v in rows.items():
+                        acc[group].setdefault(key, []).append(v)
+                        pooled[group].setdefault(key, []).append(v)
+                    ok = rows["iou"] > 0
+                    print(f"{variant:11s} seed {seed} {name:18s} frames {len(ok):4d} lost(IoU=0) "
+                          f"{np.sum(~ok):4d} " + " ".join(
+                              f"{s}={roc_auc(rows[s][ok], rows[s][~ok]):.2f}" for s in signals))
+                tag = f"seed {seed}"
             else:
-                cat = {k: np.concatenate(v) for k, v in acc[group].items()}
-            tracked = cat["iou"] > 0
-            good = cat["iou"] > 0.5
-            lost = ~tracked
-            entry: dict[str, Any] = {"frames": int(tracked.size), "lost": int(lost.sum())}
-            for s in signals:
-                v = cat[s]
-                entry[s] = {
-                    "auc_iou>0_vs_0": roc_auc(v[tracked], v[lost]),
-                    "auc_iou>0.5_vs_0": roc_auc(v[good], v[lost]),
-                    "median_iou>0.5": float(np.nanmedian(v[good])) if good.any() else math.nan,
-                    "median_iou==0": float(np.nanmedian(v[lost])) if lost.any() else math.nan,
-                    "q10_iou>0.5": float(np.nanpercentile(v[good], 10)) if good.any() else math.nan,
-                    "q90_iou==0": float(np.nanpercentile(v[lost], 90)) if lost.any() else math.nan,
-                }
-            if group == "all":
-                a, b = fit_logistic(cat["mean_k"], tracked)
-                entry["fit"] = {"gain": a, "offset": b}
-                print(f"   balanced logistic fit of P(IoU>0 | raw/K): gain {a:.3f} offset {b:.3f}")
-            report[f"{variant}/{group}"] = entry
-            print(f"== {variant} {group}: {entry['frames']} frames, {entry['lost']} lost")
-            for s in signals:
-                e = entry[s]
-                print(f"   {s:9s} AUC(IoU>0 vs 0) {e['auc_iou>0_vs_0']:.3f}  AUC(IoU>.5 vs 0) "
-                      f"{e['auc_iou>0.5_vs_0']:.3f}  median tracked {e['median_iou>0.5']:.3f} "
-                      f"lost {e['median_iou==0']:.3f}  q10 tracked {e['q10_iou>0.5']:.3f} "
-                      f"q90 lost {e['q90_iou==0']:.3f}")
-            # best threshold for ok = score >= thr (balanced accuracy) on the current score
-            v = cat["score"]
-            best = max(((0.5 * (np.mean(v[tracked] >= th) + np.mean(v[lost] < th)), th)
-                        for th in np.linspace(0.0, 1.0, 101)), default=(math.nan, math.nan))
-            name, overrides = parse_spec(variant)
-            thr = wmiltrack.Params.for_variant(name, **overrides).lost_threshold
-            at = 0.5 * (np.mean(v[tracked] >= thr) + np.mean(v[lost] < thr))
-            print(f"   score: balanced accuracy at lost_threshold {thr:.2f}: {at:.3f}")
-            entry["score_best_threshold"] = {"balanced_accuracy": best[0], "threshold": best[1]}
-            print(f"   score: best threshold {best[1]:.2f} (balanced accuracy {best[0]:.3f})")
+                acc, tag = pooled, "seeds " + ",".join(map(str, seeds)) + " pooled"
+            summarise(report, f"{variant}/{tag.replace(' ', '')}", variant, tag, acc, signals)
     if args.json:
         args.json.write_text(json.dumps(report, indent=2))
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wmiltrack.engine.colour import ColourModel, is_colour
+from wmiltrack.engine.colour import ColourModel, colour_contrast, is_colour, luma3
 
 
 def scene(rng: np.random.Generator) -> np.ndarray:
@@ -164,3 +164,35 @@ def test_core_histograms_refuse_bad_input() -> None:
     assert not h.learnt
     h.learn(frame, (0, 0, 10, 10), (0, 5, 0, 5), (1, 4, 1, 4))
     assert h.learnt and h.foreground.sum() == 1.0
+
+
+def test_contrast_of_one_box_equals_the_integral_image_one() -> None:
+    rng = np.random.default_rng(3)
+    frame = scene(rng)
+    fh, fw = frame.shape[:2]
+    model = ColourModel()
+    model.learn(frame, (40, 30, 30, 40))
+    table, x0, y0 = model.integral(frame, (0, 0, fw, fh))
+    boxes = [(40, 30, 30, 40), (0, 0, 20, 25), (fw - 12, fh - 9, 12, 9), (5, fh - 30, 60, 30)]
+    for _ in range(50):
+        w, h = (int(v) for v in rng.integers(4, 60, 2))
+        boxes.append((int(rng.integers(0, fw - w + 1)), int(rng.integers(0, fh - h + 1)), w, h))
+    expected = colour_contrast(table, x0, y0, np.array(boxes))
+    got = [model.contrast(frame, b) for b in boxes]
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+    copy = model.copy()
+    model.learn(frame, (0, 0, 20, 25))  # the copy keeps its histograms
+    assert copy.contrast(frame, boxes[0]) == pytest.approx(got[0], abs=1e-12)
+    with pytest.raises(ValueError, match="learn"):
+        ColourModel().contrast(frame, boxes[0])
+
+
+def test_luma3_repeats_the_intensity() -> None:
+    rng = np.random.default_rng(4)
+    frame = scene(rng)
+    out = luma3(frame)
+    assert out.shape == frame.shape and out.dtype == np.uint8
+    assert np.array_equal(out[..., 0], out[..., 1]) and np.array_equal(out[..., 1], out[..., 2])
+    gray = out[..., 0]
+    assert np.array_equal(luma3(gray), out) and np.array_equal(luma3(gray[:, :, None]), out)
+    assert not ColourModel.usable(out)  # a histogram of it is one of intensities

@@ -75,7 +75,7 @@ PAPER = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
 #: Each rcwmil-plus component's field and the value that switches it off.
 OFF = {"scale_steps": 0, "scale_negatives": 0, "channels": (), "motion": "none",
        "gate_threshold": 0.0, "gate_drop": 0.0, "recovery_radius": 0, "colour_weight": 0.0,
-       "score_colour": 0.0}
+       "score_colour": 0.0, "score_colour_model": "current", "score_luma": 0.0}
 
 
 @pytest.mark.parametrize("variant", PAPER)
@@ -273,7 +273,10 @@ def test_score_colour_changes_the_report_only(demo) -> None:
     frames, gt = demo
 
     def run(frames: list[np.ndarray], **kw: object) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        t = wmiltrack.Tracker("rcwmil-plus", seed=0, **kw)
+        # the current colour model's contrast alone (the preset also reads the first frame's
+        # histograms: see test_first_frame_scores_change_the_report_only)
+        t = wmiltrack.Tracker("rcwmil-plus", seed=0, score_colour_model="current", score_luma=0.0,
+                              **kw)
         t.init(frames[0], gt[0])
         rs = [t.update(f) for f in frames[1:]]
         return (np.array([r.box for r in rs]), np.array([r.score for r in rs]),
@@ -305,3 +308,102 @@ def test_score_drops_when_the_target_vanishes() -> None:
 def test_score_colour_is_validated(value: object) -> None:
     with pytest.raises(ValueError, match="score_colour"):
         wmiltrack.Params.for_variant("rcwmil-plus", score_colour=value)
+
+
+def _occluder(rng: np.random.Generator, h: int, w: int) -> np.ndarray:
+    """A blocky random texture (8x8-pixel cells) of another colour range than the scene's."""
+    cells = rng.integers(60, 200, size=(h // 8 + 1, w // 8 + 1, 3), dtype=np.uint8)
+    return np.kron(cells, np.ones((8, 8, 1), dtype=np.uint8))[:h, :w]
+
+
+@pytest.mark.parametrize("case", ["occluded", "vanished"])
+def test_plus_score_falls_when_the_target_is_hidden(case: str) -> None:
+    """The preset's reported score (classifier and first-frame colour contrast) drops once the
+    target is fully covered by an occluder or the scene is swapped for one without it, and
+    comes out on the lost side of ``lost_threshold``."""
+    frames, gt = zoom_sequence(90, seed=1)
+    rng = np.random.default_rng(7)
+    hidden = range(40, 70)
+    frames = [f.copy() for f in frames]
+    if case == "occluded":
+        for i in hidden:
+            x, y, w, h = gt[i].astype(int)
+            x0, y0 = max(x - w // 4, 0), max(y - h // 4, 0)
+            x1, y1 = x + w + w // 4, y + h + h // 4
+            frames[i][y0:y1, x0:x1] = _occluder(rng, y1 - y0, x1 - x0)
+    else:
+        other, _ = zoom_sequence(90, seed=4)
+        scene = cv2.GaussianBlur(other[0], (0, 0), 8)  # another scene, no target in it
+        for i in hidden:
+            frames[i] = np.clip(scene + rng.normal(0, 3, scene.shape), 0, 255).astype(np.uint8)
+    p = wmiltrack.Params.for_variant("rcwmil-plus")
+    assert p.score_colour > 0 and p.score_colour_model == "first"
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    t.init(frames[0], gt[0])
+    rs = [t.update(f) for f in frames[1:hidden.stop]]
+    tracked = np.array([r.score for r in rs[10:hidden.start - 1]])
+    lost = np.array([r.score for r in rs[hidden.start + 1:hidden.stop - 1]])
+    assert np.all((tracked >= 0) & (tracked <= 1)) and np.all((lost >= 0) & (lost <= 1))
+    assert np.median(lost) < p.lost_threshold < np.median(tracked)
+    assert np.percentile(lost, 90) < np.percentile(tracked, 10)
+    # the classifier learns the occluder as it goes (its confidence creeps back towards 0.5);
+    # the first frame's histograms do not, so most hidden frames stay reported lost
+    assert np.mean([r.ok for r in rs[hidden.start + 1:hidden.stop - 1]]) < 1 / 3
+    # and the score stays below that of the contrast under the colours learnt as it goes
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, score_colour_model="current", score_luma=0.0)
+    t.init(frames[0], gt[0])
+    adaptive = np.array([t.update(f).score for f in frames[1:hidden.stop]])
+    assert np.median(lost) < np.median(adaptive[hidden.start + 1:hidden.stop - 1]) - 0.03
+
+
+def test_first_frame_scores_change_the_report_only(demo) -> None:
+    frames, gt = demo
+
+    def run(fr: list[np.ndarray] | None = None, **kw: object
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        fr = frames if fr is None else fr
+        t = wmiltrack.Tracker("rcwmil-plus", seed=0, **kw)
+        t.init(fr[0], gt[0])
+        rs = [t.update(f) for f in fr[1:]]
+        return (np.array([r.box for r in rs]), np.array([r.score for r in rs]),
+                np.array([r.ok for r in rs]))
+
+    thr = wmiltrack.Params.for_variant("rcwmil-plus").lost_threshold
+    b0, s0, _ = run(score_colour=0.0, score_luma=0.0)  # the classifier's confidence
+    b1, s1, _ = run(score_colour=0.5, score_colour_model="current", score_luma=0.0)
+    b2, s2, ok2 = run()  # the preset: first frame's colours and intensities
+    b3, s3, _ = run(score_colour=0.0)  # intensities only
+    for b in (b1, b2, b3):
+        np.testing.assert_array_equal(b0, b)
+    assert not np.allclose(s1, s2) and not np.allclose(s0, s2) and not np.allclose(s3, s2)
+    assert np.all((s2 >= 0) & (s2 <= 1))
+    np.testing.assert_array_equal(ok2, s2 >= thr)
+    # gray frames: the same boxes; the intensity contrast still counts
+    gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
+    g0, gs0, _ = run(gray, score_colour=0.0, score_luma=0.0)
+    g2, gs2, gok2 = run(gray)
+    np.testing.assert_array_equal(g0, g2)
+    assert not np.allclose(gs0, gs2) and np.all((gs2 >= 0) & (gs2 <= 1))
+    np.testing.assert_array_equal(gok2, gs2 >= thr)
+    # the first frame's histograms stay as they were learnt
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    t.init(frames[0], gt[0])
+    firsts = [t._first_colour, t._first_luma]
+    assert all(m is not None for m in firsts)
+    before = [m.histograms.likelihood for m in firsts]  # type: ignore[union-attr]
+    for f in frames[1:10]:
+        t.update(f)
+    for m, b in zip(firsts, before):
+        np.testing.assert_array_equal(m.histograms.likelihood, b)  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize("value", ["last", "", 1])
+def test_score_colour_model_is_validated(value: object) -> None:
+    with pytest.raises(ValueError, match="score_colour_model"):
+        wmiltrack.Params.for_variant("rcwmil-plus", score_colour_model=value)
+
+
+@pytest.mark.parametrize("value", [-0.1, 0.8, True, "0.3"])
+def test_score_luma_is_validated(value: object) -> None:
+    with pytest.raises(ValueError, match="score_luma"):  # 0.8: with score_colour 0.33, over 1
+        wmiltrack.Params.for_variant("rcwmil-plus", score_luma=value)

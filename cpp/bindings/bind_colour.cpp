@@ -1,3 +1,4 @@
+#include <memory>
 #include <mutex>
 #include <tuple>
 #include <vector>
@@ -51,6 +52,15 @@ void bind_colour(py::module_& m) {
       "frames at `rate`) and the per-bin likelihood fg / (fg + bg), 0.5 where both are 0.\n"
       "bin = (b >> s) << 2 bits | (g >> s) << bits | (r >> s), s = 8 - bits.")
       .def(py::init<int, double>(), py::arg("bits"), py::arg("rate"))
+      .def(
+          "copy",
+          [](LockedHistograms& h) {
+            std::lock_guard<std::mutex> guard(h.lock);
+            auto out = std::make_unique<LockedHistograms>(h.hist.bits(), h.hist.rate());
+            out->hist = h.hist;
+            return out;
+          },
+          "An independent copy (the histograms as they are now).")
       .def_property_readonly("bits", [](const LockedHistograms& h) { return h.hist.bits(); })
       .def_property_readonly("rate", [](const LockedHistograms& h) { return h.hist.rate(); })
       .def_property_readonly("learnt", [](LockedHistograms& h) {

@@ -128,6 +128,8 @@ def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayL
 class ColourHistograms:
     """Foreground/background colour histograms blended over frames, and P(target | bin)."""
     def __init__(self, bits: int, rate: float) -> None: ...
+    def copy(self) -> ColourHistograms:
+        """An independent copy (the histograms as they are now)."""
     @property
     def bits(self) -> int: ...
     @property

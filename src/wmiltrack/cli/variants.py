@@ -53,7 +53,10 @@ def variant_table() -> str:
             if p.motion != "none":
                 parts.append(f"motion {p.motion}")
             if p.score_colour > 0:
-                parts.append(f"score colour {p.score_colour:g}")
+                first = " (first frame)" if p.score_colour_model == "first" else ""
+                parts.append(f"score colour {p.score_colour:g}{first}")
+            if p.score_luma > 0:
+                parts.append(f"score luma {p.score_luma:g} (first frame)")
             if p.gate_threshold > 0 or p.gate_drop > 0:
                 parts.append("gated update")
             if p.recovery_radius:

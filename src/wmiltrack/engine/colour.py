@@ -19,12 +19,13 @@ alone.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import numpy.typing as npt
 
 from .. import _core
 
-__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour"]
+__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour", "luma3"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -35,6 +36,19 @@ def is_colour(frame: np.ndarray) -> bool:
         return False
     b, g, r = frame[..., 0], frame[..., 1], frame[..., 2]
     return not (np.array_equal(b, g) and np.array_equal(g, r))
+
+
+def luma3(frame: np.ndarray) -> np.ndarray:
+    """The frame's luma (OpenCV's BGR weights; gray frames as they are) repeated in three
+    channels, so that a :class:`ColourModel` on it is a histogram of intensities (32 levels at
+    5 bits)."""
+    if frame.ndim == 3 and frame.shape[2] >= 3:
+        code = cv2.COLOR_BGRA2GRAY if frame.shape[2] == 4 else cv2.COLOR_BGR2GRAY
+        gray = cv2.cvtColor(np.ascontiguousarray(frame), code)
+    else:
+        gray = frame.reshape(frame.shape[0], frame.shape[1])
+    out: np.ndarray = cv2.merge([gray, gray, gray])
+    return out
 
 
 class ColourModel:
@@ -94,6 +108,12 @@ class ColourModel:
         # The core's pixels count for the target, the pixels outside the box for the background.
         self._hist.learn(frame, (x0, y0, rw, rh), inside, core)
 
+    def copy(self) -> ColourModel:
+        """An independent copy (its histograms no longer change with this model's)."""
+        out = ColourModel(self.bits, self.learning_rate, self.pad, self.shrink)
+        out._hist = self._hist.copy()
+        return out
+
     def integral(self, frame: np.ndarray, roi: tuple[int, int, int, int]) -> tuple[FloatArray, int, int]:
         """Integral image of ``P(target | colour)`` over ``roi = (x0, y0, x1, y1)`` (clipped to the
         frame): ``(table, x0, y0)``, the table ``(y1 - y0 + 1) x (x1 - x0 + 1)`` with a zero
@@ -105,6 +125,19 @@ class ColourModel:
         x1, y1 = min(fw, roi[2]), min(fh, roi[3])
         table = self._hist.likelihood_integral(frame, (x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)))
         return table, x0, y0
+
+    def contrast(self, frame: np.ndarray, box: tuple[int, int, int, int], ring: float = 0.25) -> float:
+        """:func:`colour_contrast` of one box (inside and ring clipped to the frame), from an
+        integral image of the box and its ring alone."""
+        if not self._hist.learnt:
+            raise ValueError("call learn() before contrast()")
+        x, y, w, h = box
+        pad = max(1, int(np.rint(ring * (w + h) / 2.0)))
+        fh, fw = frame.shape[:2]
+        if min(fw, x + w + pad) <= max(0, x - pad) or min(fh, y + h + pad) <= max(0, y - pad):
+            return 0.0
+        table, x0, y0 = self.integral(frame, (x - pad, y - pad, x + w + pad, y + h + pad))
+        return float(colour_contrast(table, x0, y0, np.array([box]), ring)[0])
 
     @staticmethod
     def box_means(table: FloatArray, x0: int, y0: int, xs: npt.NDArray[np.integer],

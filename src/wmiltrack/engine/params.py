@@ -23,6 +23,7 @@ GradientForm = Literal["paper", "code"]
 SubregionMode = Literal["grid", "random"]
 MotionModel = Literal["none", "velocity"]
 ScaleModel = Literal["ratio", "likelihood", "both"]
+ScoreColourModel = Literal["current", "first"]
 
 _CHOICES: dict[str, tuple[str, ...]] = {
     "feature_kind": ("subregion", "random"),
@@ -36,6 +37,7 @@ _CHOICES: dict[str, tuple[str, ...]] = {
     "subregion_mode": ("grid", "random"),
     "motion": ("none", "velocity"),
     "scale_model": ("ratio", "likelihood", "both"),
+    "score_colour_model": ("current", "first"),
 }
 
 
@@ -192,7 +194,22 @@ class Params:
         (:func:`wmiltrack.engine.colour.colour_contrast`): a box on the target holds its
         colours and its surroundings do not, while a lost box sees background on both
         sides. Only the report changes: ``motion``, the gates and ``recovery_radius`` still
-        read the classifier's confidence. 0: off.
+        read the classifier's confidence. 0: off. (With ``score_luma`` the classifier's
+        weight is ``1 - w - score_luma``.)
+    score_colour_model : {"current", "first"}
+        Which colour histograms ``score_colour``'s contrast reads: ``current``, the ones the
+        search uses (updated every frame, so they follow the box wherever it goes), or
+        ``first``, the histograms learnt on the first frame and never updated (a memory of
+        what the target looked like: a box that drifted onto background keeps a high
+        classifier confidence, since the classifier learns the background it sits on, but
+        its colours no longer stand out under the first frame's model).
+    score_luma : float
+        Weight ``v`` of a second contrast in the reported confidence: the box's contrast under
+        a histogram of the first frame's intensities (luma, 32 levels), learnt once and never
+        updated, on colour and gray frames alike. The score becomes ``(1 - w - v) * conf +
+        w * clip(0.5 + colour contrast, 0, 1) + v * clip(0.5 + luma contrast, 0, 1)`` (``w``:
+        ``score_colour``); on frames without colour the colour term reads the luma contrast.
+        Only the report changes, as for ``score_colour``. 0: off.
     gate_threshold : float
         Learn only from frames whose confidence is at least this (0: always learn).
     gate_drop : float
@@ -264,6 +281,8 @@ class Params:
     motion_max: float = 30.0
     colour_weight: float = 0.0
     score_colour: float = 0.0
+    score_colour_model: ScoreColourModel = "current"
+    score_luma: float = 0.0
     gate_threshold: float = 0.0
     gate_drop: float = 0.0
     gate_learning_rate: float | None = None
@@ -389,6 +408,9 @@ class Params:
         need(isinstance(self.score_colour, (int, float)) and not isinstance(self.score_colour, bool)
              and 0.0 <= self.score_colour <= 1.0,
              f"score_colour must be in [0, 1], got {self.score_colour!r}")
+        need(isinstance(self.score_luma, (int, float)) and not isinstance(self.score_luma, bool)
+             and 0.0 <= self.score_luma <= 1.0 and self.score_colour + self.score_luma <= 1.0,
+             f"score_luma must be in [0, 1 - score_colour], got {self.score_luma!r}")
         need(self.gate_drop >= 0.0, f"gate_drop must be >= 0, got {self.gate_drop}")
         need(0.0 <= self.gate_threshold <= 1.0,
              f"gate_threshold must be in [0, 1], got {self.gate_threshold}")
@@ -484,11 +506,13 @@ VARIANTS: dict[str, Params] = {
     "rcwmil-plus": Params(
         variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
-        scale_negatives=2,
+        scale_negatives=2, score_colour=0.33, score_colour_model="first", score_luma=0.33,
         description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into "
         "the search (0.7), a constant-velocity search centre, and scale search by scaled Haar "
         "rectangles (1.03^-1, 1, 1.03^+1; classifier score plus a slow target likelihood, "
-        "penalised away from the current scale; boxes 1.03^+-2 off learnt as negatives).",
+        "penalised away from the current scale; boxes 1.03^+-2 off learnt as negatives); the "
+        "reported score also counts the box's colour and intensity contrast under the first "
+        "frame's histograms.",
     ),
 }
 

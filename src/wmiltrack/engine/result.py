@@ -22,6 +22,10 @@ class TrackResult:
         ``(x, y, w, h)`` of the target in pixel coordinates (top-left corner, width, height).
     score:
         Confidence in ``[0, 1]``; ``nan`` when the tracker gives none (some OpenCV trackers).
+        wmiltrack's trackers: the classifier's confidence (``engine.tracker.confidence``);
+        rcwmil-plus: its mean with the box's colour and intensity contrast under the first
+        frame's histograms (``Params.score_colour``, ``score_luma``). Higher is more
+        confident; 0.5 is where tracked and lost frames were equally likely.
     ok:
         ``False`` when the tracker considers the target lost (score below the variant's
         ``lost_threshold``, or an OpenCV tracker reporting failure).

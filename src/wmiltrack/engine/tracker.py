@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import _core
 from .classifier import GaussianPool
-from .colour import ColourModel, colour_contrast
+from .colour import ColourModel, colour_contrast, luma3
 from .features import (
     CHANNEL_IDS,
     BankArrays,
@@ -116,6 +116,12 @@ def confidence(raw: float, k: int, offset: float = CONFIDENCE_OFFSET) -> float:
     ``logistic(raw / k - offset)`` (``offset``: ``Params.confidence_offset``, by default
     :data:`CONFIDENCE_OFFSET`): 0.5 at the point where, on the benchmark sequences, tracked
     and lost frames were equally likely; 0 when no candidate was scored.
+
+    This is ``TrackResult.score`` of the six paper variants. With ``Params.score_colour`` or
+    ``Params.score_luma`` (rcwmil-plus) the reported score is a weighted mean of it and the
+    box's colour / intensity contrasts (each ``clip(0.5 + contrast, 0, 1)``), still in [0, 1]
+    with 0.5 as the tracked/lost boundary; the tracker's own decisions (motion, gating,
+    recovery) keep reading this confidence.
     """
     if not math.isfinite(raw):
         return 0.0
@@ -242,6 +248,15 @@ class Tracker:
         if p.colour_weight > 0 and ColourModel.usable(img):
             self._colour = ColourModel()
             self._colour.learn(img, b)
+        # The first frame's colour histograms, kept unchanged for the reported score.
+        self._first_colour: ColourModel | None = None
+        if self._colour is not None and p.score_colour > 0 and p.score_colour_model == "first":
+            self._first_colour = self._colour.copy()
+        # The first frame's intensity histograms (any frame), for the reported score.
+        self._first_luma: ColourModel | None = None
+        if p.score_luma > 0:
+            self._first_luma = ColourModel()
+            self._first_luma.learn(luma3(img), b)
         self._colour_table: tuple[np.ndarray, int, int] | None = None
         self._compute_integral(img, b, self._first.reach)
         self._learn(self._first)
@@ -278,9 +293,11 @@ class Tracker:
         Returns
         -------
         TrackResult
-            ``box`` (x, y, w, h), ``score`` (confidence in [0, 1]: see :func:`confidence`)
-            and ``ok`` (score >= the variant's ``lost_threshold``; False suggests the
-            target is lost or hidden).
+            ``box`` (x, y, w, h), ``score`` (confidence in [0, 1]: see :func:`confidence`;
+            rcwmil-plus also counts the box's contrast under the first frame's colour and
+            intensity histograms, ``Params.score_colour`` / ``score_luma``) and ``ok``
+            (score >= the variant's ``lost_threshold``; False suggests the target is lost or
+            hidden).
         """
         self._require_init()
         img = as_frame(frame)
@@ -342,8 +359,8 @@ class Tracker:
                 empty = np.zeros((0, 2), dtype=np.int32)
                 self._bags = (empty, empty)
             self._score = score
-            if p.score_colour > 0 and self._colour_table is not None:
-                self._score = self._colour_score(score)
+            if (p.score_colour > 0 and self._colour_table is not None) or p.score_luma > 0:
+                self._score = self._colour_score(score, img)
             if self._colour is not None:
                 self._colour.learn(img, self._box)
             self._follow(previous, tracked)
@@ -566,10 +583,40 @@ class Tracker:
         table, x0, y0 = self._colour_table
         return float(colour_contrast(table, x0, y0, np.array([box]))[0])
 
-    def _colour_score(self, conf: float) -> float:
-        """``(1 - w) conf + w clip(0.5 + contrast, 0, 1)`` of the box (``w``: ``score_colour``)."""
-        w = self._params.score_colour
-        return (1.0 - w) * conf + w * min(max(0.5 + self._contrast(self._box), 0.0), 1.0)
+    def _first_contrast(self, model: ColourModel, img: np.ndarray, box: IntBox,
+                        luma: bool = False) -> float:
+        """The contrast of ``box`` under one of the first frame's histograms (``luma``: the
+        intensity one, read on the luma of the box's neighbourhood)."""
+        if not luma:
+            return model.contrast(img, box)
+        x, y, w, h = box
+        m = int(round(0.25 * (w + h) / 2.0)) + 1  # the contrast's ring, and a margin
+        fw, fh = self._frame_wh
+        x0, y0 = max(0, x - m), max(0, y - m)
+        x1, y1 = min(fw, x + w + m), min(fh, y + h + m)
+        if x1 <= x0 or y1 <= y0:
+            return 0.0
+        return model.contrast(luma3(img[y0:y1, x0:x1]), (x - x0, y - y0, w, h))
+
+    def _colour_score(self, conf: float, img: np.ndarray) -> float:
+        """``(1 - w - v) conf + w clip(0.5 + colour contrast, 0, 1) + v clip(0.5 + luma
+        contrast, 0, 1)`` of the box (``w``: ``score_colour``, its contrast under the current or
+        the first frame's colours, ``score_colour_model``; ``v``: ``score_luma``, the first
+        frame's intensities). Without colour the colour term reads the luma contrast, or is
+        left out (``v = 0``: the classifier's confidence alone)."""
+        p = self._params
+        w, v = p.score_colour, p.score_luma
+        luma = 0.0
+        if self._first_luma is not None:
+            luma = min(max(0.5 + self._first_contrast(self._first_luma, img, self._box, True),
+                           0.0), 1.0)
+        if self._colour_table is None:  # no colour in this video
+            return (1.0 - w - v) * conf + (w + v) * luma if v > 0 else conf
+        if self._first_colour is not None:
+            contrast = self._first_contrast(self._first_colour, img, self._box)
+        else:
+            contrast = self._contrast(self._box)
+        return (1.0 - w - v) * conf + w * min(max(0.5 + contrast, 0.0), 1.0) + v * luma
 
     def _likelihood(self, index: int, box: IntBox) -> float:
         """Minus the mean log(1 + z^2) of all M features of ``box`` under the scale model."""
