@@ -137,7 +137,17 @@ class ColourModel:
         if min(fw, x + w + pad) <= max(0, x - pad) or min(fh, y + h + pad) <= max(0, y - pad):
             return 0.0
         table, x0, y0 = self.integral(frame, (x - pad, y - pad, x + w + pad, y + h + pad))
-        return float(colour_contrast(table, x0, y0, np.array([box]), ring)[0])
+        # colour_contrast's arithmetic for one box, on Python floats: the table covers the
+        # box's ring clipped to the frame, so the ring's outer box is the whole table.
+        th, tw = table.shape[0] - 1, table.shape[1] - 1
+        xa, xb = min(max(x - x0, 0), tw), min(max(x + w - x0, 0), tw)
+        ya, yb = min(max(y - y0, 0), th), min(max(y + h - y0, 0), th)
+        t = table.item
+        s_in = t(yb, xb) - t(ya, xb) - t(yb, xa) + t(ya, xa)
+        a_in = float((xb - xa) * (yb - ya))
+        s_out = t(th, tw) - t(0, tw) - t(th, 0) + t(0, 0)
+        a_out = float(tw * th)
+        return s_in / max(a_in, 1.0) - (s_out - s_in) / max(a_out - a_in, 1.0)
 
     @staticmethod
     def box_means(table: FloatArray, x0: int, y0: int, xs: npt.NDArray[np.integer],
