@@ -407,3 +407,48 @@ def test_score_colour_model_is_validated(value: object) -> None:
 def test_score_luma_is_validated(value: object) -> None:
     with pytest.raises(ValueError, match="score_luma"):  # 0.8: with score_colour 0.33, over 1
         wmiltrack.Params.for_variant("rcwmil-plus", score_luma=value)
+
+
+def test_scaled_bank_keeps_edge_features() -> None:
+    """On a gradient channel a rectangle's sum grows with the length of the edges it holds: a
+    feature over a step edge keeps its value at every scale when its weights are marked as edge
+    weights (sqrt of the area ratio), and would not with the area ratio."""
+    from wmiltrack import _core
+    from wmiltrack.engine.features import BankArrays, scale_bank
+
+    img = np.zeros((200, 200), np.uint8)
+    img[:, 100:] = 200  # one vertical step edge between columns 99 and 100
+    ii = _core.IntegralImage()
+    ii.compute_channels(img, (0, 0, 200, 200), [_core.CH_GRAD])
+    base = BankArrays(starts=np.array([0, 1], np.int32), rects=np.array([[0, 0, 30, 40]], np.int32),
+                      weights=np.array([1.0 / (30 * 40)]), subregion=np.array([-1], np.int32))
+
+    def value(b: BankArrays, w: int, h: int) -> float:
+        bank = _core.FeatureBank(b.starts, b.rects, b.weights)
+        x = np.array([100 - w // 2], np.int32)  # the box centred on the edge
+        return float(_core.project(ii, bank, x, np.array([50], np.int32))[0, 0])
+
+    ref = value(base, 30, 40)
+    assert ref > 0
+    edge = np.array([True])
+    for w, h in ((60, 80), (15, 20), (45, 60)):
+        np.testing.assert_allclose(value(scale_bank(base, 30, 40, w, h, edge), w, h), ref, rtol=1e-12)
+        assert not np.isclose(value(scale_bank(base, 30, 40, w, h), w, h), ref)
+
+
+def test_orientation_channels(demo) -> None:
+    """``orient0..3`` are valid channels; a tracker with them reads those planes and runs with scale."""
+    from wmiltrack import _core
+
+    frames, gt = demo
+    names = ("luma", "orient0", "orient1", "orient2", "orient3")
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, channels=names)
+    t.init(frames[0], gt[0])
+    for f in frames[1:6]:
+        t.update(f)
+    assert t._ii.channels == (_core.CH_LUMA, _core.CH_ORIENT0, _core.CH_ORIENT1, _core.CH_ORIENT2,
+                              _core.CH_ORIENT3)
+    assert t._edge_rects is not None and t._rect_planes is not None
+    np.testing.assert_array_equal(t._edge_rects, t._rect_planes > 0)
+    with pytest.raises(ValueError, match="gray channel"):
+        wmiltrack.Params(channels=("opp_rg",))

@@ -15,8 +15,12 @@ from .. import _core
 from .params import Params
 
 #: Channel names (``Params.channels``) and their ids in ``_core.IntegralImage.compute_channels``.
-CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "opp_rg": _core.CH_OPP_RG,
-               "opp_yb": _core.CH_OPP_YB}
+CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "orient0": _core.CH_ORIENT0,
+               "orient1": _core.CH_ORIENT1, "orient2": _core.CH_ORIENT2,
+               "orient3": _core.CH_ORIENT3, "opp_rg": _core.CH_OPP_RG, "opp_yb": _core.CH_OPP_YB}
+#: Gradient channels: their values sit on edges, so a rectangle's sum grows with the edges'
+#: length (see :func:`scale_bank`).
+EDGE_CHANNELS = frozenset({"grad", "orient0", "orient1", "orient2", "orient3"})
 #: Channels that need a colour (3- or 4-channel) frame.
 COLOUR_CHANNELS = frozenset({"opp_rg", "opp_yb"})
 
@@ -150,13 +154,22 @@ def make_bank(params: Params, w: int, h: int, rng: np.random.Generator) -> BankA
     return BankArrays(starts=starts, rects=rects, weights=weights, subregion=subregion)
 
 
-def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int) -> BankArrays:
+def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int,
+               edge: np.ndarray | None = None) -> BankArrays:
     """The bank drawn for a ``base_w x base_h`` box, stretched to a ``w x h`` box.
 
     Each rectangle's edges are scaled and rounded (sides at least 1 pixel, kept inside the
     box) and its weight is multiplied by ``old area / new area``: an area-normalised feature
     stays a signed sum of mean intensities, so the learnt Gaussians remain valid at every
     scale (and raw-sum features keep their expected value).
+
+    ``edge`` (one bool per rectangle) marks rectangles on gradient channels (``grad``,
+    ``orient0..3``). Their sums count edge pixels: when the target appears ``s`` times
+    larger, its edges are ``s`` times longer but no stronger (the gradient summed across
+    an edge is its contrast), so a rectangle's sum grows as ``s``, not ``s^2``. Their
+    weights are multiplied by ``sqrt(old area / new area)`` instead, which keeps the
+    feature's expected value at every scale (with the area ratio, the mean gradient of a
+    smaller box would be higher and the scale search would favour shrinking).
     """
     if (w, h) == (base_w, base_h):
         return base
@@ -171,5 +184,8 @@ def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int) -> Ba
     x0 = np.clip(x0, 0.0, w - rw)
     y0 = np.clip(y0, 0.0, h - rh)
     rects = np.stack([x0, y0, rw, rh], axis=1).astype(np.int32)
-    weights = base.weights * (r[:, 2] * r[:, 3]) / (rw * rh)
+    ratio = (r[:, 2] * r[:, 3]) / (rw * rh)
+    if edge is not None:
+        ratio = np.where(edge, np.sqrt(ratio), ratio)
+    weights = base.weights * ratio
     return BankArrays(starts=base.starts, rects=rects, weights=weights, subregion=base.subregion)

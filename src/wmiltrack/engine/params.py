@@ -141,8 +141,11 @@ class Params:
 
     channels : tuple of str
         Image channels the features are drawn on, each feature on one: any of ``"luma"``,
-        ``"grad"`` (gradient magnitude), ``"opp_rg"``, ``"opp_yb"`` (colour opponents; they
-        drop out for gray frames). Empty (the paper): luma only, one integral image.
+        ``"grad"`` (gradient magnitude), ``"orient0"`` .. ``"orient3"`` (the gradient
+        magnitude where the unsigned gradient angle is nearest 0, 45, 90, 135 degrees, else
+        0: integral channel features, a four-bin histogram of oriented gradients summed by
+        rectangles), ``"opp_rg"``, ``"opp_yb"`` (colour opponents; they drop out for gray
+        frames). Empty (the paper): luma only, one integral image.
     scale_steps : int
         Scale search: after the translation search, also try the box scaled by
         ``scale_factor ** j`` for ``j = -scale_steps..scale_steps`` (0: the box keeps its
@@ -379,12 +382,13 @@ class Params:
             v = getattr(self, name)
             need(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
                  f"{name} must be a finite number, got {v!r}")
-        known = ("luma", "grad", "opp_rg", "opp_yb")
+        known = ("luma", "grad", "orient0", "orient1", "orient2", "orient3", "opp_rg", "opp_yb")
         need(isinstance(self.channels, tuple) and all(c in known for c in self.channels)
              and len(set(self.channels)) == len(self.channels),
              f"channels must be a tuple of distinct names from {', '.join(known)}; got {self.channels!r}")
-        need(self.channels == () or any(c in ("luma", "grad") for c in self.channels),
-             "channels needs luma or grad (the colour channels drop out for gray frames)")
+        need(self.channels == () or any(c not in ("opp_rg", "opp_yb") for c in self.channels),
+             "channels needs a gray channel: luma, grad or orient0..3 (the colour channels drop "
+             "out for gray frames)")
         need(0 <= self.scale_steps <= 10, f"scale_steps must be in 0..10, got {self.scale_steps}")
         need(isinstance(self.scale_learning_rate, (int, float))
              and not isinstance(self.scale_learning_rate, bool)

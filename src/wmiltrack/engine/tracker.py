@@ -20,6 +20,7 @@ from .classifier import GaussianPool
 from .colour import ColourModel, colour_contrast, luma3
 from .features import (
     CHANNEL_IDS,
+    EDGE_CHANNELS,
     BankArrays,
     available_channels,
     check_box_size,
@@ -219,6 +220,7 @@ class Tracker:
         self._chan_names: tuple[str, ...] | None = None
         self._chan_ids: list[int] = []
         self._rect_planes: np.ndarray | None = None
+        self._edge_rects: np.ndarray | None = None
         if p.channels:
             names = available_channels(p.channels, img)
             chan_rng = np.random.default_rng([self._seed, 1])
@@ -226,6 +228,8 @@ class Tracker:
             self._chan_names = names
             self._chan_ids = [CHANNEL_IDS[c] for c in names]
             self._rect_planes = rect_planes(self._bank_arrays, self._feature_channel)
+            edge_plane = np.array([c in EDGE_CHANNELS for c in names], dtype=bool)
+            self._edge_rects = edge_plane[self._rect_planes]
         self._bank = self._make_core_bank(self._bank_arrays)
         # Scale state (rcwmil-plus): the box is the first box scaled by scale_factor ** index.
         self._base_wh = (b[2], b[3])
@@ -472,7 +476,8 @@ class Tracker:
         cached = self._banks.get(index)
         if cached is None:
             w, h = self._box_size(index)
-            arrays = scale_bank(self._bank_arrays, self._base_wh[0], self._base_wh[1], w, h)
+            arrays = scale_bank(self._bank_arrays, self._base_wh[0], self._base_wh[1], w, h,
+                                self._edge_rects)
             cached = (self._make_core_bank(arrays), arrays)
             self._banks[index] = cached
         return cached
