@@ -102,6 +102,22 @@ void bind_colour(py::module_& m) {
           py::arg("frame"), py::arg("region"),
           "Integral image (h + 1) x (w + 1), zero first row and column, of the likelihood of\n"
           "every pixel of region = (x, y, w, h) (inside the frame); the sums of cv2.integral.")
+      .def(
+          "likelihood_sums",
+          [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in,
+             std::tuple<int, int, int, int> inner) {
+            const ImageView view = image_view(frame);
+            require_colour(view, h.hist.bits());
+            const Rect region = region_of(view, region_in);
+            py::gil_scoped_release release;
+            std::lock_guard<std::mutex> guard(h.lock);
+            if (!h.hist.learnt()) throw py::value_error("call learn() before likelihood_sums()");
+            return h.hist.likelihood_sums(view, region, span_of(inner));
+          },
+          py::arg("frame"), py::arg("region"), py::arg("inner"),
+          "(inner sum, region sum) of the likelihood of the pixels of region = (x, y, w, h)\n"
+          "(inside the frame) and of its part inner = (row0, row1, col0, col1), relative to the\n"
+          "region and clipped to it.")
       .def_property_readonly("foreground", [](LockedHistograms& h) {
         std::lock_guard<std::mutex> guard(h.lock);
         return copy_of(h.hist.foreground());

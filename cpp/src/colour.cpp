@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <type_traits>
+#include <vector>
 
 namespace wmiltrack {
 
@@ -16,6 +18,29 @@ void check(const ImageView& image, const Rect& region, int bits) {
       static_cast<std::int64_t>(region.x) + region.w > image.cols ||
       static_cast<std::int64_t>(region.y) + region.h > image.rows) {
     throw std::invalid_argument("colour model: the region must lie inside the frame");
+  }
+}
+
+// The bins of n pixels of frame row y from column x (inside the frame), into out. Packed
+// BGR and BGRA rows (the usual numpy layouts) take a loop with constant strides.
+void row_bins(const ImageView& image, int y, int x, int n, int bits, std::uint32_t* out) {
+  const std::ptrdiff_t cs = image.channel_stride, step = image.col_stride;
+  const std::uint8_t* p = image.data + static_cast<std::ptrdiff_t>(y) * image.row_stride +
+                          static_cast<std::ptrdiff_t>(x) * step;
+  const int sh = 8 - bits;
+  const auto packed = [&](auto kStep) {
+    for (int c = 0; c < n; ++c, p += kStep.value) {
+      out[c] = (static_cast<std::uint32_t>(p[0] >> sh) << (2 * bits)) |
+               (static_cast<std::uint32_t>(p[1] >> sh) << bits) |
+               static_cast<std::uint32_t>(p[2] >> sh);
+    }
+  };
+  if (cs == 1 && step == 3) {
+    packed(std::integral_constant<int, 3>{});
+  } else if (cs == 1 && step == 4) {
+    packed(std::integral_constant<int, 4>{});
+  } else {
+    for (int c = 0; c < n; ++c, p += step) out[c] = colour_bin(p[0], p[cs], p[2 * cs], bits);
   }
 }
 
@@ -37,27 +62,25 @@ ColourHistograms::ColourHistograms(int bits, double rate) : bits_(bits), rate_(r
 
 void ColourHistograms::count(const ImageView& image, const Rect& region, const Span& inside,
                              const Span& core) {
-  const std::ptrdiff_t cs = image.channel_stride, step = image.col_stride;
-  const auto add = [&](std::vector<double>& counts, std::uint32_t bin) {
-    if (fg_count_[bin] == 0.0 && bg_count_[bin] == 0.0) counted_.push_back(bin);
-    counts[bin] += 1.0;
-  };
-  // Columns [c0, c1) of row r, clipped to the region.
-  const auto run = [&](int r, int c0, int c1, std::vector<double>& counts) {
+  std::vector<std::uint32_t> bins(static_cast<std::size_t>(region.w));
+  // Columns [c0, c1) of the row's bins, clipped to the region, into counts.
+  const auto run = [&](int c0, int c1, std::vector<double>& counts) {
     c0 = std::max(c0, 0);
     c1 = std::min(c1, region.w);
-    const std::uint8_t* p = image.data +
-                            static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
-                            static_cast<std::ptrdiff_t>(region.x + c0) * step;
-    for (int c = c0; c < c1; ++c, p += step) add(counts, colour_bin(p[0], p[cs], p[2 * cs], bits_));
+    for (int c = c0; c < c1; ++c) {
+      const std::uint32_t bin = bins[static_cast<std::size_t>(c)];
+      if (fg_count_[bin] == 0.0 && bg_count_[bin] == 0.0) counted_.push_back(bin);
+      counts[bin] += 1.0;
+    }
   };
   for (int r = 0; r < region.h; ++r) {
-    if (r >= core.r0 && r < core.r1) run(r, core.c0, core.c1, fg_count_);
+    row_bins(image, region.y + r, region.x, region.w, bits_, bins.data());
+    if (r >= core.r0 && r < core.r1) run(core.c0, core.c1, fg_count_);
     if (r >= inside.r0 && r < inside.r1 && inside.c0 < inside.c1) {
-      run(r, 0, inside.c0, bg_count_);  // left and right of the inside span
-      run(r, inside.c1, region.w, bg_count_);
+      run(0, inside.c0, bg_count_);  // left and right of the inside span
+      run(inside.c1, region.w, bg_count_);
     } else {
-      run(r, 0, region.w, bg_count_);
+      run(0, region.w, bg_count_);
     }
   }
 }
@@ -101,41 +124,35 @@ void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& r
   check(image, region, bits_);
   const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(region.w) + 1;
   std::fill(table, table + stride, 0.0);
-  const std::ptrdiff_t cs = image.channel_stride, step = image.col_stride;
   const double* lik = lik_.data();
   // First each row's running sums (rows in groups of four, whose independent sums overlap in
   // the pipeline), then each row plus the row above: table[r + 1][c + 1] = table[r][c + 1] +
   // s, the same additions as one pass would make.
-  const auto pixels = [&](int r) {
-    return image.data + static_cast<std::ptrdiff_t>(region.y + r) * image.row_stride +
-           static_cast<std::ptrdiff_t>(region.x) * step;
-  };
-  const auto value = [&](const std::uint8_t* p) {
-    return lik[colour_bin(p[0], p[cs], p[2 * cs], bits_)];
-  };
+  const std::size_t w = static_cast<std::size_t>(region.w);
+  std::vector<std::uint32_t> bins(4 * w);
   int r = 0;
   for (; r + 4 <= region.h; r += 4) {
-    const std::uint8_t* p[4] = {pixels(r), pixels(r + 1), pixels(r + 2), pixels(r + 3)};
     double* row[4];
     double s[4] = {0.0, 0.0, 0.0, 0.0};
     for (int i = 0; i < 4; ++i) {
+      row_bins(image, region.y + r + i, region.x, region.w, bits_, bins.data() + i * w);
       row[i] = table + (r + i + 1) * stride;
       row[i][0] = 0.0;
     }
-    for (std::ptrdiff_t c = 0; c < region.w; ++c) {
+    for (std::size_t c = 0; c < w; ++c) {
       for (int i = 0; i < 4; ++i) {
-        s[i] += value(p[i] + c * step);
+        s[i] += lik[bins[i * w + c]];
         row[i][c + 1] = s[i];
       }
     }
   }
   for (; r < region.h; ++r) {
-    const std::uint8_t* p = pixels(r);
+    row_bins(image, region.y + r, region.x, region.w, bits_, bins.data());
     double* row = table + (r + 1) * stride;
     row[0] = 0.0;
     double s = 0.0;
-    for (std::ptrdiff_t c = 0; c < region.w; ++c) {
-      s += value(p + c * step);
+    for (std::size_t c = 0; c < w; ++c) {
+      s += lik[bins[c]];
       row[c + 1] = s;
     }
   }
@@ -144,6 +161,36 @@ void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& r
     double* row = table + (r + 1) * stride;
     for (std::ptrdiff_t c = 1; c < stride; ++c) row[c] = above[c] + row[c];
   }
+}
+
+std::pair<double, double> ColourHistograms::likelihood_sums(const ImageView& image,
+                                                           const Rect& region,
+                                                           const Span& inner) const {
+  if (!learnt_) throw std::logic_error("colour model: learn() before likelihood_sums()");
+  check(image, region, bits_);
+  const double* lik = lik_.data();
+  const int c0 = std::max(inner.c0, 0), c1 = std::min(inner.c1, region.w);
+  std::vector<std::uint32_t> bins(static_cast<std::size_t>(region.w));
+  double inside = 0.0, outside = 0.0;
+  const auto sum = [&](int a, int b) {  // four running sums, for the pipeline
+    double s[4] = {0.0, 0.0, 0.0, 0.0};
+    int c = a;
+    for (; c + 4 <= b; c += 4) {
+      for (int i = 0; i < 4; ++i) s[i] += lik[bins[static_cast<std::size_t>(c + i)]];
+    }
+    for (; c < b; ++c) s[0] += lik[bins[static_cast<std::size_t>(c)]];
+    return (s[0] + s[1]) + (s[2] + s[3]);
+  };
+  for (int r = 0; r < region.h; ++r) {
+    row_bins(image, region.y + r, region.x, region.w, bits_, bins.data());
+    if (r >= inner.r0 && r < inner.r1 && c0 < c1) {
+      outside += sum(0, c0) + sum(c1, region.w);
+      inside += sum(c0, c1);
+    } else {
+      outside += sum(0, region.w);
+    }
+  }
+  return {inside, inside + outside};
 }
 
 }  // namespace wmiltrack

@@ -142,6 +142,9 @@ class ColourHistograms:
     def likelihood_integral(self, frame: npt.NDArray[np.uint8],
                             region: tuple[int, int, int, int]) -> _F64:
         """(h + 1) x (w + 1) integral image of the per-pixel likelihood over region."""
+    def likelihood_sums(self, frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int],
+                        inner: tuple[int, int, int, int]) -> tuple[float, float]:
+        """(inner sum, region sum) of the per-pixel likelihood; inner relative to region."""
     @property
     def foreground(self) -> _F64: ...
     @property

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "wmiltrack/integral.hpp"
@@ -55,6 +56,12 @@ class ColourHistograms {
   // row's running sum up to column c (the order of cv::integral). Needs learn() first
   // (std::logic_error); the same errors as learn() otherwise.
   void likelihood_integral(const ImageView& image, const Rect& region, double* table) const;
+
+  // The likelihood summed over every pixel of `region` (inside the frame) and over those of
+  // its part `inner` (rows and columns relative to the region, clipped to it): {inner,
+  // region}. One pass, no table: what a contrast between a box and its ring needs.
+  std::pair<double, double> likelihood_sums(const ImageView& image, const Rect& region,
+                                            const Span& inner) const;
 
   const std::vector<double>& foreground() const { return fg_; }
   const std::vector<double>& background() const { return bg_; }

@@ -127,8 +127,8 @@ class ColourModel:
         return table, x0, y0
 
     def contrast(self, frame: np.ndarray, box: tuple[int, int, int, int], ring: float = 0.25) -> float:
-        """:func:`colour_contrast` of one box (inside and ring clipped to the frame), from an
-        integral image of the box and its ring alone."""
+        """:func:`colour_contrast` of one box (inside and ring clipped to the frame), from the
+        likelihood sums over the box and its ring alone (one pass, no integral image)."""
         if not self._hist.learnt:
             raise ValueError("call learn() before contrast()")
         x, y, w, h = box
@@ -136,17 +136,14 @@ class ColourModel:
         fh, fw = frame.shape[:2]
         if min(fw, x + w + pad) <= max(0, x - pad) or min(fh, y + h + pad) <= max(0, y - pad):
             return 0.0
-        table, x0, y0 = self.integral(frame, (x - pad, y - pad, x + w + pad, y + h + pad))
-        # colour_contrast's arithmetic for one box, on Python floats: the table covers the
-        # box's ring clipped to the frame, so the ring's outer box is the whole table.
-        th, tw = table.shape[0] - 1, table.shape[1] - 1
-        xa, xb = min(max(x - x0, 0), tw), min(max(x + w - x0, 0), tw)
-        ya, yb = min(max(y - y0, 0), th), min(max(y + h - y0, 0), th)
-        t = table.item
-        s_in = t(yb, xb) - t(ya, xb) - t(yb, xa) + t(ya, xa)
+        # The box and its ring clipped to the frame; the box's part of it.
+        x0, y0 = max(0, x - pad), max(0, y - pad)
+        x1, y1 = min(fw, x + w + pad), min(fh, y + h + pad)
+        xa, xb = min(max(x - x0, 0), x1 - x0), min(max(x + w - x0, 0), x1 - x0)
+        ya, yb = min(max(y - y0, 0), y1 - y0), min(max(y + h - y0, 0), y1 - y0)
+        s_in, s_out = self._hist.likelihood_sums(frame, (x0, y0, x1 - x0, y1 - y0), (ya, yb, xa, xb))
         a_in = float((xb - xa) * (yb - ya))
-        s_out = t(th, tw) - t(0, tw) - t(th, 0) + t(0, 0)
-        a_out = float(tw * th)
+        a_out = float((x1 - x0) * (y1 - y0))
         return s_in / max(a_in, 1.0) - (s_out - s_in) / max(a_out - a_in, 1.0)
 
     @staticmethod

@@ -338,8 +338,12 @@ class Tracker:
         try:
             cue = None
             if self._colour is not None:
+                # The search's candidates lie within search_reach of the origin; the contrast
+                # of the current colour model (score_colour_model="current") reads a ring
+                # around the box from the same table, so that one keeps the whole margin.
                 x, y, w, h = origin
-                m = margin + 1
+                current = p.score_colour > 0 and p.score_colour_model == "current"
+                m = (margin if current else p.search_reach) + 1
                 self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
                 cue = (*self._colour_table, p.colour_weight, p.confidence_offset)
             self._box = origin
