@@ -144,6 +144,10 @@ def test_core_histograms_match_numpy_bit_for_bit(bits: int, channels: int) -> No
         x, y, w, h = 2, 1, 47, 33
         want = cv2.integral(ref.lik[_bins_numpy(frame[y:y + h, x:x + w], bits)], sdepth=cv2.CV_64F)
         np.testing.assert_array_equal(core_h.likelihood_integral(frame, (x, y, w, h)), want)
+        p = ref.lik[_bins_numpy(frame[y:y + h, x:x + w], bits)]
+        inner, whole = core_h.likelihood_sums(frame, (x, y, w, h), (3, 20, -4, 30))  # clipped
+        assert inner == pytest.approx(p[3:20, 0:30].sum(), rel=1e-12)
+        assert whole == pytest.approx(p.sum(), rel=1e-12)
 
 
 def test_core_histograms_refuse_bad_input() -> None:
@@ -153,6 +157,8 @@ def test_core_histograms_refuse_bad_input() -> None:
     h = _core.ColourHistograms(5, 0.04)
     with pytest.raises(ValueError, match="learn"):
         h.likelihood_integral(frame, (0, 0, 10, 10))
+    with pytest.raises(ValueError, match="learn"):
+        h.likelihood_sums(frame, (0, 0, 10, 10), (2, 5, 2, 5))
     with pytest.raises(ValueError):
         h.learn(frame[..., 0], (0, 0, 10, 10), (0, 5, 0, 5), (1, 4, 1, 4))  # gray
     with pytest.raises(ValueError):
