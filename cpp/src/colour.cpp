@@ -55,8 +55,9 @@ ColourHistograms::ColourHistograms(int bits, double rate) : bits_(bits), rate_(r
   fg_.assign(n, 0.0);
   bg_.assign(n, 0.0);
   lik_.assign(n, 0.5);
-  fg_count_.assign(n, 0.0);
-  bg_count_.assign(n, 0.0);
+  fg_count_.assign(n, 0);
+  bg_count_.assign(n, 0);
+  is_counted_.assign(n, 0);
   is_seen_.assign(n, 0);
 }
 
@@ -64,13 +65,16 @@ void ColourHistograms::count(const ImageView& image, const Rect& region, const S
                              const Span& core) {
   std::vector<std::uint32_t> bins(static_cast<std::size_t>(region.w));
   // Columns [c0, c1) of the row's bins, clipped to the region, into counts.
-  const auto run = [&](int c0, int c1, std::vector<double>& counts) {
+  const auto run = [&](int c0, int c1, std::vector<std::uint32_t>& counts) {
     c0 = std::max(c0, 0);
     c1 = std::min(c1, region.w);
     for (int c = c0; c < c1; ++c) {
       const std::uint32_t bin = bins[static_cast<std::size_t>(c)];
-      if (fg_count_[bin] == 0.0 && bg_count_[bin] == 0.0) counted_.push_back(bin);
-      counts[bin] += 1.0;
+      if (!is_counted_[bin]) {
+        is_counted_[bin] = 1;
+        counted_.push_back(bin);
+      }
+      ++counts[bin];
     }
   };
   for (int r = 0; r < region.h; ++r) {
@@ -87,7 +91,8 @@ void ColourHistograms::count(const ImageView& image, const Rect& region, const S
 
 void ColourHistograms::blend(std::uint32_t i, double fd, double bd, bool first) {
   const double keep = 1.0 - rate_;
-  const double f = fg_count_[i] / fd, b = bg_count_[i] / bd;
+  const double f = static_cast<double>(fg_count_[i]) / fd;
+  const double b = static_cast<double>(bg_count_[i]) / bd;
   fg_[i] = first ? f : keep * fg_[i] + rate_ * f;
   bg_[i] = first ? b : keep * bg_[i] + rate_ * b;
   const double total = fg_[i] + bg_[i];
@@ -97,12 +102,15 @@ void ColourHistograms::blend(std::uint32_t i, double fd, double bd, bool first) 
 void ColourHistograms::learn(const ImageView& image, const Rect& region, const Span& inside,
                              const Span& core) {
   check(image, region, bits_);
+  if (static_cast<std::uint64_t>(region.w) * static_cast<std::uint64_t>(region.h) >= (std::uint64_t{1} << 32)) {
+    throw std::invalid_argument("colour model: a region of 2^32 pixels or more");  // uint32 counts
+  }
   count(image, region, inside, core);
   // Sums of whole counts (< 2^53): exact in any order.
   double fg_sum = 0.0, bg_sum = 0.0;
   for (const std::uint32_t bin : counted_) {
-    fg_sum += fg_count_[bin];
-    bg_sum += bg_count_[bin];
+    fg_sum += static_cast<double>(fg_count_[bin]);
+    bg_sum += static_cast<double>(bg_count_[bin]);
   }
   const double fd = std::max(fg_sum, 1.0), bd = std::max(bg_sum, 1.0);
   for (const std::uint32_t bin : counted_) {
@@ -113,7 +121,10 @@ void ColourHistograms::learn(const ImageView& image, const Rect& region, const S
   }
   const bool first = !learnt_;
   for (const std::uint32_t bin : seen_) blend(bin, fd, bd, first);
-  for (const std::uint32_t bin : counted_) fg_count_[bin] = bg_count_[bin] = 0.0;
+  for (const std::uint32_t bin : counted_) {
+    fg_count_[bin] = bg_count_[bin] = 0;
+    is_counted_[bin] = 0;
+  }
   counted_.clear();
   learnt_ = true;
 }

@@ -75,8 +75,9 @@ class ColourHistograms {
   double rate_;
   bool learnt_ = false;
   std::vector<double> fg_, bg_, lik_;       // the model
-  std::vector<double> fg_count_, bg_count_;  // this frame's counts; zero between frames
-  std::vector<std::uint32_t> counted_;       // bins with a count this frame
+  std::vector<std::uint32_t> fg_count_, bg_count_;  // this frame's counts; zero between frames
+  std::vector<std::uint8_t> is_counted_;             // 1 for the bins of counted_
+  std::vector<std::uint32_t> counted_;               // bins with a count this frame
   std::vector<std::uint32_t> seen_;          // bins ever counted
   std::vector<std::uint8_t> is_seen_;
 };
