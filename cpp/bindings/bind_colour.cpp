@@ -1,6 +1,7 @@
 #include <memory>
 #include <mutex>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "common.hpp"
@@ -38,6 +39,14 @@ py::array_t<double> copy_of(const std::vector<double>& v) {
   return out;
 }
 
+// A colour frame for these histograms and a region inside it, checked.
+std::pair<ImageView, Rect> colour_region(const LockedHistograms& h, const py::array& frame,
+                                         std::tuple<int, int, int, int> region) {
+  const ImageView view = image_view(frame);
+  require_colour(view, h.hist.bits());
+  return {view, region_of(view, region)};
+}
+
 Span span_of(std::tuple<int, int, int, int> t) {
   const auto [r0, r1, c0, c1] = t;
   return Span{r0, r1, c0, c1};
@@ -71,9 +80,7 @@ void bind_colour(py::module_& m) {
           "learn",
           [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in,
              std::tuple<int, int, int, int> inside, std::tuple<int, int, int, int> core) {
-            const ImageView view = image_view(frame);
-            require_colour(view, h.hist.bits());
-            const Rect region = region_of(view, region_in);
+            const auto [view, region] = colour_region(h, frame, region_in);
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> guard(h.lock);
             h.hist.learn(view, region, span_of(inside), span_of(core));
@@ -86,9 +93,7 @@ void bind_colour(py::module_& m) {
       .def(
           "likelihood_integral",
           [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in) {
-            const ImageView view = image_view(frame);
-            require_colour(view, h.hist.bits());
-            const Rect region = region_of(view, region_in);
+            const auto [view, region] = colour_region(h, frame, region_in);
             CArray<double> out({region.h + 1, region.w + 1});
             double* o = out.mutable_data();
             {
@@ -106,9 +111,7 @@ void bind_colour(py::module_& m) {
           "likelihood_sums",
           [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in,
              std::tuple<int, int, int, int> inner) {
-            const ImageView view = image_view(frame);
-            require_colour(view, h.hist.bits());
-            const Rect region = region_of(view, region_in);
+            const auto [view, region] = colour_region(h, frame, region_in);
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> guard(h.lock);
             if (!h.hist.learnt()) throw py::value_error("call learn() before likelihood_sums()");
