@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import _core
 from .classifier import GaussianPool
-from .colour import ColourModel, colour_contrast, luma3
+from .colour import ColourModel, luma3
 from .features import (
     CHANNEL_IDS,
     EDGE_CHANNELS,
@@ -34,9 +34,6 @@ from .params import CONFIDENCE_OFFSET, Params
 from .result import TrackResult
 from .sampling import BagSampler
 from .selection import milboost_select
-
-Weak = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-"""mu1, sigma1, mu0, sigma0 of the selected features."""
 
 
 class _Search(tuple):  # type: ignore[type-arg]
@@ -261,7 +258,6 @@ class Tracker:
         if p.score_luma > 0:
             self._first_luma = ColourModel()
             self._first_luma.learn(luma3(img), b)
-        self._colour_table: tuple[np.ndarray, int, int] | None = None
         self._compute_integral(img, b, self._first.reach)
         self._learn(self._first)
         self._search_origins: list[IntBox] = []
@@ -337,15 +333,11 @@ class Tracker:
             self._compute_integral(img, origin, margin)
         try:
             cue = None
-            if self._colour is not None:
-                # The search's candidates lie within search_reach of the origin; the contrast
-                # of the current colour model (score_colour_model="current") reads a ring
-                # around the box from the same table, so that one keeps the whole margin.
+            if self._colour is not None:  # its table covers the search's candidates
                 x, y, w, h = origin
-                current = p.score_colour > 0 and p.score_colour_model == "current"
-                m = (margin if current else p.search_reach) + 1
-                self._colour_table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
-                cue = (*self._colour_table, p.colour_weight, p.confidence_offset)
+                m = p.search_reach + 1
+                table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
+                cue = (*table, p.colour_weight, p.confidence_offset)
             self._box = origin
             stages = self._stages(coarse)
             pool = self._pool
@@ -367,7 +359,7 @@ class Tracker:
                 empty = np.zeros((0, 2), dtype=np.int32)
                 self._bags = (empty, empty)
             self._score = score
-            if (p.score_colour > 0 and self._colour_table is not None) or p.score_luma > 0:
+            if (p.score_colour > 0 and self._colour is not None) or p.score_luma > 0:
                 self._score = self._colour_score(score, img)
             if self._colour is not None:
                 self._colour.learn(img, self._box)
@@ -444,13 +436,15 @@ class Tracker:
         else:
             self._ii.compute(img, roi)
 
-    def _score_grid(self, index: int, sel: np.ndarray, weak: Weak, box: IntBox,
-                    radius: int, step: int) -> tuple[int, int, float, int]:
-        """Best offset, its raw score and the candidate count of a grid around ``box``."""
-        guard = self._params.guard
-        dx, dy, score, n = _core.score_grid(self._ii, self._bank_at(index)[0], sel, *weak, guard,
-                                            box, radius, step, self._frame_wh)
-        return int(dx), int(dy), float(score), int(n)
+    def _grid(self, index: int, box: IntBox, radius: int) -> tuple[int, int, float, int]:
+        """Best offset, its raw score and the candidate count of the step-1 grid around
+        ``box`` at scale ``index`` (the translation search's core call, one stage)."""
+        pool = self._pool
+        ((dx, dy, score, n),) = _core.search(self._ii, self._bank_at(index)[0], self._selected,
+                                              pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
+                                              self._params.guard, box, [(radius, 1)],
+                                              self._frame_wh)
+        return dx, dy, score, n
 
     def _project(self, index: int, corners: np.ndarray) -> np.ndarray:
         """Feature values ``(M, n)`` of the boxes at scale ``index`` with these top-left corners."""
@@ -581,23 +575,11 @@ class Tracker:
         if p.scale_model == "likelihood":
             self._scale_by_likelihood()
             return raw
-        sel = self._selected
-        pool = self._pool
-        weak: Weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
-        return self._scale_by_ratio(raw, sel, weak)
+        return self._scale_by_ratio(raw)
 
-    def _contrast(self, box: IntBox) -> float:
-        """The colour contrast of ``box`` (:func:`~wmiltrack.engine.colour.colour_contrast`)."""
-        assert self._colour_table is not None
-        table, x0, y0 = self._colour_table
-        return float(colour_contrast(table, x0, y0, np.array([box]))[0])
-
-    def _first_contrast(self, model: ColourModel, img: np.ndarray, box: IntBox,
-                        luma: bool = False) -> float:
-        """The contrast of ``box`` under one of the first frame's histograms (``luma``: the
-        intensity one, read on the luma of the box's neighbourhood)."""
-        if not luma:
-            return model.contrast(img, box)
+    def _luma_contrast(self, model: ColourModel, img: np.ndarray, box: IntBox) -> float:
+        """The contrast of ``box`` under the first frame's intensity histograms, read on the
+        luma of the box's neighbourhood."""
         x, y, w, h = box
         m = int(round(0.25 * (w + h) / 2.0)) + 1  # the contrast's ring, and a margin
         fw, fh = self._frame_wh
@@ -617,14 +599,11 @@ class Tracker:
         w, v = p.score_colour, p.score_luma
         luma = 0.0
         if self._first_luma is not None:
-            luma = min(max(0.5 + self._first_contrast(self._first_luma, img, self._box, True),
-                           0.0), 1.0)
-        if self._colour_table is None:  # no colour in this video
+            luma = min(max(0.5 + self._luma_contrast(self._first_luma, img, self._box), 0.0), 1.0)
+        if self._colour is None:  # no colour in this video
             return (1.0 - w - v) * conf + (w + v) * luma if v > 0 else conf
-        if self._first_colour is not None:
-            contrast = self._first_contrast(self._first_colour, img, self._box)
-        else:
-            contrast = self._contrast(self._box)
+        # Before this frame's learning: the current model is the one the search used.
+        contrast = (self._first_colour or self._colour).contrast(img, self._box)
         return (1.0 - w - v) * conf + w * min(max(0.5 + contrast, 0.0), 1.0) + v * luma
 
     def _likelihood(self, index: int, box: IntBox) -> float:
@@ -634,10 +613,10 @@ class Tracker:
         return _core.template_fit(self._ii, self._bank_at(index)[0], box[0], box[1], pool.mu1,
                                   pool.sigma1)
 
-    def _scale_by_ratio(self, best: float, sel: np.ndarray, weak: Weak) -> float:
+    def _scale_by_ratio(self, best: float) -> float:
         """Try the other scales with the strong classifier; returns the chosen raw score."""
         p = self._params
-        k = max(len(sel), 1)
+        k = max(len(self._selected), 1)
         mix = p.scale_mix if p.scale_model == "both" else 0.0
         best_value = best / k
         if mix:
@@ -650,7 +629,7 @@ class Tracker:
             w, h = self._box_size(index)
             candidate = self._centred(self._box, w, h)
             self._scale_boxes.append(candidate)
-            dx, dy, score, n = self._score_grid(index, sel, weak, candidate, p.scale_radius, 1)
+            dx, dy, score, n = self._grid(index, candidate, p.scale_radius)
             if n == 0:
                 continue
             moved = (candidate[0] + dx, candidate[1] + dy, w, h)
