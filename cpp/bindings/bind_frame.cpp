@@ -268,6 +268,20 @@ void require_threads(int threads) {
   require(threads >= 1, "threads must be >= 1, got " + std::to_string(threads));
 }
 
+// Runs every job on up to `threads` threads with the GIL released once; their results, in
+// order (the first error is raised after all ran).
+template <class Job, class Result>
+py::list run_all(std::vector<Job>& jobs, int threads, Result result) {
+  {
+    py::gil_scoped_release release;
+    parallel_for(static_cast<int>(jobs.size()), threads,
+                 [&jobs](int i) { jobs[static_cast<std::size_t>(i)].run(); });
+  }
+  py::list out;
+  for (const Job& job : jobs) out.append(result(job));
+  return out;
+}
+
 }  // namespace
 
 void bind_frame(py::module_& m) {
@@ -325,22 +339,15 @@ void bind_frame(py::module_& m) {
                         std::to_string(j) + " also uses");
           }
         }
-        {
-          py::gil_scoped_release release;
-          parallel_for(static_cast<int>(jobs.size()), threads,
-                       [&jobs](int i) { jobs[static_cast<std::size_t>(i)].run(); });
-        }
-        py::list out;
-        for (const SearchJob& job : jobs) out.append(search_result(job));
-        return out;
+        return run_all(jobs, threads, search_result);
       },
       py::arg("jobs"), py::arg("threads"),
       "search() for several targets in one call, on up to `threads` threads with the GIL\n"
       "released once: each job is the tuple of search()'s arguments in order (ii, bank,\n"
       "selected, mu1, sigma1, mu0, sigma0, guard, box, stages, frame_size, frame, roi,\n"
-      "colour). A job\n"
-      "that computes its integral image (frame not None) needs one no other job uses\n"
-      "(ValueError). Returns the results in order; the first error is raised after all ran.");
+      "colour). A job that computes its integral image (frame not None) needs one no other\n"
+      "job uses (ValueError). Returns the results in order; the first error is raised after\n"
+      "all ran.");
 
   m.def(
       "learn",
@@ -391,22 +398,14 @@ void bind_frame(py::module_& m) {
               std::get<14>(a), std::get<15>(a), std::get<16>(a), std::get<17>(a),
               std::get<18>(a), std::get<19>(a), std::get<20>(a), std::get<21>(a)));
         }
-        {
-          py::gil_scoped_release release;
-          parallel_for(static_cast<int>(jobs.size()), threads,
-                       [&jobs](int i) { jobs[static_cast<std::size_t>(i)].run(); });
-        }
-        py::list out;
-        for (const LearnJob& job : jobs) out.append(learn_result(job));
-        return out;
+        return run_all(jobs, threads, learn_result);
       },
       py::arg("jobs"), py::arg("threads"),
       "learn() for several targets in one call, on up to `threads` threads with the GIL\n"
       "released once: each job is the tuple of learn()'s arguments in order (ii, bank, xs, ys,\n"
       "n_pos, mu1, sigma1, mu0, sigma0, lam, first_pos, first_neg, direct_first, mil,\n"
       "sigma_floor, guard, select, w_pos, k, code_gradient, extra_neg, second). Returns the\n"
-      "results in order; the\n"
-      "first error is raised after all jobs ran.");
+      "results in order; the first error is raised after all jobs ran.");
 }
 
 }  // namespace wmiltrack::bindings
