@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from wmiltrack.engine.colour import ColourModel, colour_contrast, is_colour, luma3
+from wmiltrack.engine.colour import ColourModel, colour_contrast, is_colour
 
 
 def scene(rng: np.random.Generator) -> np.ndarray:
@@ -82,6 +82,13 @@ def test_errors() -> None:
         ColourModel().integral(np.zeros((4, 4, 3), np.uint8), (0, 0, 4, 4))
 
 
+def _sampled(region: tuple[int, int, int, int], step: int) -> np.ndarray:
+    """The region's pixels whose frame row and column are multiples of step."""
+    x, y, w, h = region
+    return (((np.arange(y, y + h) % step) == 0)[:, None]
+            & ((np.arange(x, x + w) % step) == 0)[None, :])
+
+
 def _bins_numpy(patch: np.ndarray, bits: int) -> np.ndarray:
     s = 8 - bits
     b, g, r = ((patch[..., c] >> s).astype(np.int64) for c in range(3))
@@ -91,9 +98,9 @@ def _bins_numpy(patch: np.ndarray, bits: int) -> np.ndarray:
 class _NumpyHistograms:
     """The colour model's update over every bin, in numpy: what the core must equal bit for bit."""
 
-    def __init__(self, bits: int, rate: float) -> None:
+    def __init__(self, bits: int, rate: float, step: int = 1) -> None:
         n = 1 << (3 * bits)
-        self.bits, self.rate = bits, rate
+        self.bits, self.rate, self.step = bits, rate, step
         self.fg, self.bg, self.lik = np.zeros(n), np.zeros(n), np.full(n, 0.5)
         self.first = True
 
@@ -105,9 +112,10 @@ class _NumpyHistograms:
         m_in[inside[0]:inside[1], inside[2]:inside[3]] = True
         m_core = np.zeros(idx.shape, bool)
         m_core[core[0]:core[1], core[2]:core[3]] = True
+        sampled = _sampled(region, self.step)
         n = self.fg.size
-        fc = np.bincount(idx[m_core], minlength=n).astype(float)
-        bc = np.bincount(idx[~m_in], minlength=n).astype(float)
+        fc = np.bincount(idx[m_core & sampled], minlength=n).astype(float)
+        bc = np.bincount(idx[~m_in & sampled], minlength=n).astype(float)
         f, b = fc / max(fc.sum(), 1.0), bc / max(bc.sum(), 1.0)
         keep = 1.0 - self.rate
         self.fg = f if self.first else keep * self.fg + self.rate * f
@@ -145,9 +153,45 @@ def test_core_histograms_match_numpy_bit_for_bit(bits: int, channels: int) -> No
         want = cv2.integral(ref.lik[_bins_numpy(frame[y:y + h, x:x + w], bits)], sdepth=cv2.CV_64F)
         np.testing.assert_array_equal(core_h.likelihood_integral(frame, (x, y, w, h)), want)
         p = ref.lik[_bins_numpy(frame[y:y + h, x:x + w], bits)]
-        inner, whole = core_h.likelihood_sums(frame, (x, y, w, h), (3, 20, -4, 30))  # clipped
+        inner, whole, n_inner, n_whole = core_h.likelihood_sums(frame, (x, y, w, h),
+                                                                (3, 20, -4, 30))  # clipped
         assert inner == pytest.approx(p[3:20, 0:30].sum(), rel=1e-12)
         assert whole == pytest.approx(p.sum(), rel=1e-12)
+        assert (n_inner, n_whole) == (17 * 30, w * h)
+
+
+@pytest.mark.parametrize("step", [2, 3])
+def test_core_histograms_step_reads_the_frame_grid(step: int) -> None:
+    """With step > 1, learning and the likelihood sums see exactly the pixels whose frame row
+    and column are multiples of step (numpy over those pixels); the integral reads all."""
+    import cv2
+
+    from wmiltrack import _core
+
+    rng = np.random.default_rng(step)
+    frames = [rng.integers(0, 256, (41, 57, 3), dtype=np.uint8) for _ in range(3)]
+    core_h = _core.ColourHistograms(4, 0.3)
+    ref = _NumpyHistograms(4, 0.3, step)
+    for frame, region in zip(frames, [(5, 3, 41, 30), (0, 0, 57, 41), (7, 2, 33, 37)]):
+        inside, core = (4, 20, 6, 30), (6, 18, 9, 27)
+        core_h.learn(frame, region, inside, core, step=step)
+        ref.learn(frame, region, inside, core)
+        np.testing.assert_array_equal(core_h.foreground, ref.fg)
+        np.testing.assert_array_equal(core_h.background, ref.bg)
+        x, y, w, h = 3, 1, 47, 33
+        p = ref.lik[_bins_numpy(frame[y:y + h, x:x + w], 4)]
+        want = cv2.integral(p, sdepth=cv2.CV_64F)
+        np.testing.assert_array_equal(core_h.likelihood_integral(frame, (x, y, w, h)), want)
+        sampled = _sampled((x, y, w, h), step)
+        inner_mask = np.zeros_like(sampled)
+        inner_mask[3:20, 5:30] = True
+        inner, whole, n_inner, n_whole = core_h.likelihood_sums(frame, (x, y, w, h),
+                                                                (3, 20, 5, 30), step=step)
+        assert inner == pytest.approx(p[sampled & inner_mask].sum(), rel=1e-12)
+        assert whole == pytest.approx(p[sampled].sum(), rel=1e-12)
+        assert (n_inner, n_whole) == ((sampled & inner_mask).sum(), sampled.sum())
+    with pytest.raises(ValueError, match="step"):
+        core_h.learn(frames[0], (0, 0, 10, 10), (0, 5, 0, 5), (1, 4, 1, 4), step=0)
 
 
 def test_core_histograms_refuse_bad_input() -> None:
@@ -193,12 +237,28 @@ def test_contrast_of_one_box_equals_the_integral_image_one() -> None:
         ColourModel().contrast(frame, boxes[0])
 
 
-def test_luma3_repeats_the_intensity() -> None:
+@pytest.mark.parametrize("sample", [0, 500])
+def test_intensity_model_is_the_colour_model_of_the_luma(sample: int) -> None:
+    """An intensity model learns from a BGR, BGRA or gray frame exactly what a colour model
+    learns from the frame's luma (cv2.COLOR_BGR2GRAY) repeated in three channels."""
+    import cv2
+
     rng = np.random.default_rng(4)
     frame = scene(rng)
-    out = luma3(frame)
-    assert out.shape == frame.shape and out.dtype == np.uint8
-    assert np.array_equal(out[..., 0], out[..., 1]) and np.array_equal(out[..., 1], out[..., 2])
-    gray = out[..., 0]
-    assert np.array_equal(luma3(gray), out) and np.array_equal(luma3(gray[:, :, None]), out)
-    assert not ColourModel.usable(out)  # a histogram of it is one of intensities
+    gray = cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+    gray3 = cv2.merge([gray, gray, gray])
+    bgra = cv2.cvtColor(frame, cv2.COLOR_BGR2BGRA)
+    box = (30, 20, 20, 16)
+    ref = ColourModel(sample=sample)
+    ref.learn(gray3, box)
+    for img in (frame, bgra, gray, gray[:, :, None]):
+        model = ColourModel(intensity=True, sample=sample)
+        model.learn(img, box)
+        np.testing.assert_array_equal(model.histograms.foreground, ref.histograms.foreground)
+        np.testing.assert_array_equal(model.histograms.likelihood, ref.histograms.likelihood)
+        for b in (box, (0, 0, 30, 30), (60, 50, 40, 30)):
+            assert model.contrast(img, b) == ref.contrast(gray3, b)
+        table, _, _ = model.integral(img, (0, 0, 100, 80))
+        np.testing.assert_array_equal(table, ref.integral(gray3, (0, 0, 100, 80))[0])
+    with pytest.raises(ValueError, match="BGR"):
+        ColourModel().learn(gray, box)  # a colour model needs colour

@@ -9,9 +9,12 @@ namespace wmiltrack {
 
 namespace {
 
-void check(const ImageView& image, const Rect& region, int bits) {
-  if (image.data == nullptr || image.channels < 3) {
+void check(const ImageView& image, const Rect& region, int bits, bool intensity) {
+  if (image.data == nullptr || (image.channels < 3 && !intensity)) {
     throw std::invalid_argument("colour model: needs a BGR or BGRA frame");
+  }
+  if (image.channels != 1 && image.channels < 3) {
+    throw std::invalid_argument("colour model: needs a gray, BGR or BGRA frame");
   }
   if (bits < 1 || bits > 8) throw std::invalid_argument("colour model: bits must be in 1..8");
   if (region.x < 0 || region.y < 0 || region.w < 0 || region.h < 0 ||
@@ -21,13 +24,28 @@ void check(const ImageView& image, const Rect& region, int bits) {
   }
 }
 
-// The bins of n pixels of frame row y from column x (inside the frame), into out. Packed
-// BGR and BGRA rows (the usual numpy layouts) take a loop with constant strides.
-void row_bins(const ImageView& image, int y, int x, int n, int bits, std::uint32_t* out) {
-  const std::ptrdiff_t cs = image.channel_stride, step = image.col_stride;
+// The bins of n pixels of frame row y, columns x, x + step, ... (inside the frame), into out;
+// with `intensity` the bin of each pixel's luma. Packed BGR and BGRA rows (the usual numpy
+// layouts) take a loop with constant strides.
+void row_bins(const ImageView& image, int y, int x, int n, int step, int bits, bool intensity,
+              std::uint32_t* out) {
+  const std::ptrdiff_t cs = image.channel_stride, col = image.col_stride;
+  const std::ptrdiff_t jump = col * step;
   const std::uint8_t* p = image.data + static_cast<std::ptrdiff_t>(y) * image.row_stride +
-                          static_cast<std::ptrdiff_t>(x) * step;
+                          static_cast<std::ptrdiff_t>(x) * col;
   const int sh = 8 - bits;
+  if (intensity) {
+    const auto gray_bin = [&](std::uint8_t l) {
+      const std::uint32_t v = static_cast<std::uint32_t>(l >> sh);
+      return (v << (2 * bits)) | (v << bits) | v;
+    };
+    if (image.channels == 1) {
+      for (int c = 0; c < n; ++c, p += jump) out[c] = gray_bin(p[0]);
+    } else {
+      for (int c = 0; c < n; ++c, p += jump) out[c] = gray_bin(bgr_to_gray(p[0], p[cs], p[2 * cs]));
+    }
+    return;
+  }
   const auto packed = [&](auto kStep) {
     for (int c = 0; c < n; ++c, p += kStep.value) {
       out[c] = (static_cast<std::uint32_t>(p[0] >> sh) << (2 * bits)) |
@@ -35,18 +53,34 @@ void row_bins(const ImageView& image, int y, int x, int n, int bits, std::uint32
                static_cast<std::uint32_t>(p[2] >> sh);
     }
   };
-  if (cs == 1 && step == 3) {
+  if (cs == 1 && jump == 3) {
     packed(std::integral_constant<int, 3>{});
-  } else if (cs == 1 && step == 4) {
+  } else if (cs == 1 && jump == 4) {
     packed(std::integral_constant<int, 4>{});
   } else {
-    for (int c = 0; c < n; ++c, p += step) out[c] = colour_bin(p[0], p[cs], p[2 * cs], bits);
+    for (int c = 0; c < n; ++c, p += jump) out[c] = colour_bin(p[0], p[cs], p[2 * cs], bits);
   }
 }
 
+// The pixels of a region's row or column range that a step of `step` samples: those at
+// offsets first, first + step, ... below `size` (frame coordinate origin + offset a multiple of
+// step); index(o) counts the samples at offsets below o.
+struct Samples {
+  int first, count, step;
+  Samples(int origin, int size, int step_) : step(step_) {
+    first = (step - origin % step) % step;
+    count = size > first ? (size - first + step - 1) / step : 0;
+  }
+  int index(int o) const {
+    if (o <= first) return 0;
+    return std::min(count, (o - first + step - 1) / step);
+  }
+};
+
 }  // namespace
 
-ColourHistograms::ColourHistograms(int bits, double rate) : bits_(bits), rate_(rate) {
+ColourHistograms::ColourHistograms(int bits, double rate, bool intensity)
+    : bits_(bits), rate_(rate), intensity_(intensity) {
   if (bits < 1 || bits > 8) throw std::invalid_argument("colour model: bits must be in 1..8");
   if (!(rate > 0.0 && rate <= 1.0)) {
     throw std::invalid_argument("colour model: rate must be in (0, 1]");
@@ -62,14 +96,14 @@ ColourHistograms::ColourHistograms(int bits, double rate) : bits_(bits), rate_(r
 }
 
 void ColourHistograms::count(const ImageView& image, const Rect& region, const Span& inside,
-                             const Span& core) {
-  std::vector<std::uint32_t> bins(static_cast<std::size_t>(region.w));
-  // Columns [c0, c1) of the row's bins, clipped to the region, into counts.
+                             const Span& core, int step) {
+  const Samples cols(region.x, region.w, step), rows(region.y, region.h, step);
+  std::vector<std::uint32_t> bins(static_cast<std::size_t>(cols.count));
+  // The row's samples in columns [c0, c1) of the region, into counts.
   const auto run = [&](int c0, int c1, std::vector<std::uint32_t>& counts) {
-    c0 = std::max(c0, 0);
-    c1 = std::min(c1, region.w);
-    for (int c = c0; c < c1; ++c) {
-      const std::uint32_t bin = bins[static_cast<std::size_t>(c)];
+    const int k1 = cols.index(c1);
+    for (int k = cols.index(c0); k < k1; ++k) {
+      const std::uint32_t bin = bins[static_cast<std::size_t>(k)];
       if (!is_counted_[bin]) {
         is_counted_[bin] = 1;
         counted_.push_back(bin);
@@ -77,8 +111,9 @@ void ColourHistograms::count(const ImageView& image, const Rect& region, const S
       ++counts[bin];
     }
   };
-  for (int r = 0; r < region.h; ++r) {
-    row_bins(image, region.y + r, region.x, region.w, bits_, bins.data());
+  for (int r = rows.first; r < region.h; r += step) {
+    row_bins(image, region.y + r, region.x + cols.first, cols.count, step, bits_, intensity_,
+             bins.data());
     if (r >= core.r0 && r < core.r1) run(core.c0, core.c1, fg_count_);
     if (r >= inside.r0 && r < inside.r1 && inside.c0 < inside.c1) {
       run(0, inside.c0, bg_count_);  // left and right of the inside span
@@ -100,12 +135,13 @@ void ColourHistograms::blend(std::uint32_t i, double fd, double bd, bool first) 
 }
 
 void ColourHistograms::learn(const ImageView& image, const Rect& region, const Span& inside,
-                             const Span& core) {
-  check(image, region, bits_);
+                             const Span& core, int step) {
+  check(image, region, bits_, intensity_);
+  if (step < 1) throw std::invalid_argument("colour model: step must be at least 1");
   if (static_cast<std::uint64_t>(region.w) * static_cast<std::uint64_t>(region.h) >= (std::uint64_t{1} << 32)) {
     throw std::invalid_argument("colour model: a region of 2^32 pixels or more");  // uint32 counts
   }
-  count(image, region, inside, core);
+  count(image, region, inside, core, step);
   // Sums of whole counts (< 2^53): exact in any order.
   double fg_sum = 0.0, bg_sum = 0.0;
   for (const std::uint32_t bin : counted_) {
@@ -132,7 +168,7 @@ void ColourHistograms::learn(const ImageView& image, const Rect& region, const S
 void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& region,
                                            double* table) const {
   if (!learnt_) throw std::logic_error("colour model: learn() before likelihood_integral()");
-  check(image, region, bits_);
+  check(image, region, bits_, intensity_);
   const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(region.w) + 1;
   std::fill(table, table + stride, 0.0);
   const double* lik = lik_.data();
@@ -146,7 +182,8 @@ void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& r
     double* row[4];
     double s[4] = {0.0, 0.0, 0.0, 0.0};
     for (int i = 0; i < 4; ++i) {
-      row_bins(image, region.y + r + i, region.x, region.w, bits_, bins.data() + i * w);
+      row_bins(image, region.y + r + i, region.x, region.w, 1, bits_, intensity_,
+               bins.data() + i * w);
       row[i] = table + (r + i + 1) * stride;
       row[i][0] = 0.0;
     }
@@ -158,7 +195,7 @@ void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& r
     }
   }
   for (; r < region.h; ++r) {
-    row_bins(image, region.y + r, region.x, region.w, bits_, bins.data());
+    row_bins(image, region.y + r, region.x, region.w, 1, bits_, intensity_, bins.data());
     double* row = table + (r + 1) * stride;
     row[0] = 0.0;
     double s = 0.0;
@@ -174,15 +211,18 @@ void ColourHistograms::likelihood_integral(const ImageView& image, const Rect& r
   }
 }
 
-std::pair<double, double> ColourHistograms::likelihood_sums(const ImageView& image,
-                                                           const Rect& region,
-                                                           const Span& inner) const {
+ColourHistograms::Sums ColourHistograms::likelihood_sums(const ImageView& image,
+                                                        const Rect& region,
+                                                        const Span& inner, int step) const {
   if (!learnt_) throw std::logic_error("colour model: learn() before likelihood_sums()");
-  check(image, region, bits_);
+  check(image, region, bits_, intensity_);
+  if (step < 1) throw std::invalid_argument("colour model: step must be at least 1");
   const double* lik = lik_.data();
-  const int c0 = std::max(inner.c0, 0), c1 = std::min(inner.c1, region.w);
-  std::vector<std::uint32_t> bins(static_cast<std::size_t>(region.w));
-  double inside = 0.0, outside = 0.0;
+  const Samples cols(region.x, region.w, step), rows(region.y, region.h, step);
+  const int c0 = cols.index(std::max(inner.c0, 0)), c1 = cols.index(std::min(inner.c1, region.w));
+  std::vector<std::uint32_t> bins(static_cast<std::size_t>(cols.count));
+  Sums out;
+  double outside = 0.0;
   const auto sum = [&](int a, int b) {  // four running sums, for the pipeline
     double s[4] = {0.0, 0.0, 0.0, 0.0};
     int c = a;
@@ -192,16 +232,20 @@ std::pair<double, double> ColourHistograms::likelihood_sums(const ImageView& ima
     for (; c < b; ++c) s[0] += lik[bins[static_cast<std::size_t>(c)]];
     return (s[0] + s[1]) + (s[2] + s[3]);
   };
-  for (int r = 0; r < region.h; ++r) {
-    row_bins(image, region.y + r, region.x, region.w, bits_, bins.data());
+  for (int r = rows.first; r < region.h; r += step) {
+    row_bins(image, region.y + r, region.x + cols.first, cols.count, step, bits_, intensity_,
+             bins.data());
+    out.region_pixels += cols.count;
     if (r >= inner.r0 && r < inner.r1 && c0 < c1) {
-      outside += sum(0, c0) + sum(c1, region.w);
-      inside += sum(c0, c1);
+      outside += sum(0, c0) + sum(c1, cols.count);
+      out.inner += sum(c0, c1);
+      out.inner_pixels += c1 - c0;
     } else {
-      outside += sum(0, region.w);
+      outside += sum(0, cols.count);
     }
   }
-  return {inside, inside + outside};
+  out.region = out.inner + outside;
+  return out;
 }
 
 }  // namespace wmiltrack

@@ -127,7 +127,7 @@ def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayL
 
 class ColourHistograms:
     """Foreground/background colour histograms blended over frames, and P(target | bin)."""
-    def __init__(self, bits: int, rate: float) -> None: ...
+    def __init__(self, bits: int, rate: float, *, intensity: bool = False) -> None: ...
     def copy(self) -> ColourHistograms:
         """An independent copy (the histograms as they are now)."""
     @property
@@ -135,16 +135,23 @@ class ColourHistograms:
     @property
     def rate(self) -> float: ...
     @property
+    def intensity(self) -> bool: ...
+    @property
     def learnt(self) -> bool: ...
     def learn(self, frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int],
-              inside: tuple[int, int, int, int], core: tuple[int, int, int, int]) -> None:
-        """Fold in one frame (core: target pixels; region outside inside: background)."""
+              inside: tuple[int, int, int, int], core: tuple[int, int, int, int], *,
+              step: int = 1) -> None:
+        """Fold in one frame (core: target pixels; region outside inside: background; every
+        step-th row and column of the frame)."""
     def likelihood_integral(self, frame: npt.NDArray[np.uint8],
                             region: tuple[int, int, int, int]) -> _F64:
         """(h + 1) x (w + 1) integral image of the per-pixel likelihood over region."""
     def likelihood_sums(self, frame: npt.NDArray[np.uint8], region: tuple[int, int, int, int],
-                        inner: tuple[int, int, int, int]) -> tuple[float, float]:
-        """(inner sum, region sum) of the per-pixel likelihood; inner relative to region."""
+                        inner: tuple[int, int, int, int], *, step: int = 1,
+                        ) -> tuple[float, float, int, int]:
+        """(inner sum, region sum, inner pixels, region pixels) of the per-pixel likelihood over
+        the sampled pixels (every step-th row and column of the frame); inner relative to
+        region."""
     @property
     def foreground(self) -> _F64: ...
     @property

@@ -29,6 +29,13 @@ struct Span {
 // The colour model's state: foreground and background histograms of 2^(3 bits) bins blended
 // over frames, and P(target | bin) = fg / (fg + bg) (0.5 where both are 0).
 //
+// With `intensity`, a pixel's bin is that of its luma repeated in the three channels
+// (bgr_to_gray, OpenCV's BGR2GRAY; a 1-channel frame's value as it is): a histogram of
+// intensities that takes gray frames too. With a `step` > 1, learn() and likelihood_sums() look
+// at the pixels whose frame column and row are multiples of `step` only (a sample of 1 in
+// step^2, on a grid fixed to the frame): histograms and means of a large region for a fraction
+// of the work. likelihood_integral() always reads every pixel.
+//
 // A frame's work is proportional to the pixels it looks at and the bins seen so far, not to
 // all 32 768 bins of the default 5 bits: a bin never counted holds 0 in both histograms and
 // 0.5 in the likelihood for ever (its blend, (1 - rate) 0 + rate 0, stays 0), so only the
@@ -37,19 +44,22 @@ struct Span {
 class ColourHistograms {
  public:
   // bits in 1..8, rate in (0, 1]; std::invalid_argument otherwise.
-  ColourHistograms(int bits, double rate);
+  ColourHistograms(int bits, double rate, bool intensity = false);
 
   int bits() const { return bits_; }
   double rate() const { return rate_; }
   int bins() const { return static_cast<int>(fg_.size()); }
   bool learnt() const { return learnt_; }
+  bool intensity() const { return intensity_; }
 
   // Folds in one frame: every pixel of `core` (rows/columns relative to `region`) counts for
   // the foreground, every pixel of the region outside `inside` for the background; each
   // histogram of counts is divided by its sum (at least 1) and blended in at the rate (taken
   // as it is on the first frame). Throws std::invalid_argument for a gray frame (fewer than 3
-  // channels) or a region outside the frame.
-  void learn(const ImageView& image, const Rect& region, const Span& inside, const Span& core);
+  // channels) without `intensity`, or a region outside the frame.
+  // step >= 1 (std::invalid_argument otherwise): see above.
+  void learn(const ImageView& image, const Rect& region, const Span& inside, const Span& core,
+             int step = 1);
 
   // The (region.h + 1) x (region.w + 1) integral image (row-major, zero first row and column)
   // of the likelihood of every pixel of `region`: table[r + 1][c + 1] = table[r][c + 1] + the
@@ -57,22 +67,29 @@ class ColourHistograms {
   // (std::logic_error); the same errors as learn() otherwise.
   void likelihood_integral(const ImageView& image, const Rect& region, double* table) const;
 
-  // The likelihood summed over every pixel of `region` (inside the frame) and over those of
-  // its part `inner` (rows and columns relative to the region, clipped to it): {inner,
-  // region}. One pass, no table: what a contrast between a box and its ring needs.
-  std::pair<double, double> likelihood_sums(const ImageView& image, const Rect& region,
-                                            const Span& inner) const;
+  // The likelihood summed over the (sampled, see `step`) pixels of `region` (inside the
+  // frame) and over those of its part `inner` (rows and columns relative to the region,
+  // clipped to it), with the number of pixels of each. One pass, no table: what a contrast
+  // between a box and its ring needs.
+  struct Sums {
+    double inner = 0.0, region = 0.0;
+    std::int64_t inner_pixels = 0, region_pixels = 0;
+  };
+  Sums likelihood_sums(const ImageView& image, const Rect& region, const Span& inner,
+                       int step = 1) const;
 
   const std::vector<double>& foreground() const { return fg_; }
   const std::vector<double>& background() const { return bg_; }
   const std::vector<double>& likelihood() const { return lik_; }
 
  private:
-  void count(const ImageView& image, const Rect& region, const Span& inside, const Span& core);
+  void count(const ImageView& image, const Rect& region, const Span& inside, const Span& core,
+             int step);
   void blend(std::uint32_t bin, double fd, double bd, bool first);
 
   int bits_;
   double rate_;
+  bool intensity_;
   bool learnt_ = false;
   std::vector<double> fg_, bg_, lik_;       // the model
   std::vector<std::uint32_t> fg_count_, bg_count_;  // this frame's counts; zero between frames

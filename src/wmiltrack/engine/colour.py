@@ -19,13 +19,14 @@ alone.
 
 from __future__ import annotations
 
-import cv2
+import math
+
 import numpy as np
 import numpy.typing as npt
 
 from .. import _core
 
-__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour", "luma3"]
+__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -36,19 +37,6 @@ def is_colour(frame: np.ndarray) -> bool:
         return False
     b, g, r = frame[..., 0], frame[..., 1], frame[..., 2]
     return not (np.array_equal(b, g) and np.array_equal(g, r))
-
-
-def luma3(frame: np.ndarray) -> np.ndarray:
-    """The frame's luma (OpenCV's BGR weights; gray frames as they are) repeated in three
-    channels, so that a :class:`ColourModel` on it is a histogram of intensities (32 levels at
-    5 bits)."""
-    if frame.ndim == 3 and frame.shape[2] >= 3:
-        code = cv2.COLOR_BGRA2GRAY if frame.shape[2] == 4 else cv2.COLOR_BGR2GRAY
-        gray = cv2.cvtColor(np.ascontiguousarray(frame), code)
-    else:
-        gray = frame.reshape(frame.shape[0], frame.shape[1])
-    out: np.ndarray = cv2.merge([gray, gray, gray])
-    return out
 
 
 class ColourModel:
@@ -64,10 +52,18 @@ class ColourModel:
         The background region extends the box by ``pad * (w + h) / 2`` on every side.
     shrink : float
         The foreground region is the box less ``shrink`` of its width/height on every side.
+    intensity : bool
+        Histograms of the pixels' luma (OpenCV's BGR weights; 32 levels at 5 bits) instead of
+        their colours: a model of how bright the target is, for gray frames too.
+    sample : int
+        Learning and :meth:`contrast` read about this many pixels of their region at most:
+        a region of ``A`` pixels is read at the frame rows and columns that are multiples of
+        ``ceil(sqrt(A / sample))`` (0: every pixel; :meth:`integral` always reads every pixel).
+        Normalised histograms and means need a sample, not every pixel of a large box.
     """
 
     def __init__(self, bits: int = 5, learning_rate: float = 0.04, pad: float = 0.5,
-                 shrink: float = 0.1) -> None:
+                 shrink: float = 0.1, *, intensity: bool = False, sample: int = 0) -> None:
         if not 1 <= bits <= 8:
             raise ValueError(f"bits must be in 1..8, got {bits}")
         if not 0.0 < learning_rate <= 1.0:
@@ -75,13 +71,22 @@ class ColourModel:
         self.bits = bits
         self.learning_rate = learning_rate
         self.pad = pad
+        if sample < 0:
+            raise ValueError(f"sample must be >= 0, got {sample}")
         self.shrink = shrink
-        self._hist = _core.ColourHistograms(bits, learning_rate)
+        self.sample = sample
+        self._hist = _core.ColourHistograms(bits, learning_rate, intensity=intensity)
 
     @property
     def histograms(self) -> _core.ColourHistograms:
         """The core's histograms and per-bin likelihood (read-only copies on access)."""
         return self._hist
+
+    def _step(self, w: int, h: int) -> int:
+        """The pixel step that reads about ``sample`` pixels of a ``w x h`` region."""
+        if self.sample <= 0 or w * h <= self.sample:
+            return 1
+        return math.ceil(math.sqrt(w * h / self.sample))
 
     @staticmethod
     def usable(frame: np.ndarray) -> bool:
@@ -106,11 +111,12 @@ class ColourModel:
         core = span(max(0, y - y0 + sy), max(0, y - y0 + h - sy), max(0, x - x0 + sx),
                     max(0, x - x0 + w - sx))
         # The core's pixels count for the target, the pixels outside the box for the background.
-        self._hist.learn(frame, (x0, y0, rw, rh), inside, core)
+        self._hist.learn(frame, (x0, y0, rw, rh), inside, core, step=self._step(rw, rh))
 
     def copy(self) -> ColourModel:
         """An independent copy (its histograms no longer change with this model's)."""
-        out = ColourModel(self.bits, self.learning_rate, self.pad, self.shrink)
+        out = ColourModel(self.bits, self.learning_rate, self.pad, self.shrink,
+                          intensity=self._hist.intensity, sample=self.sample)
         out._hist = self._hist.copy()
         return out
 
@@ -128,7 +134,8 @@ class ColourModel:
 
     def contrast(self, frame: np.ndarray, box: tuple[int, int, int, int], ring: float = 0.25) -> float:
         """:func:`colour_contrast` of one box (inside and ring clipped to the frame), from the
-        likelihood sums over the box and its ring alone (one pass, no integral image)."""
+        likelihood sums over the box and its ring alone (one pass, no integral image; over
+        a sample of them, see ``sample``)."""
         if not self._hist.learnt:
             raise ValueError("call learn() before contrast()")
         x, y, w, h = box
@@ -141,10 +148,9 @@ class ColourModel:
         x1, y1 = min(fw, x + w + pad), min(fh, y + h + pad)
         xa, xb = min(max(x - x0, 0), x1 - x0), min(max(x + w - x0, 0), x1 - x0)
         ya, yb = min(max(y - y0, 0), y1 - y0), min(max(y + h - y0, 0), y1 - y0)
-        s_in, s_out = self._hist.likelihood_sums(frame, (x0, y0, x1 - x0, y1 - y0), (ya, yb, xa, xb))
-        a_in = float((xb - xa) * (yb - ya))
-        a_out = float((x1 - x0) * (y1 - y0))
-        return s_in / max(a_in, 1.0) - (s_out - s_in) / max(a_out - a_in, 1.0)
+        s_in, s_out, n_in, n_out = self._hist.likelihood_sums(
+            frame, (x0, y0, x1 - x0, y1 - y0), (ya, yb, xa, xb), step=self._step(x1 - x0, y1 - y0))
+        return s_in / max(n_in, 1) - (s_out - s_in) / max(n_out - n_in, 1)
 
     @staticmethod
     def box_means(table: FloatArray, x0: int, y0: int, xs: npt.NDArray[np.integer],

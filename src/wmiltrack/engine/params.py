@@ -189,6 +189,12 @@ class Params:
         histograms, the mean P(target | colour) over a candidate box) merged into every
         translation search stage: ``(1 - w) * confidence + w * colour`` per candidate (0: off;
         also off for gray frames and BGR frames whose three channels are equal).
+    colour_sample : int
+        The colour and intensity histograms' learning and the reported score's contrasts read
+        about this many pixels of a region at most (``engine.colour.ColourModel``'s
+        ``sample``: a region of ``A`` pixels at every ``ceil(sqrt(A / colour_sample))``-th
+        frame row and column; 0: every pixel). A large box's histograms then cost what a
+        small box's do. The search's colour cue always reads every pixel.
     score_colour : float
         With the colour model on, the reported confidence (``TrackResult.score``, and ``ok``
         from it) is ``(1 - w) * logistic(raw / K - offset) + w * clip(0.5 + contrast, 0, 1)``
@@ -283,6 +289,7 @@ class Params:
     motion_smoothing: float = 0.5
     motion_max: float = 30.0
     colour_weight: float = 0.0
+    colour_sample: int = 0
     score_colour: float = 0.0
     score_colour_model: ScoreColourModel = "current"
     score_luma: float = 0.0
@@ -409,6 +416,9 @@ class Params:
              f"motion_max must be in [0, {MAX_SEARCH_RADIUS}], got {self.motion_max}")
         need(0.0 <= self.colour_weight <= 1.0,
              f"colour_weight must be in [0, 1], got {self.colour_weight}")
+        need(isinstance(self.colour_sample, int) and not isinstance(self.colour_sample, bool)
+             and self.colour_sample >= 0,
+             f"colour_sample must be an integer >= 0, got {self.colour_sample!r}")
         need(isinstance(self.score_colour, (int, float)) and not isinstance(self.score_colour, bool)
              and 0.0 <= self.score_colour <= 1.0,
              f"score_colour must be in [0, 1], got {self.score_colour!r}")
@@ -511,12 +521,13 @@ VARIANTS: dict[str, Params] = {
         variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
         scale_negatives=2, score_colour=0.33, score_colour_model="first", score_luma=0.33,
+        colour_sample=16384,
         description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into "
         "the search (0.7), a constant-velocity search centre, and scale search by scaled Haar "
         "rectangles (1.03^-1, 1, 1.03^+1; classifier score plus a slow target likelihood, "
         "penalised away from the current scale; boxes 1.03^+-2 off learnt as negatives); the "
         "reported score also counts the box's colour and intensity contrast under the first "
-        "frame's histograms.",
+        "frame's histograms; the histograms read at most about 16 384 pixels of a region.",
     ),
 }
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import _core
 from .classifier import GaussianPool
-from .colour import ColourModel, luma3
+from .colour import ColourModel
 from .features import (
     CHANNEL_IDS,
     EDGE_CHANNELS,
@@ -247,7 +247,7 @@ class Tracker:
         self._box = b
         self._colour: ColourModel | None = None
         if p.colour_weight > 0 and ColourModel.usable(img):
-            self._colour = ColourModel()
+            self._colour = ColourModel(sample=p.colour_sample)
             self._colour.learn(img, b)
         # The first frame's colour histograms, kept unchanged for the reported score.
         self._first_colour: ColourModel | None = None
@@ -256,8 +256,8 @@ class Tracker:
         # The first frame's intensity histograms (any frame), for the reported score.
         self._first_luma: ColourModel | None = None
         if p.score_luma > 0:
-            self._first_luma = ColourModel()
-            self._first_luma.learn(luma3(img), b)
+            self._first_luma = ColourModel(intensity=True, sample=p.colour_sample)
+            self._first_luma.learn(img, b)
         self._compute_integral(img, b, self._first.reach)
         self._learn(self._first)
         self._search_origins: list[IntBox] = []
@@ -577,18 +577,6 @@ class Tracker:
             return raw
         return self._scale_by_ratio(raw)
 
-    def _luma_contrast(self, model: ColourModel, img: np.ndarray, box: IntBox) -> float:
-        """The contrast of ``box`` under the first frame's intensity histograms, read on the
-        luma of the box's neighbourhood."""
-        x, y, w, h = box
-        m = int(round(0.25 * (w + h) / 2.0)) + 1  # the contrast's ring, and a margin
-        fw, fh = self._frame_wh
-        x0, y0 = max(0, x - m), max(0, y - m)
-        x1, y1 = min(fw, x + w + m), min(fh, y + h + m)
-        if x1 <= x0 or y1 <= y0:
-            return 0.0
-        return model.contrast(luma3(img[y0:y1, x0:x1]), (x - x0, y - y0, w, h))
-
     def _colour_score(self, conf: float, img: np.ndarray) -> float:
         """``(1 - w - v) conf + w clip(0.5 + colour contrast, 0, 1) + v clip(0.5 + luma
         contrast, 0, 1)`` of the box (``w``: ``score_colour``, its contrast under the current or
@@ -599,7 +587,7 @@ class Tracker:
         w, v = p.score_colour, p.score_luma
         luma = 0.0
         if self._first_luma is not None:
-            luma = min(max(0.5 + self._luma_contrast(self._first_luma, img, self._box), 0.0), 1.0)
+            luma = min(max(0.5 + self._first_luma.contrast(img, self._box), 0.0), 1.0)
         if self._colour is None:  # no colour in this video
             return (1.0 - w - v) * conf + (w + v) * luma if v > 0 else conf
         # Before this frame's learning: the current model is the one the search used.
