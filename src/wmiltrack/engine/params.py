@@ -176,6 +176,10 @@ class Params:
         Also learn, as negatives, the box centred on the target but scaled by
         ``scale_factor ** +-scale_negatives`` (so the classifier learns what a wrong size
         looks like; 0: none).
+    scale_contrast : float
+        With the colour model on, add this weight times the box's colour contrast (the mean
+        ``P(target | colour)`` inside it minus that over a ring around it, under the colour
+        model the search uses) to each scale's value in the scale search (0: off).
     motion : {"none", "velocity"}
         Centre the search on the last box (``none``) or on a constant-velocity prediction
         of the box centre (``velocity``; falls back to the last box when the last frame's
@@ -285,6 +289,7 @@ class Params:
     scale_min: float = 0.2
     scale_max: float = 5.0
     scale_negatives: int = 0
+    scale_contrast: float = 0.0
     motion: MotionModel = "none"
     motion_smoothing: float = 0.5
     motion_max: float = 30.0
@@ -385,7 +390,7 @@ class Params:
         need(self.min_box_size >= 2, f"min_box_size must be >= 2, got {self.min_box_size}")
         for name in ("confidence_offset", "scale_factor", "scale_penalty", "scale_min", "scale_max",
                      "motion_smoothing", "motion_max", "gate_threshold", "gate_drop", "scale_mix",
-                     "colour_weight"):
+                     "colour_weight", "scale_contrast"):
             v = getattr(self, name)
             need(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
                  f"{name} must be a finite number, got {v!r}")
