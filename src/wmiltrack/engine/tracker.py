@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import _core
 from .classifier import GaussianPool
-from .colour import ColourModel, colour_contrast
+from .colour import ColourModel, box_contrast
 from .features import (
     CHANNEL_IDS,
     EDGE_CHANNELS,
@@ -602,7 +602,7 @@ class Tracker:
         the search's likelihood table (the box and its ring clipped to the table's region)."""
         assert self._cue_table is not None
         table, x0, y0 = self._cue_table
-        return float(colour_contrast(table, x0, y0, np.array([box]))[0])
+        return box_contrast(table, x0, y0, box)
 
     def _likelihood(self, index: int, box: IntBox) -> float:
         """Minus the mean log(1 + z^2) of all M features of ``box`` under the scale model."""
