@@ -262,3 +262,19 @@ def test_intensity_model_is_the_colour_model_of_the_luma(sample: int) -> None:
         np.testing.assert_array_equal(table, ref.integral(gray3, (0, 0, 100, 80))[0])
     with pytest.raises(ValueError, match="BGR"):
         ColourModel().learn(gray, box)  # a colour model needs colour
+
+
+def test_box_contrast_equals_colour_contrast() -> None:
+    """The scalar one-box contrast (rcwmil-plus's scale search) gives colour_contrast's bits,
+    for boxes inside, across and outside the table's region."""
+    from wmiltrack.engine.colour import box_contrast, colour_contrast
+
+    rng = np.random.default_rng(3)
+    table = np.pad(rng.random((90, 120)).cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+    for _ in range(2000):
+        box = (int(rng.integers(-30, 140)), int(rng.integers(-30, 110)), int(rng.integers(1, 80)),
+               int(rng.integers(1, 80)))
+        x0, y0 = int(rng.integers(-5, 15)), int(rng.integers(-5, 15))
+        ring = float(rng.choice([0.1, 0.25, 0.5]))
+        want = colour_contrast(table, x0, y0, np.array([box]), ring=ring)[0]
+        assert box_contrast(table, x0, y0, box, ring=ring) == want

@@ -45,7 +45,8 @@ def variant_table() -> str:
         if key == "plus":
             parts = []
             if p.scale_steps:
-                parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} ({p.scale_model})")
+                contrast = f", colour contrast {p.scale_contrast:g}" if p.scale_contrast > 0 else ""
+                parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} ({p.scale_model}{contrast})")
             if p.channels:
                 parts.append("channels " + "+".join(p.channels))
             if p.colour_weight > 0:

@@ -26,7 +26,7 @@ import numpy.typing as npt
 
 from .. import _core
 
-__all__ = ["ColourModel", "box_sums_clipped", "colour_contrast", "is_colour"]
+__all__ = ["ColourModel", "box_contrast", "box_sums_clipped", "colour_contrast", "is_colour"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -193,3 +193,22 @@ def colour_contrast(table: FloatArray, x0: int, y0: int, boxes: npt.NDArray[np.i
     ring_mean = (s_out - s_in) / np.maximum(a_out - a_in, 1.0)
     out: FloatArray = inner - ring_mean
     return out
+
+
+def box_contrast(table: FloatArray, x0: int, y0: int, box: tuple[int, int, int, int],
+                 ring: float = 0.25) -> float:
+    """:func:`colour_contrast` of one box ``(x, y, w, h)``, with the same result, computed with
+    scalars (eight reads of the table; numpy's per-call overhead would be most of the cost)."""
+    th, tw = table.shape[0] - 1, table.shape[1] - 1
+    x, y, w, h = (int(v) for v in box)
+    pad = max(1, int(round(ring * (w + h) / 2.0)))
+
+    def clipped(bx: int, by: int, bw: int, bh: int) -> tuple[float, float]:
+        xa, ya = min(max(bx - x0, 0), tw), min(max(by - y0, 0), th)
+        xb, yb = min(max(bx + bw - x0, 0), tw), min(max(by + bh - y0, 0), th)
+        s = float(table[yb, xb]) - float(table[ya, xb]) - float(table[yb, xa]) + float(table[ya, xa])
+        return s, float((xb - xa) * (yb - ya))
+
+    s_in, a_in = clipped(x, y, w, h)
+    s_out, a_out = clipped(x - pad, y - pad, w + 2 * pad, h + 2 * pad)
+    return s_in / max(a_in, 1.0) - (s_out - s_in) / max(a_out - a_in, 1.0)

@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import _core
 from .classifier import GaussianPool
-from .colour import ColourModel
+from .colour import ColourModel, box_contrast
 from .features import (
     CHANNEL_IDS,
     EDGE_CHANNELS,
@@ -239,6 +239,7 @@ class Tracker:
         self._lost = False
         self._level = math.nan  # running mean of raw / K over the frames learnt from
         self._scale_boxes: list[IntBox] = []
+        self._cue_table: tuple[np.ndarray, int, int] | None = None
         self._pool = GaussianPool(p)
         self._scale_pool = (GaussianPool(p.replace(learning_rate=p.scale_learning_rate))
                             if p.scale_steps > 0 and p.scale_model != "ratio" else None)
@@ -348,7 +349,9 @@ class Tracker:
             raw = self._apply_search(stages, results)
             self._scale_boxes = []
             if p.scale_steps > 0 and math.isfinite(raw):
+                self._cue_table = None if cue is None else cue[:3]
                 raw = self._scale_search(raw)
+                self._cue_table = None
             score = confidence(raw, len(self._selected), p.confidence_offset)
             tracked = score >= p.lost_threshold
             k = max(len(self._selected), 1)
@@ -594,6 +597,13 @@ class Tracker:
         contrast = (self._first_colour or self._colour).contrast(img, self._box)
         return (1.0 - w - v) * conf + w * min(max(0.5 + contrast, 0.0), 1.0) + v * luma
 
+    def _colour_contrast(self, box: IntBox) -> float:
+        """The box's colour contrast (:func:`~wmiltrack.engine.colour.colour_contrast`) read from
+        the search's likelihood table (the box and its ring clipped to the table's region)."""
+        assert self._cue_table is not None
+        table, x0, y0 = self._cue_table
+        return box_contrast(table, x0, y0, box)
+
     def _likelihood(self, index: int, box: IntBox) -> float:
         """Minus the mean log(1 + z^2) of all M features of ``box`` under the scale model."""
         pool = self._scale_pool
@@ -609,6 +619,9 @@ class Tracker:
         best_value = best / k
         if mix:
             best_value += mix * self._likelihood(self._scale_index, self._box)
+        cw = p.scale_contrast if self._cue_table is not None else 0.0
+        if cw:
+            best_value += cw * self._colour_contrast(self._box)
         best_index, best_box = self._scale_index, self._box
         for j in range(-p.scale_steps, p.scale_steps + 1):
             index = self._scale_index + j
@@ -624,6 +637,8 @@ class Tracker:
             value = score / k - p.scale_penalty * abs(j)
             if mix:
                 value += mix * self._likelihood(index, moved)
+            if cw:
+                value += cw * self._colour_contrast(moved)
             if value > best_value:
                 best_value = value
                 best = score
