@@ -422,7 +422,13 @@ def test_tracker_random_frames_boxes_params(data: st.DataObject) -> None:
         bx, by, bw, bh = r.box
         assert all(math.isfinite(v) for v in r.box)
         assert 0 <= bx and bx + bw <= fw and 0 <= by and by + bh <= fh
-        assert (bw, bh) == (w, h)
+        if t.params.scale_steps == 0:
+            assert (bw, bh) == (w, h)
+        else:  # a scale-searching preset may resize, within its documented limits and the frame
+            p = t.params
+            assert bw >= mw and bh >= mh
+            assert bw <= max(w, round(w * p.scale_max / p.scale_min) + 1)
+            assert bh <= max(h, round(h * p.scale_max / p.scale_min) + 1)
         assert 0.0 <= r.score <= 1.0
 
 
