@@ -136,3 +136,36 @@ def test_anchor_keeps_the_target_model_near_the_first_frame() -> None:
 def test_illumination_options_are_validated(overrides: dict[str, object]) -> None:
     with pytest.raises(ValueError):
         wmiltrack.Params.for_variant("rcwmil-plus", **overrides)
+
+
+def test_gray_channels_and_anchor_apply_to_frames_without_colour_only() -> None:
+    from wmiltrack.data.synthetic import make_preset
+
+    seq = make_preset("all", seed=2, n_frames=6)
+    frames, gt = seq.load(), np.asarray(seq.groundtruth)
+    gray = [np.repeat(f.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2) for f in frames]
+    kw = {"gray_channels": ("logluma", "orient0", "orient1", "orient2", "orient3"),
+          "gray_anchor_weight": 0.1}
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, **kw)
+    t.init(gray[0], gt[0])
+    assert t._chan_names == kw["gray_channels"] and t._anchor is not None
+    for f in gray[1:]:
+        t.update(f)
+    assert t._ii.channels == (_core.CH_LOGLUMA, _core.CH_ORIENT0, _core.CH_ORIENT1,
+                              _core.CH_ORIENT2, _core.CH_ORIENT3)
+    # colour frames: the preset's own channels (none) and anchor (off), so the same boxes
+    np.testing.assert_array_equal(
+        wmiltrack.Tracker("rcwmil-plus", seed=0, **kw).track(frames, gt[0]),
+        wmiltrack.Tracker("rcwmil-plus", seed=0).track(frames, gt[0]))
+    c = wmiltrack.Tracker("rcwmil-plus", seed=0, **kw)
+    c.init(frames[0], gt[0])
+    assert c._chan_names is None and c._anchor is None
+
+
+@pytest.mark.parametrize("overrides", [
+    {"gray_anchor_weight": 1.5}, {"gray_anchor_weight": False}, {"gray_channels": ("opp_rg",)},
+    {"gray_channels": ("luma", "luma")}, {"gray_channels": ("lum",)},
+])
+def test_gray_options_are_validated(overrides: dict[str, object]) -> None:
+    with pytest.raises(ValueError):
+        wmiltrack.Params.for_variant("rcwmil-plus", **overrides)

@@ -76,7 +76,8 @@ PAPER = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
 OFF = {"scale_steps": 0, "scale_negatives": 0, "channels": (), "motion": "none",
        "gate_threshold": 0.0, "gate_drop": 0.0, "recovery_radius": 0, "colour_weight": 0.0,
        "score_colour": 0.0, "score_colour_model": "current", "score_luma": 0.0,
-       "zero_dc": "none", "zero_dc_channels": (), "anchor_weight": 0.0}
+       "zero_dc": "none", "zero_dc_channels": (), "anchor_weight": 0.0, "gray_channels": (),
+       "gray_anchor_weight": None}
 
 
 @pytest.mark.parametrize("variant", PAPER)

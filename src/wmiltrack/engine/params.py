@@ -247,6 +247,12 @@ class Params:
         first frame's by this fraction (``mu1 <- (1 - a) mu1 + a mu1_first``, likewise
         sigma1), so that a few frames of learning the wrong thing cannot rewrite what the
         target looks like (0: off).
+    gray_channels : tuple of str
+        On frames without colour (gray, or BGR with three equal channels: where the colour
+        likelihood is off), use these channels instead of ``channels`` (empty: ``channels``
+        on every frame). Decided on the first frame.
+    gray_anchor_weight : float or None
+        On frames without colour, this ``anchor_weight`` instead (``None``: ``anchor_weight``).
     """
 
     variant: str = "rcwmil"
@@ -314,6 +320,8 @@ class Params:
     zero_dc: ZeroDC = "none"
     zero_dc_channels: tuple[str, ...] = ()
     anchor_weight: float = 0.0
+    gray_channels: tuple[str, ...] = ()
+    gray_anchor_weight: float | None = None
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -414,7 +422,7 @@ class Params:
              "channels needs a gray channel: luma, logluma, grad or orient0..3 (the colour channels drop "
              "out for gray frames)")
         need(isinstance(self.zero_dc_channels, tuple)
-             and all(c in self.channels for c in self.zero_dc_channels),
+             and all(c in self.channels + self.gray_channels for c in self.zero_dc_channels),
              f"zero_dc_channels must be a tuple of names from channels; got {self.zero_dc_channels!r}")
         need(0 <= self.scale_steps <= 10, f"scale_steps must be in 0..10, got {self.scale_steps}")
         need(isinstance(self.scale_learning_rate, (int, float))
@@ -442,6 +450,16 @@ class Params:
         need(isinstance(self.score_luma, (int, float)) and not isinstance(self.score_luma, bool)
              and 0.0 <= self.score_luma <= 1.0 and self.score_colour + self.score_luma <= 1.0,
              f"score_luma must be in [0, 1 - score_colour], got {self.score_luma!r}")
+        need(self.gray_anchor_weight is None
+             or (isinstance(self.gray_anchor_weight, (int, float))
+                 and not isinstance(self.gray_anchor_weight, bool)
+                 and 0.0 <= self.gray_anchor_weight <= 1.0),
+             f"gray_anchor_weight must be None or in [0, 1], got {self.gray_anchor_weight!r}")
+        need(isinstance(self.gray_channels, tuple) and all(c in known for c in self.gray_channels)
+             and len(set(self.gray_channels)) == len(self.gray_channels)
+             and all(c not in ("opp_rg", "opp_yb") for c in self.gray_channels),
+             f"gray_channels must be a tuple of distinct gray channel names from {', '.join(known)}; "
+             f"got {self.gray_channels!r}")
         need(isinstance(self.anchor_weight, (int, float)) and not isinstance(self.anchor_weight, bool)
              and 0.0 <= self.anchor_weight <= 1.0,
              f"anchor_weight must be in [0, 1], got {self.anchor_weight!r}")

@@ -219,10 +219,16 @@ class Tracker:
         self._chan_ids: list[int] = []
         self._rect_planes: np.ndarray | None = None
         self._edge_rects: np.ndarray | None = None
-        if p.zero_dc != "none" and not p.channels:
+        # Frames without colour (gray, or BGR with equal channels) may use other channels and
+        # another anchor (Params.gray_channels, gray_anchor_weight).
+        gray = not ColourModel.usable(img)
+        channels = p.gray_channels if gray and p.gray_channels else p.channels
+        self._anchor_weight = (p.gray_anchor_weight if gray and p.gray_anchor_weight is not None
+                               else p.anchor_weight)
+        if p.zero_dc != "none" and not channels:
             self._bank_arrays = zero_dc_bank(p, self._bank_arrays, b[2], b[3])
-        if p.channels:
-            names = available_channels(p.channels, img)
+        if channels:
+            names = available_channels(channels, img)
             chan_rng = np.random.default_rng([self._seed, 1])
             self._feature_channel = chan_rng.integers(0, len(names), size=self._bank_arrays.size)
             if p.zero_dc != "none":
@@ -718,7 +724,7 @@ class Tracker:
                                                   p.scale_learning_rate, scale_pool.first(1))
         mu1_in, sigma1_in = pool.mu1, pool.sigma1
         if self._anchor is not None:  # pull the target model towards the first frame's
-            a = p.anchor_weight
+            a = self._anchor_weight
             mu1_in = (1.0 - a) * pool.mu1 + a * self._anchor[0]
             sigma1_in = (1.0 - a) * pool.sigma1 + a * self._anchor[1]
         mu1, sigma1, mu0, sigma0, selected, h, mu2, sigma2 = yield _Learn((
@@ -729,7 +735,7 @@ class Tracker:
             p.sigma_floor, p.guard, select, w, p.num_selected, p.gradient == "code", extra,
             second))
         pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg + len(wrong) > 0)
-        if p.anchor_weight > 0 and n_pos > 0 and self._anchor is None:
+        if self._anchor_weight > 0 and n_pos > 0 and self._anchor is None:
             self._anchor = (mu1.copy(), sigma1.copy())
         if scale_pool is not None:
             scale_pool.assign(mu2, sigma2, scale_pool.mu0, scale_pool.sigma0, n_pos > 0, False)
