@@ -78,7 +78,8 @@ PAPER = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
 OFF = {"scale_steps": 0, "scale_negatives": 0, "channels": (), "motion": "none",
        "gate_threshold": 0.0, "gate_drop": 0.0, "recovery_radius": 0, "colour_weight": 0.0,
        "score_colour": 0.0, "score_colour_model": "current", "score_luma": 0.0,
-       "scale_contrast": 0.0}
+       "scale_contrast": 0.0, "zero_dc": "none", "zero_dc_channels": (), "anchor_weight": 0.0,
+       "gray_channels": (), "gray_anchor_weight": None}
 
 
 @pytest.mark.parametrize("variant", PAPER)
@@ -102,6 +103,10 @@ def demo() -> tuple[list[np.ndarray], np.ndarray]:
     {"scale_negatives": 0}, {"scale_negatives": 4}, {"scale_contrast": 0.0}, {"colour_weight": 0.0}, {"colour_weight": 1.0}, {"channels": ("luma", "grad", "opp_rg", "opp_yb")},
     {"channels": ("luma", "grad")}, {"motion": "velocity"}, {"gate_threshold": 0.4},
     {"gate_drop": 1.0, "gate_learning_rate": 0.97}, {"recovery_radius": 40, "recovery_step": 5},
+    {"channels": ("logluma",)}, {"channels": ("logluma", "grad_x", "grad_y")},
+    {"zero_dc": "box"}, {"zero_dc": "subregion"},
+    {"channels": ("luma", "logluma"), "zero_dc": "box", "zero_dc_channels": ("logluma",)},
+    {"anchor_weight": 0.1}, {"anchor_weight": 1.0},
 ])
 def test_each_component_switches_and_tracks(demo, overrides: dict[str, object]) -> None:
     frames, gt = demo

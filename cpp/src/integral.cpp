@@ -1,7 +1,10 @@
 #include "wmiltrack/integral.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -220,7 +223,35 @@ void accumulate_row(const std::uint8_t* v, int w, const double* prev, double* ou
 #endif
 }
 
+// The kLogLuma table (computed once, thread-safe static initialisation).
+const std::array<std::uint8_t, 256>& log_luma_table() {
+  static const std::array<std::uint8_t, 256> table = [] {
+    std::array<std::uint8_t, 256> t{};
+    const double scale = 255.0 / std::log(271.0 / 16.0);
+    for (int v = 0; v < 256; ++v) {
+      t[static_cast<std::size_t>(v)] =
+          static_cast<std::uint8_t>(std::lround(scale * std::log((v + 16.0) / 16.0)));
+    }
+    return t;
+  }();
+  return table;
+}
+
+// out[c] = lut[in[c]] for c < n, eight pixels a step into a local buffer, then one copy: the
+// compiler need not reload after every byte store (for it, out may alias in and lut).
+void log_luma_row(const std::uint8_t* in, int n, const std::uint8_t* lut, std::uint8_t* out) {
+  int c = 0;
+  for (; c + 8 <= n; c += 8) {
+    std::uint8_t buf[8];
+    for (int k = 0; k < 8; ++k) buf[k] = lut[in[c + k]];
+    std::memcpy(out + c, buf, sizeof buf);
+  }
+  for (; c < n; ++c) out[c] = lut[in[c]];
+}
+
 }  // namespace
+
+std::uint8_t log_luma(std::uint8_t luma) { return log_luma_table()[luma]; }
 
 // compute() and compute_channels() build a new table in a fresh object and swap it in only
 // when complete: an exception (a bad argument, std::bad_alloc) leaves *this as it was.
@@ -252,14 +283,16 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
                                    const std::vector<int>& channels) {
   if (channels.empty()) throw std::invalid_argument("integral image: no channels requested");
   bool need_luma = false, need_grad = false, need_orient = false, need_colour = false;
+  bool need_gxy = false;
   for (int ch : channels) {
     if (ch < 0 || ch >= kNumChannelKinds) {
       throw std::invalid_argument("integral image: unknown channel id " + std::to_string(ch) +
                                   " (valid: 0 .. " + std::to_string(kNumChannelKinds - 1) + ")");
     }
-    need_luma = need_luma || ch == kLuma;
+    need_luma = need_luma || ch == kLuma || ch == kLogLuma;
     need_grad = need_grad || ch == kGrad;
-    need_orient = need_orient || ch >= kOrient0;
+    need_gxy = need_gxy || ch == kGradX || ch == kGradY;
+    need_orient = need_orient || (ch >= kOrient0 && ch <= kOrient3);
     need_colour = need_colour || ch == kOppRG || ch == kOppYB;
   }
   const Rect r0 = clip_roi(image, roi);
@@ -281,7 +314,7 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   data_.resize(static_cast<std::size_t>(ps) * static_cast<std::size_t>(n_planes));
   for (int k = 0; k < n_planes; ++k) std::fill_n(data_.data() + k * ps, s, 0.0);
 
-  const bool gradients = need_grad || need_orient;
+  const bool gradients = need_grad || need_orient || need_gxy;
   const std::size_t ext = static_cast<std::size_t>(w) + 2;
   const std::size_t wz = static_cast<std::size_t>(w);
   // Three luma rows (above, at, below the current row) with one extra column on each side.
@@ -290,22 +323,27 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   std::uint8_t* here = above + ext;
   std::uint8_t* below = here + ext;
   // Rows of channel values: gradient, 4 orientations, 2 opponent colours.
-  std::vector<std::uint8_t> rows(7 * wz);
+  std::vector<std::uint8_t> rows(10 * wz);
   std::uint8_t* grad = rows.data();
   std::uint8_t* orient[4] = {grad + wz, grad + 2 * wz, grad + 3 * wz, grad + 4 * wz};
   std::uint8_t* opp_rg = grad + 5 * wz;
   std::uint8_t* opp_yb = grad + 6 * wz;
+  std::uint8_t* log_l = grad + 7 * wz;
+  std::uint8_t* grad_x = grad + 8 * wz;
+  std::uint8_t* grad_y = grad + 9 * wz;
   std::vector<std::int32_t> scan(wz);
   const int last_row = image.rows - 1;
   if (gradients) {
     luma_row_ext(image, std::max(y0_ - 1, 0), x0_, w, above);
     luma_row_ext(image, std::min(y0_ + 1, last_row), x0_, w, below);
   }
-  bool want_rg = false, want_yb = false;
+  bool want_rg = false, want_yb = false, want_log = false;
   for (int ch : channels) {
     want_rg = want_rg || ch == kOppRG;
     want_yb = want_yb || ch == kOppYB;
+    want_log = want_log || ch == kLogLuma;
   }
+  const std::uint8_t* log_lut = log_luma_table().data();
 
   for (int r = 0; r < height_; ++r) {
     const int y = y0_ + r;
@@ -321,6 +359,14 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
       const std::uint8_t* __restrict l_mid = here;
       const std::uint8_t* __restrict l_down = below + 1;
       std::uint8_t* __restrict g_out = grad;
+      if (need_gxy) {
+        std::uint8_t* __restrict gx_out = grad_x;
+        std::uint8_t* __restrict gy_out = grad_y;
+        for (int c = 0; c < w; ++c) {
+          gx_out[c] = static_cast<std::uint8_t>(std::abs(l_mid[c + 2] - l_mid[c]));
+          gy_out[c] = static_cast<std::uint8_t>(std::abs(l_down[c] - l_up[c]));
+        }
+      }
       if (need_orient) {
         // orientation_bin without branches (the same exact tests; int32 is wide enough for
         // |g| <= 255) so that the loop vectorises. A zero gradient has magnitude 0 in every
@@ -345,7 +391,7 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
           o2[c] = static_cast<std::uint8_t>(mag & -b2);
           o3[c] = static_cast<std::uint8_t>(mag & -(diagonal & (1 - same_sign)));
         }
-      } else {
+      } else if (need_grad) {
         for (int c = 0; c < w; ++c) {
           const int gx = l_mid[c + 2] - l_mid[c];
           const int gy = l_down[c] - l_up[c];
@@ -355,6 +401,7 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
     } else if (need_luma) {
       luma_row(image, y, x0_, x0_ + w, here + 1);
     }
+    if (want_log) log_luma_row(here + 1, w, log_lut, log_l);
     if (want_rg || want_yb) {
       const std::uint8_t* px = image.data + y * image.row_stride + x0_ * image.col_stride;
       if (want_rg && want_yb) {
@@ -379,6 +426,9 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
                               : ch == kGrad  ? grad
                               : ch == kOppRG ? opp_rg
                               : ch == kOppYB ? opp_yb
+                              : ch == kLogLuma ? log_l
+                              : ch == kGradX ? grad_x
+                              : ch == kGradY ? grad_y
                                              : orient[ch - kOrient0];
       double* plane_k = data_.data() + k * ps;
       accumulate_row(v, w, plane_k + r * s, plane_k + (r + 1) * s, scan.data());

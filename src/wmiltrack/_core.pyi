@@ -26,6 +26,9 @@ CH_ORIENT0: Final[int]  # 4: CH_GRAD where the unsigned gradient angle is neares
 CH_ORIENT1: Final[int]  # 5: ... nearest 45 deg (from +x towards +y)
 CH_ORIENT2: Final[int]  # 6: ... nearest 90 deg
 CH_ORIENT3: Final[int]  # 7: ... nearest 135 deg
+CH_LOGLUMA: Final[int]  # 8: luma on a log scale (a 256-entry table; see integral.hpp)
+CH_GRAD_X: Final[int]  # 9: |gx|, the horizontal central difference of luma
+CH_GRAD_Y: Final[int]  # 10: |gy|, the vertical central difference of luma
 NUM_CHANNEL_KINDS: Final[int]  # 8
 
 class IntegralImage:

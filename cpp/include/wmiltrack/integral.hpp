@@ -34,8 +34,18 @@ enum Channel : int {
   kOrient1 = 5,  //   ... nearest 45 deg (gx, gy of equal sign; angle from +x towards +y)
   kOrient2 = 6,  //   ... nearest 90 deg
   kOrient3 = 7,  //   ... nearest 135 deg
+  kLogLuma = 8,  // log_luma(L): the luma on a log scale, so a change of brightness by a
+                 // factor (a shadow) is about an added constant (see log_luma below)
+  kGradX = 9,    // |gx|: horizontal intensity change (vertical edges), 0..255
+  kGradY = 10,   // |gy|: vertical intensity change (horizontal edges), 0..255
 };
-constexpr int kNumChannelKinds = 8;
+constexpr int kNumChannelKinds = 11;
+
+// The kLogLuma value of a luma L: round(255 * ln((L + 16) / 16) / ln(271 / 16)), 0..255.
+// The offset 16 keeps the darkest levels (where the sensor's noise is about as large as the
+// signal) from spreading over much of the range; over L = 40..255 a brightness factor k
+// moves the value by about 90 * ln k (k = 0.66, a shadow: about -37). A 256-entry table.
+std::uint8_t log_luma(std::uint8_t luma);
 
 // Orientation bin (0..3) of the gradient (gx, gy): the unsigned angle atan2(gy, gx) mod 180
 // rounded to the nearest multiple of 45 degrees, decided in exact integer arithmetic (the

@@ -24,6 +24,7 @@ SubregionMode = Literal["grid", "random"]
 MotionModel = Literal["none", "velocity"]
 ScaleModel = Literal["ratio", "likelihood", "both"]
 ScoreColourModel = Literal["current", "first"]
+ZeroDC = Literal["none", "box", "subregion"]
 
 _CHOICES: dict[str, tuple[str, ...]] = {
     "feature_kind": ("subregion", "random"),
@@ -38,6 +39,7 @@ _CHOICES: dict[str, tuple[str, ...]] = {
     "motion": ("none", "velocity"),
     "scale_model": ("ratio", "likelihood", "both"),
     "score_colour_model": ("current", "first"),
+    "zero_dc": ("none", "box", "subregion"),
 }
 
 
@@ -145,7 +147,9 @@ class Params:
         magnitude where the unsigned gradient angle is nearest 0, 45, 90, 135 degrees, else
         0: integral channel features, a four-bin histogram of oriented gradients summed by
         rectangles), ``"opp_rg"``, ``"opp_yb"`` (colour opponents; they drop out for gray
-        frames). Empty (the paper): luma only, one integral image.
+        frames), ``"logluma"`` (the luma on a log scale through a 256-entry table, so that a
+        change of brightness by a factor is about an added constant; see ``zero_dc``).
+        Empty (the paper): luma only, one integral image.
     scale_steps : int
         Scale search: after the translation search, also try the box scaled by
         ``scale_factor ** j`` for ``j = -scale_steps..scale_steps`` (0: the box keeps its
@@ -243,6 +247,28 @@ class Params:
         While lost (confidence below ``lost_threshold``), the coarse search is centred on
         the last confidently tracked box with this radius and step (``recovery_radius=0``:
         no recovery search).
+    zero_dc : {"none", "box", "subregion"}
+        Make every feature blind to an intensity offset added to the whole box (``box``) or
+        to the feature's sub-region (``subregion``; the box for ``random`` features): a
+        rectangle over that reference region is added to each feature with the weight that
+        makes the feature's weights times areas sum to zero, so the feature measures its
+        rectangles' means relative to the reference region's mean. On a log-intensity
+        channel (``"logluma"``) an offset is a multiplicative change of brightness (a
+        shadow). ``none``: the features as drawn.
+    zero_dc_channels : tuple of str
+        With ``zero_dc`` and ``channels``: only the features on these channels are made
+        blind to an offset (empty: every feature).
+    anchor_weight : float
+        Before every update, the target's Gaussians (mu1, sigma1) are pulled towards the
+        first frame's by this fraction (``mu1 <- (1 - a) mu1 + a mu1_first``, likewise
+        sigma1), so that a few frames of learning the wrong thing cannot rewrite what the
+        target looks like (0: off).
+    gray_channels : tuple of str
+        On frames without colour (gray, or BGR with three equal channels: where the colour
+        likelihood is off), use these channels instead of ``channels`` (empty: ``channels``
+        on every frame). Decided on the first frame.
+    gray_anchor_weight : float or None
+        On frames without colour, this ``anchor_weight`` instead (``None``: ``anchor_weight``).
     """
 
     variant: str = "rcwmil"
@@ -309,6 +335,11 @@ class Params:
     gate_learning_rate: float | None = None
     recovery_radius: int = 0
     recovery_step: int = 4
+    zero_dc: ZeroDC = "none"
+    zero_dc_channels: tuple[str, ...] = ()
+    anchor_weight: float = 0.0
+    gray_channels: tuple[str, ...] = ()
+    gray_anchor_weight: float | None = None
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -400,13 +431,17 @@ class Params:
             v = getattr(self, name)
             need(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
                  f"{name} must be a finite number, got {v!r}")
-        known = ("luma", "grad", "orient0", "orient1", "orient2", "orient3", "opp_rg", "opp_yb")
+        known = ("luma", "grad", "orient0", "orient1", "orient2", "orient3", "opp_rg", "opp_yb",
+                 "logluma", "grad_x", "grad_y")
         need(isinstance(self.channels, tuple) and all(c in known for c in self.channels)
              and len(set(self.channels)) == len(self.channels),
              f"channels must be a tuple of distinct names from {', '.join(known)}; got {self.channels!r}")
         need(self.channels == () or any(c not in ("opp_rg", "opp_yb") for c in self.channels),
-             "channels needs a gray channel: luma, grad or orient0..3 (the colour channels drop "
+             "channels needs a gray channel: luma, logluma, grad or orient0..3 (the colour channels drop "
              "out for gray frames)")
+        need(isinstance(self.zero_dc_channels, tuple)
+             and all(c in self.channels + self.gray_channels for c in self.zero_dc_channels),
+             f"zero_dc_channels must be a tuple of names from channels; got {self.zero_dc_channels!r}")
         need(0 <= self.scale_steps <= 10, f"scale_steps must be in 0..10, got {self.scale_steps}")
         need(isinstance(self.scale_learning_rate, (int, float))
              and not isinstance(self.scale_learning_rate, bool)
@@ -437,6 +472,19 @@ class Params:
         need(isinstance(self.score_luma, (int, float)) and not isinstance(self.score_luma, bool)
              and 0.0 <= self.score_luma <= 1.0 and self.score_colour + self.score_luma <= 1.0,
              f"score_luma must be in [0, 1 - score_colour], got {self.score_luma!r}")
+        need(self.gray_anchor_weight is None
+             or (isinstance(self.gray_anchor_weight, (int, float))
+                 and not isinstance(self.gray_anchor_weight, bool)
+                 and 0.0 <= self.gray_anchor_weight <= 1.0),
+             f"gray_anchor_weight must be None or in [0, 1], got {self.gray_anchor_weight!r}")
+        need(isinstance(self.gray_channels, tuple) and all(c in known for c in self.gray_channels)
+             and len(set(self.gray_channels)) == len(self.gray_channels)
+             and all(c not in ("opp_rg", "opp_yb") for c in self.gray_channels),
+             f"gray_channels must be a tuple of distinct gray channel names from {', '.join(known)}; "
+             f"got {self.gray_channels!r}")
+        need(isinstance(self.anchor_weight, (int, float)) and not isinstance(self.anchor_weight, bool)
+             and 0.0 <= self.anchor_weight <= 1.0,
+             f"anchor_weight must be in [0, 1], got {self.anchor_weight!r}")
         need(self.gate_drop >= 0.0, f"gate_drop must be >= 0, got {self.gate_drop}")
         need(0.0 <= self.gate_threshold <= 1.0,
              f"gate_threshold must be in [0, 1], got {self.gate_threshold}")

@@ -28,6 +28,7 @@ from .features import (
     min_box_size,
     rect_planes,
     scale_bank,
+    zero_dc_bank,
 )
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .params import CONFIDENCE_OFFSET, Params
@@ -218,10 +219,22 @@ class Tracker:
         self._chan_ids: list[int] = []
         self._rect_planes: np.ndarray | None = None
         self._edge_rects: np.ndarray | None = None
-        if p.channels:
-            names = available_channels(p.channels, img)
+        # Frames without colour (gray, or BGR with equal channels) may use other channels and
+        # another anchor (Params.gray_channels, gray_anchor_weight).
+        gray = not ColourModel.usable(img)
+        channels = p.gray_channels if gray and p.gray_channels else p.channels
+        self._anchor_weight = (p.gray_anchor_weight if gray and p.gray_anchor_weight is not None
+                               else p.anchor_weight)
+        if p.zero_dc != "none" and not channels:
+            self._bank_arrays = zero_dc_bank(p, self._bank_arrays, b[2], b[3])
+        if channels:
+            names = available_channels(channels, img)
             chan_rng = np.random.default_rng([self._seed, 1])
             self._feature_channel = chan_rng.integers(0, len(names), size=self._bank_arrays.size)
+            if p.zero_dc != "none":
+                which = np.array([not p.zero_dc_channels or c in p.zero_dc_channels
+                                  for c in names], dtype=bool)[self._feature_channel]
+                self._bank_arrays = zero_dc_bank(p, self._bank_arrays, b[2], b[3], which)
             self._chan_names = names
             self._chan_ids = [CHANNEL_IDS[c] for c in names]
             self._rect_planes = rect_planes(self._bank_arrays, self._feature_channel)
@@ -241,6 +254,7 @@ class Tracker:
         self._scale_boxes: list[IntBox] = []
         self._cue_table: tuple[np.ndarray, int, int] | None = None
         self._pool = GaussianPool(p)
+        self._anchor: tuple[np.ndarray, np.ndarray] | None = None
         self._scale_pool = (GaussianPool(p.replace(learning_rate=p.scale_learning_rate))
                             if p.scale_steps > 0 and p.scale_model != "ratio" else None)
         self._selected = np.arange(p.num_selected, dtype=np.int32)
@@ -711,14 +725,21 @@ class Tracker:
         scale_pool = self._scale_pool
         second = None if scale_pool is None else (scale_pool.mu1, scale_pool.sigma1,
                                                   p.scale_learning_rate, scale_pool.first(1))
+        mu1_in, sigma1_in = pool.mu1, pool.sigma1
+        if self._anchor is not None:  # pull the target model towards the first frame's
+            a = self._anchor_weight
+            mu1_in = (1.0 - a) * pool.mu1 + a * self._anchor[0]
+            sigma1_in = (1.0 - a) * pool.sigma1 + a * self._anchor[1]
         mu1, sigma1, mu0, sigma0, selected, h, mu2, sigma2 = yield _Learn((
             self._ii, self._bank_at(self._scale_index)[0], corners[:, 0], corners[:, 1], n_pos,
-            pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
+            mu1_in, sigma1_in, pool.mu0, pool.sigma0,
             p.learning_rate if learning_rate is None else learning_rate,
             pool.first(1), pool.first(0), p.first_update == "direct", p.classifier == "mil",
             p.sigma_floor, p.guard, select, w, p.num_selected, p.gradient == "code", extra,
             second))
         pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg + len(wrong) > 0)
+        if self._anchor_weight > 0 and n_pos > 0 and self._anchor is None:
+            self._anchor = (mu1.copy(), sigma1.copy())
         if scale_pool is not None:
             scale_pool.assign(mu2, sigma2, scale_pool.mu0, scale_pool.sigma0, n_pos > 0, False)
         if selected is not None:
