@@ -79,7 +79,7 @@ OFF = {"scale_steps": 0, "scale_negatives": 0, "channels": (), "motion": "none",
        "gate_threshold": 0.0, "gate_drop": 0.0, "recovery_radius": 0, "colour_weight": 0.0,
        "score_colour": 0.0, "score_colour_model": "current", "score_luma": 0.0,
        "scale_contrast": 0.0, "zero_dc": "none", "zero_dc_channels": (), "anchor_weight": 0.0,
-       "gray_channels": (), "gray_anchor_weight": None}
+       "gray_channels": (), "gray_anchor_weight": None, "gray_colour": False}
 
 
 @pytest.mark.parametrize("variant", PAPER)
@@ -131,7 +131,7 @@ def test_colour_channels_drop_out_for_gray_frames(demo) -> None:
     for f in gray[1:]:
         t.update(f)
     assert t._ii.channels == (_core.CH_LUMA, _core.CH_GRAD)
-    c = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    c = wmiltrack.Tracker("rcwmil-plus", seed=0, gray_colour=False)
     c.init(gray[0], gt[0])
     assert c._colour is None  # no colour likelihood on gray frames either
     c.init(frames[0], gt[0])
@@ -140,6 +140,30 @@ def test_colour_channels_drop_out_for_gray_frames(demo) -> None:
     assert t._chan_names == ("luma", "grad", "opp_rg", "opp_yb")
     with pytest.raises(ValueError, match="gray"):
         t.update(gray[1])
+
+
+def test_gray_colour_reads_luma_histograms_on_gray_frames_only(demo) -> None:
+    frames, gt = demo
+    gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
+    on = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    on.init(gray[0], gt[0])
+    assert on._colour is not None and on._colour.histograms.intensity
+    on.init(frames[0], gt[0])
+    assert on._colour is not None and not on._colour.histograms.intensity
+    # colour frames: the option changes nothing
+    np.testing.assert_array_equal(_run(frames, gt, "rcwmil-plus"),
+                                  _run(frames, gt, "rcwmil-plus", gray_colour=False))
+    # gray frames: the luma likelihood joins the search and the scale's contrast
+    with_luma = _run(gray, gt, "rcwmil-plus")
+    without = _run(gray, gt, "rcwmil-plus", gray_colour=False)
+    assert not np.array_equal(with_luma, without)
+    assert np.mean(iou(with_luma, gt)) > 0.5, np.mean(iou(with_luma, gt))
+
+
+@pytest.mark.parametrize("value", [1, 0, None, "yes"])
+def test_gray_colour_is_validated(value: object) -> None:
+    with pytest.raises(ValueError, match="gray_colour"):
+        wmiltrack.Params.for_variant("rcwmil-plus").replace(gray_colour=value)
 
 
 def _box_sums(table: np.ndarray, x: np.ndarray, y: np.ndarray, w: np.ndarray,
@@ -296,9 +320,12 @@ def test_score_colour_changes_the_report_only(demo) -> None:
     assert np.all((s1 >= 0) & (s1 <= 1)) and not np.allclose(s0, s1)
     np.testing.assert_array_equal(ok1, s1 >= wmiltrack.Params.for_variant("rcwmil-plus").lost_threshold)
     gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
-    _, g0, _ = run(gray, score_colour=0.0)
-    _, g1, _ = run(gray, score_colour=0.5)
+    _, g0, _ = run(gray, score_colour=0.0, gray_colour=False)
+    _, g1, _ = run(gray, score_colour=0.5, gray_colour=False)
     np.testing.assert_array_equal(g0, g1)  # no colour model on gray frames: the classifier's
+    _, l0, _ = run(gray, score_colour=0.0)
+    _, l1, _ = run(gray, score_colour=0.5)
+    assert not np.allclose(l0, l1)  # gray_colour: the luma histograms' contrast
 
 
 def test_score_drops_when_the_target_vanishes() -> None:
@@ -534,7 +561,7 @@ def test_scale_contrast_is_off_without_colour(demo, monkeypatch) -> None:
     frames, gt = demo
     gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames[:5]]
     monkeypatch.setattr(Tracker, "_colour_contrast", lambda self, box: pytest.fail("read"))
-    t = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, gray_colour=False)
     t.init(gray[0], gt[0])
     for f in gray[1:]:
         t.update(f)

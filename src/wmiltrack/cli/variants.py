@@ -50,7 +50,7 @@ def variant_table() -> str:
             if p.channels:
                 parts.append("channels " + "+".join(p.channels))
             if p.colour_weight > 0:
-                parts.append(f"colour {p.colour_weight:g}")
+                parts.append(f"colour {p.colour_weight:g}" + (" (luma on gray)" if p.gray_colour else ""))
             if p.motion != "none":
                 parts.append(f"motion {p.motion}")
             if p.score_colour > 0:

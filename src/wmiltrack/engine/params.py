@@ -269,6 +269,11 @@ class Params:
         on every frame). Decided on the first frame.
     gray_anchor_weight : float or None
         On frames without colour, this ``anchor_weight`` instead (``None``: ``anchor_weight``).
+    gray_colour : bool
+        On frames without colour, the colour likelihood (``colour_weight``, ``scale_contrast``,
+        ``score_colour``) reads histograms of the pixels' luma instead of being off: how bright
+        the target is against its surroundings is the colour cue that a gray video has.
+        Decided on the first frame.
     """
 
     variant: str = "rcwmil"
@@ -340,6 +345,7 @@ class Params:
     anchor_weight: float = 0.0
     gray_channels: tuple[str, ...] = ()
     gray_anchor_weight: float | None = None
+    gray_colour: bool = False
     description: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -472,6 +478,8 @@ class Params:
         need(isinstance(self.score_luma, (int, float)) and not isinstance(self.score_luma, bool)
              and 0.0 <= self.score_luma <= 1.0 and self.score_colour + self.score_luma <= 1.0,
              f"score_luma must be in [0, 1 - score_colour], got {self.score_luma!r}")
+        need(isinstance(self.gray_colour, bool),
+             f"gray_colour must be True or False, got {self.gray_colour!r}")
         need(self.gray_anchor_weight is None
              or (isinstance(self.gray_anchor_weight, (int, float))
                  and not isinstance(self.gray_anchor_weight, bool)
@@ -581,14 +589,14 @@ VARIANTS: dict[str, Params] = {
         variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
         scale_negatives=2, scale_contrast=20.0, score_colour=0.33, score_colour_model="first",
-        score_luma=0.33, colour_sample=16384,
-        description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into "
-        "the search (0.7), a constant-velocity search centre, and scale search by scaled Haar "
-        "rectangles (1.03^-1, 1, 1.03^+1; classifier score plus a slow target likelihood, "
-        "penalised away from the current scale, plus 20 x the box's colour contrast; boxes "
-        "1.03^+-2 off learnt as negatives); the reported score also counts the box's colour and "
-        "intensity contrast under the first frame's histograms; the histograms read at most "
-        "about 16 384 pixels of a region.",
+        score_luma=0.33, colour_sample=16384, gray_colour=True,
+        description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into the search "
+        "(0.7; on gray video a likelihood of the pixels' luma), a constant-velocity search "
+        "centre, and scale search by scaled Haar rectangles (1.03^-1, 1, 1.03^+1; classifier "
+        "score plus a slow target likelihood, penalised away from the current scale, plus 20 x "
+        "the box's colour contrast; boxes 1.03^+-2 off learnt as negatives); the reported score"
+        " also counts the box's colour and intensity contrast under the first frame's "
+        "histograms; the histograms read at most about 16 384 pixels of a region.",
     ),
 }
 
