@@ -4,6 +4,7 @@ Usage::
 
     python benchmarks/fps_compare.py                 # 3 frame sizes x 3 box sizes, ~2-4 min
     python benchmarks/fps_compare.py --quick         # 2 x 2, fewer frames, < 1 min
+    python benchmarks/fps_compare.py --gray          # the same on one-channel gray frames
     PATH/TO/contrib-venv/bin/python benchmarks/fps_compare.py   # all 7 OpenCV trackers
 
 For each frame size (320x240, 640x480, 1280x720) and target size (32, 64, 128 px) a synthetic
@@ -76,6 +77,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument(
         "--cv-threads", type=int, default=1, help="cv2.setNumThreads for OpenCV (default 1)"
     )
+    ap.add_argument(
+        "--gray",
+        action="store_true",
+        help="convert the frames to one-channel gray first (every tracker gets the same frames)",
+    )
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
     args = ap.parse_args(argv)
 
@@ -108,7 +114,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(
         f"# {cpu_model()}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy "
         f"{np.__version__}, OpenCV {cv2.__version__} ({dist} {ver}), OpenCV threads "
-        f"{cv2.getNumThreads()}; {n_frames} frames per run, median of {repeats} runs, "
+        f"{cv2.getNumThreads()}; {n_frames} {'gray ' if args.gray else ''}frames per run, "
+        f"median of {repeats} runs, "
         "update-only FPS; every tracker timed in this process"
     )
 
@@ -123,6 +130,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             n_frames, size=(h, w), target_size=(b, b), seed=1, name=f"synthetic-{key}"
         )
         frames = seq.load()
+        if args.gray:
+            frames = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
         assert seq.groundtruth is not None
         gt = np.asarray(seq.groundtruth, dtype=np.float64)
         per: dict[str, list[float]] = {t: [] for t in trackers}
@@ -169,6 +178,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "opencv": f"{cv2.__version__} ({dist} {ver})",
             "opencv_threads": cv2.getNumThreads(),
             "frames": n_frames,
+            "gray": args.gray,
             "repeats": repeats,
             "fps_median": fps,
             "mean_iou": ious,

@@ -103,6 +103,17 @@ def test_fps_compare_tiny() -> None:
     assert "| opencv:MIL | 1.0 |" in r.stdout
 
 
+def test_fps_compare_gray_frames(tmp_path: Path) -> None:
+    out = tmp_path / "fps.json"
+    r = _run([str(BENCH / "fps_compare.py"), "--sizes", "128x96", "--boxes", "24", "--frames", "8",
+              "--repeats", "1", "--trackers", "rcwmil-plus,opencv:MIL", "--gray", "--json", str(out)])
+    assert r.returncode == 0, r.stderr
+    assert "8 gray frames per run" in r.stdout
+    doc = json.loads(out.read_text())
+    assert doc["gray"] is True and set(doc["fps_median"]) == {"rcwmil-plus", "opencv:MIL"}
+    assert 0.0 <= doc["mean_iou"]["rcwmil-plus"]["128x96/24"] <= 1.0
+
+
 def test_cpp_bench_binary_if_built() -> None:
     exe = REPO / "build" / "bench" / "benchmarks" / "cpp" / "bench_core"
     if not exe.is_file():
