@@ -114,6 +114,24 @@ def test_fps_compare_gray_frames(tmp_path: Path) -> None:
     assert 0.0 <= doc["mean_iou"]["rcwmil-plus"]["128x96/24"] <= 1.0
 
 
+def test_ablation_on_a_generated_dataset(tmp_path: Path) -> None:
+    data = _tiny_dataset(tmp_path)
+    out = tmp_path / "ablation.json"
+    r = _run([str(BENCH / "ablation.py"), "--otb", str(data), "--seeds", "0,1", "--rows",
+              "rcwmil,rcwmil + colour,rcwmil-plus", "--fps-sequences", "SynC", "--fps-frames", "6",
+              "--fps-repeats", "1", "--no-progress", "--json", str(out)])
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(out.read_text())
+    assert list(doc["rows"]) == ["rcwmil", "rcwmil + colour", "rcwmil-plus"]
+    assert doc["rows"]["rcwmil + colour"].startswith("rcwmil:colour_weight=0.7")
+    for title in doc["rows"]:
+        assert len(doc["auc"][title]) == 2 and all(0.0 <= a <= 1.0 for a in doc["auc"][title])
+        assert doc["fps"][title] > 0
+        assert f"| {title} | {sum(doc['auc'][title]) / 2:.3f} |" in r.stdout
+    bad = _run([str(BENCH / "ablation.py"), "--otb", str(data), "--rows", "nonsense"])
+    assert bad.returncode == 2 and "unknown rows" in bad.stderr
+
+
 def test_cpp_bench_binary_if_built() -> None:
     exe = REPO / "build" / "bench" / "benchmarks" / "cpp" / "bench_core"
     if not exe.is_file():

@@ -1,0 +1,173 @@
+"""rcwmil-plus's ablation: mean AUC over seeds and update FPS of each component, added to
+rcwmil one at a time and taken out of rcwmil-plus one at a time.
+
+Usage::
+
+    python benchmarks/ablation.py                      # 17 shared sequences x seeds 0-2, ~4 min
+    python benchmarks/ablation.py --seeds 3,4 -j 2     # other seeds, two worker processes
+    python benchmarks/ablation.py --json ablation.json --rows "+ colour,rcwmil-plus"
+
+AUC: ``wmiltrack eval``'s OPE pipeline (:func:`wmiltrack.eval.pipeline.run_eval`) on the OTB
+folder (``--otb``, default ``$WMILTRACK_OTB`` or ``../shared/data/otb``), one run per seed,
+a box on every frame (``missing="hold"``), one OpenCV thread; the mean over sequences for each
+seed, then over seeds.  FPS: update-only, measured in this process one configuration after the
+other (interleaved within each round) on the first ``--fps-frames`` frames of a few sequences
+decoded into memory beforehand, seed 0, median over ``--fps-repeats`` rounds.  OpenCV's
+TrackerMIL (and CSRT where the installed ``cv2`` has it) run on the same frames in the same
+rounds as the reference.  The configurations are tracker specs (``name:field=value``), so a
+row of the table is also a ``wmiltrack.Tracker`` call.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import wmiltrack  # noqa: F401
+except ImportError:  # a checkout that was not installed
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from wmiltrack.engine.params import Params
+
+#: Each component with the rcwmil-plus values that switch it on (added to rcwmil) and the
+#: values that switch it off (taken out of rcwmil-plus).
+_PLUS = Params.for_variant("rcwmil-plus")
+COMPONENTS: dict[str, tuple[dict[str, object], dict[str, object]]] = {
+    "scale": (
+        {"scale_steps": _PLUS.scale_steps, "scale_factor": _PLUS.scale_factor,
+         "scale_model": _PLUS.scale_model, "scale_mix": _PLUS.scale_mix,
+         "scale_penalty": _PLUS.scale_penalty, "scale_negatives": _PLUS.scale_negatives},
+        {"scale_steps": 0, "scale_negatives": 0},
+    ),
+    "colour": (
+        {"colour_weight": _PLUS.colour_weight, "colour_sample": _PLUS.colour_sample,
+         "gray_colour": _PLUS.gray_colour},
+        {"colour_weight": 0.0},
+    ),
+    "motion": ({"motion": _PLUS.motion}, {"motion": "none"}),
+    "channels": ({"channels": ("luma", "grad", "opp_rg", "opp_yb")}, {}),
+    "gated update": ({"gate_threshold": 0.3}, {}),
+    "scale contrast": ({}, {"scale_contrast": 0.0}),
+    "luma on gray": ({}, {"gray_colour": False}),
+    "first-frame score": ({}, {"score_colour": 0.0, "score_luma": 0.0}),
+}
+
+
+def spec(name: str, overrides: dict[str, object]) -> str:
+    """``name:field=value:...`` (values as Python literals, read back by ``literal_eval``)."""
+    return ":".join([name, *(f"{k}={v!r}" for k, v in overrides.items())])
+
+
+def default_rows() -> dict[str, str]:
+    """Row title -> tracker spec: rcwmil, + each component, rcwmil-plus, - each component."""
+    rows = {"rcwmil": "rcwmil"}
+    for comp, (on, _) in COMPONENTS.items():
+        if on:
+            rows[f"rcwmil + {comp}"] = spec("rcwmil", on)
+    rows["rcwmil-plus"] = "rcwmil-plus"
+    for comp, (_, off) in COMPONENTS.items():
+        if off:
+            rows[f"rcwmil-plus - {comp}"] = spec("rcwmil-plus", off)
+    return rows
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ablation; print the markdown table; return the exit status."""
+    from wmiltrack.data.sequences import default_otb_root, list_otb_sequences, load_otb_sequence
+    from wmiltrack.eval.peers import available_opencv_trackers
+    from wmiltrack.eval.pipeline import run_eval
+    from wmiltrack.eval.runner import run_sequence, set_cv_threads
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
+    ap.add_argument("--otb", type=Path, default=None, help="OTB folder (default $WMILTRACK_OTB "
+                    "or ../shared/data/otb)")
+    ap.add_argument("--seeds", default="0,1,2", help="tracker seeds (default 0,1,2)")
+    ap.add_argument("-j", "--jobs", type=int, default=1, help="worker processes for the AUC runs")
+    ap.add_argument("--rows", default=None, help="comma-separated row titles (default: all)")
+    ap.add_argument("--sequences", default=None, help="comma-separated sequence names (default all)")
+    ap.add_argument("--fps-sequences", default="David,Coke,Surfer,Panda",
+                    help="sequences whose first frames time the updates")
+    ap.add_argument("--fps-frames", type=int, default=150)
+    ap.add_argument("--fps-repeats", type=int, default=3)
+    ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    args = ap.parse_args(argv)
+
+    root = args.otb or default_otb_root()
+    paths = list_otb_sequences(root)
+    if not paths:
+        print(f"no OTB sequences under {root} (set --otb or $WMILTRACK_OTB)", file=sys.stderr)
+        return 2
+    rows = default_rows()
+    if args.rows:
+        wanted = [r.strip() for r in args.rows.split(",") if r.strip()]
+        unknown = [r for r in wanted if r not in rows]
+        if unknown:
+            print(f"unknown rows {unknown}; known: {list(rows)}", file=sys.stderr)
+            return 2
+        rows = {r: rows[r] for r in wanted}
+    seeds = [int(s) for s in args.seeds.split(",")]
+    names = [s.strip() for s in args.sequences.split(",")] if args.sequences else None
+
+    # AUC: one run_eval per seed over every row (the pipeline's own conventions)
+    auc: dict[str, list[float]] = {title: [] for title in rows}
+    with tempfile.TemporaryDirectory() as tmp:
+        for seed in seeds:
+            doc = run_eval(root, Path(tmp) / f"seed{seed}", trackers=list(rows.values()),
+                           sequences=names, jobs=args.jobs, repeats=1, seed=seed, plots=False,
+                           show_progress=not args.no_progress)
+            for title, s in rows.items():
+                per_seq = doc["results"][s]
+                auc[title].append(float(np.mean([v["runs"][0]["auc"] for v in per_seq.values()])))
+
+    # FPS: the same frames for every configuration, in this process, interleaved
+    set_cv_threads(1)
+    peers = [f"opencv:{n}" for n in ("MIL", "CSRT") if n in available_opencv_trackers()]
+    timed = {**rows, **{p: p for p in peers}}
+    clips = []
+    for path in paths:
+        if path.name in args.fps_sequences.split(","):
+            seq = load_otb_sequence(path)
+            frames = seq.load()[: args.fps_frames]
+            clips.append((frames, np.asarray(seq.groundtruth, dtype=np.float64)[0]))
+    fps: dict[str, float] = {}
+    if clips:
+        per: dict[str, list[float]] = {t: [] for t in timed}
+        for _ in range(args.fps_repeats):
+            for title, s in timed.items():
+                n = sum(len(f) - 1 for f, _ in clips)
+                seconds = sum((len(f) - 1) / run_sequence(s, f, box, seed=0, raise_errors=True).fps
+                              for f, box in clips)
+                per[title].append(n / seconds)
+        fps = {t: statistics.median(v) for t, v in per.items()}
+
+    print(f"\nrcwmil-plus ablation: {len(paths) if names is None else len(names)} sequences of "
+          f"{root}, seeds {args.seeds}; mean AUC over sequences, then over seeds; update FPS on "
+          f"the first {args.fps_frames} frames of {args.fps_sequences} (median of "
+          f"{args.fps_repeats} rounds, one process, one OpenCV thread)\n")
+    print("| configuration | mean AUC | " + " / ".join(f"seed {s}" for s in seeds) + " | FPS |")
+    print("|---|---|---|---|")
+    for title in rows:
+        a = auc[title]
+        print(f"| {title} | {np.mean(a):.3f} | " + " / ".join(f"{x:.3f}" for x in a)
+              + f" | {fps.get(title, float('nan')):.0f} |")
+    for p in peers:
+        print(f"| {p} | (not run: see `wmiltrack eval`) | | {fps[p]:.0f} |")
+    print("\nSpecs: " + "; ".join(f"{t}: `{s}`" for t, s in rows.items()))
+    if args.json is not None:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({"rows": rows, "seeds": seeds, "auc": auc, "fps": fps},
+                                        indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
