@@ -312,10 +312,12 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     assert _core.learn_many([], 2) == []
 
 
-def test_search_with_a_colour_cue_takes_the_merged_first_maximum() -> None:
+@pytest.mark.parametrize("relative", [None, False, True])
+def test_search_with_a_colour_cue_takes_the_merged_first_maximum(relative: bool | None) -> None:
     """search(colour=...) picks, stage by stage, the first maximum in row-major order of
-    (1 - w) logistic(raw / K - offset) + w * (box mean of the cue), reports that candidate's
-    raw score, and refuses a candidate outside the cue's table."""
+    (1 - w) logistic((raw - ref) / K - offset) + w * (box mean of the cue), ref = 0 or (relative)
+    the stage's best raw score, reports that candidate's raw score, and refuses a candidate
+    outside the cue's table."""
     rng, _, _, bank, ii = grid_scene(11)
     sel = np.array([4, 1, 2], dtype=np.int32)
     mu1, mu0 = rng.normal(0, 300, 6), rng.normal(0, 300, 6)
@@ -324,8 +326,9 @@ def test_search_with_a_colour_cue_takes_the_merged_first_maximum() -> None:
     table = cv2.integral(cue_map, sdepth=cv2.CV_64F)  # region starts at frame pixel (10, 5)
     x0, y0, weight, offset = 10, 5, 0.7, 0.3
     box, stages = (60, 50, 20, 20), [(25, 4), (10, 1)]
+    extra = () if relative is None else (relative,)
     got = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                       colour=(table, x0, y0, weight, offset))
+                       colour=(table, x0, y0, weight, offset, *extra))
     at = box
     for (radius, step), (dx, dy, raw, n) in zip(stages, got):
         _, _, _, _, grid = _core.score_grid(ii, bank, sel, mu1[sel], s1[sel], mu0[sel], s0[sel],
@@ -334,7 +337,8 @@ def test_search_with_a_colour_cue_takes_the_merged_first_maximum() -> None:
         rows, cols = np.nonzero(np.isfinite(grid))
         xs, ys = at[0] + (cols - half) * step - x0, at[1] + (rows - half) * step - y0
         mean = (table[ys + 20, xs + 20] - table[ys, xs + 20] - table[ys + 20, xs] + table[ys, xs]) / 400.0
-        conf = 0.5 * (1.0 + np.tanh(0.5 * (grid[rows, cols] / 3 - offset)))
+        ref = grid[rows, cols].max() if relative else 0.0
+        conf = 0.5 * (1.0 + np.tanh(0.5 * ((grid[rows, cols] - ref) / 3 - offset)))
         best = int(np.argmax((1.0 - weight) * conf + weight * mean))
         assert (dx, dy) == ((cols[best] - half) * step, (rows[best] - half) * step)
         assert raw == grid[rows[best], cols[best]] and n == rows.size
@@ -351,6 +355,32 @@ def test_search_with_a_colour_cue_takes_the_merged_first_maximum() -> None:
     with pytest.raises(ValueError, match="weight"):
         _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
                      colour=(table, x0, y0, 1.5, offset))
+    with pytest.raises(ValueError, match="relative"):
+        _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
+                     colour=(table, x0, y0, weight, offset, True, 1))
+
+
+def test_relative_colour_merge_keeps_the_classifier_when_its_confidence_collapsed() -> None:
+    """When every candidate's raw score is far below zero, the absolute merge's confidence is ~0
+    everywhere and the cue alone picks the box, whatever its weight; measured from the stage's
+    best, the classifier's choice still wins against a cue with little weight."""
+    rng, _, _, bank, ii = grid_scene(11)
+    sel = np.array([4, 1, 2], dtype=np.int32)
+    mu1, mu0 = rng.normal(0, 300, 6), rng.normal(0, 300, 6)
+    s1, s0 = np.full(6, 1.0), np.full(6, 1e4)  # a narrow target model: raw << 0 on the grid
+    box, stages = (60, 50, 20, 20), [(25, 4)]
+    plain = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120))
+    assert plain[0][2] / 3 < -40  # the absolute confidence has collapsed
+    # a cue that is highest far from the classifier's choice
+    cue_map = np.zeros((100, 130))
+    cue_map[:30, :30] = 1.0
+    table = cv2.integral(cue_map, sdepth=cv2.CV_64F)
+    absolute = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
+                            colour=(table, 10, 5, 0.05, 1.4))
+    relative = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
+                            colour=(table, 10, 5, 0.05, 0.0, True))
+    assert absolute[0][:2] != plain[0][:2]
+    assert relative[0][:2] == plain[0][:2]
 
 
 def test_template_fit_is_numpy_mean_of_log1p_z_squared() -> None:

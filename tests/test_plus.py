@@ -385,12 +385,13 @@ def test_plus_score_falls_when_the_target_is_hidden(case: str) -> None:
     # the first frame's histograms do not, so most hidden frames stay reported lost
     assert np.mean([r.ok for r in rs[hidden.start + 1:hidden.stop - 1]]) < 1 / 3
     # and the score stays below that of the contrast under the colours learnt as it goes (the
-    # two reports on the same boxes, those of the preset before scale_contrast; with it the
-    # occluded case's medians are 0.42 and 0.44)
+    # two reports on the same boxes, those of the preset before scale_contrast and
+    # colour_relative; with scale_contrast the occluded case's medians are 0.42 and 0.44, and
+    # with colour_relative too 0.42 and 0.43)
     scores = []
     for model, luma in (("first", p.score_luma), ("current", 0.0)):
-        t = wmiltrack.Tracker("rcwmil-plus", seed=0, scale_contrast=0.0, score_colour_model=model,
-                              score_luma=luma)
+        t = wmiltrack.Tracker("rcwmil-plus", seed=0, scale_contrast=0.0, colour_relative=None,
+                              score_colour_model=model, score_luma=luma)
         t.init(frames[0], gt[0])
         scores.append(np.array([t.update(f).score for f in frames[1:hidden.stop]]))
     first, adaptive = (s[hidden.start + 1:hidden.stop - 1] for s in scores)
@@ -565,3 +566,20 @@ def test_scale_contrast_is_off_without_colour(demo, monkeypatch) -> None:
     t.init(gray[0], gt[0])
     for f in gray[1:]:
         t.update(f)
+
+
+@pytest.mark.parametrize("value", [math.inf, math.nan, True, "0"])
+def test_colour_relative_is_validated(value: object) -> None:
+    with pytest.raises(ValueError, match="colour_relative"):
+        wmiltrack.Params.for_variant("rcwmil-plus", colour_relative=value)
+
+
+
+def test_colour_relative_in_the_preset_only() -> None:
+    """The preset reads the classifier relative to the grid's best; no paper preset merges a
+    colour cue, and ``None`` (the absolute reading) is accepted."""
+    assert wmiltrack.Params.for_variant("rcwmil-plus").colour_relative == 0.0
+    for name, p in wmiltrack.variants().items():
+        if name != "rcwmil-plus":
+            assert p.colour_relative is None and p.colour_weight == 0.0
+    assert wmiltrack.Params.for_variant("rcwmil-plus", colour_relative=None).colour_relative is None

@@ -97,8 +97,15 @@ SearchJob make_search(SharedIntegralImage& ii, const py::object& frame,
     require_planes(*computed_table(ii), bank);
   }
   if (!colour.is_none()) {
-    const auto [table, x0, y0, weight, offset] =
-        colour.cast<std::tuple<CArray<double>, int, int, double, double>>();
+    const auto items = colour.cast<py::tuple>();
+    require(items.size() == 5 || items.size() == 6,
+            "colour must be (table, x0, y0, weight, offset) or (..., offset, relative)");
+    const auto table = items[0].cast<CArray<double>>();
+    const auto x0 = items[1].cast<int>();
+    const auto y0 = items[2].cast<int>();
+    const auto weight = items[3].cast<double>();
+    const auto offset = items[4].cast<double>();
+    const bool relative = items.size() == 6 && items[5].cast<bool>();
     require(table.ndim() == 2 && table.shape(0) >= 1 && table.shape(1) >= 1,
             "colour: the table must be a 2-D integral image (rows + 1) x (cols + 1)");
     require(weight >= 0.0 && weight <= 1.0, "colour: the weight must be in [0, 1]");
@@ -111,6 +118,7 @@ SearchJob make_search(SharedIntegralImage& ii, const py::object& frame,
     cue.y0 = y0;
     cue.weight = weight;
     cue.offset = offset;
+    cue.relative = relative;
     cue.k = static_cast<int>(job.selected.size());
     job.cue = cue;
   }
@@ -315,7 +323,9 @@ void bind_frame(py::module_& m) {
       "candidate with the largest (1 - weight) logistic(score / len(selected) - offset) +\n"
       "weight * (mean of the integral image `table`, whose region starts at frame pixel\n"
       "(x0, y0), over the box) wins; its score is reported, and n counts the candidates with a\n"
-      "finite score. A candidate outside the table raises IndexError.");
+      "finite score. A candidate outside the table raises IndexError. A sixth element\n"
+      "`relative` (bool) measures each score from the stage's best finite score instead:\n"
+      "logistic((score - best) / len(selected) - offset).");
 
   m.def(
       "search_many",

@@ -89,6 +89,13 @@ int merged_best(const BoxMeanCue& cue, const Rect& box, const std::vector<int>& 
   const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(cue.cols) + 1;
   const double area = static_cast<double>(box.w) * static_cast<double>(box.h);
   const double k = static_cast<double>(std::max(cue.k, 1));
+  double reference = 0.0;  // raw scores are read from here: 0, or the grid's best (relative)
+  if (cue.relative) {
+    reference = -std::numeric_limits<double>::infinity();
+    for (const double r : raw) {
+      if (std::isfinite(r) && r > reference) reference = r;
+    }
+  }
   int best = -1;
   double best_value = 0.0;
   finite = 0;
@@ -103,7 +110,7 @@ int merged_best(const BoxMeanCue& cue, const Rect& box, const std::vector<int>& 
     const double* top = cue.table + cy * stride + cx;
     const double* bottom = top + static_cast<std::ptrdiff_t>(box.h) * stride;
     const double s = bottom[box.w] - top[box.w] - bottom[0] + top[0];
-    const double conf = 0.5 * (1.0 + std::tanh(0.5 * (raw[q] / k - cue.offset)));
+    const double conf = 0.5 * (1.0 + std::tanh(0.5 * ((raw[q] - reference) / k - cue.offset)));
     const double value = (1.0 - cue.weight) * conf + cue.weight * (s / area);
     if (best < 0 || value > best_value) {
       best = static_cast<int>(q);

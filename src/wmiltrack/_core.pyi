@@ -122,10 +122,12 @@ def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayL
            box: tuple[int, int, int, int], stages: Sequence[tuple[int, int]],
            frame_size: tuple[int, int], frame: npt.NDArray[np.uint8] | None = None,
            roi: tuple[int, int, int, int] | None = None,
-           colour: tuple[_F64, int, int, float, float] | None = None,
+           colour: tuple[_F64, int, int, float, float] | tuple[_F64, int, int, float, float, bool]
+           | None = None,
            ) -> tuple[tuple[int, int, float, int], ...]:
     """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage;
-    colour = (table, x0, y0, weight, offset) merges a box-mean cue into each stage's choice."""
+    colour = (table, x0, y0, weight, offset[, relative]) merges a box-mean cue into each stage's
+    choice (relative: scores measured from the stage's best)."""
 
 
 class ColourHistograms:

@@ -61,6 +61,7 @@ struct BoxMeanCue {
   double weight = 0.0;
   double offset = 0.0;
   int k = 1;  // raw scores are divided by k (the number of selected features)
+  bool relative = false;
 };
 
 // Scores the boxes `box` + (i*step, j*step) with (i*step)^2 + (j*step)^2 < radius^2 that lie

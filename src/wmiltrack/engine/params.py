@@ -203,6 +203,14 @@ class Params:
         histograms, the mean P(target | colour) over a candidate box) merged into every
         translation search stage: ``(1 - w) * confidence + w * colour`` per candidate (0: off;
         also off for gray frames and BGR frames whose three channels are equal).
+    colour_relative : float or None
+        How the classifier's side of that merge is read. None: its absolute confidence
+        ``logistic(raw / K - confidence_offset)``. A number ``c``: its confidence relative to
+        the search grid's best candidate, ``logistic((raw - best raw) / K + c)``, so that the
+        best candidate of every frame scores ``logistic(c)``. After a sudden change of
+        appearance the absolute confidence can fall to ~0 over the whole grid (a classifier
+        learnt from a few frames is narrow), and the colour cue alone then picks the box;
+        measured from the grid's best, the classifier keeps its say.
     colour_sample : int
         The colour and intensity histograms' learning and the reported score's contrasts read
         about this many pixels of a region at most (``engine.colour.ColourModel``'s
@@ -331,6 +339,7 @@ class Params:
     motion_smoothing: float = 0.5
     motion_max: float = 30.0
     colour_weight: float = 0.0
+    colour_relative: float | None = None
     colour_sample: int = 0
     score_colour: float = 0.0
     score_colour_model: ScoreColourModel = "current"
@@ -459,6 +468,11 @@ class Params:
              "scale_negatives needs the scale search (scale_steps > 0)")
         need(1.0 < self.scale_factor <= 2.0, f"scale_factor must be in (1, 2], got {self.scale_factor}")
         need(self.scale_penalty >= 0, f"scale_penalty must be >= 0, got {self.scale_penalty}")
+        need(self.colour_relative is None
+             or (isinstance(self.colour_relative, (int, float))
+                 and not isinstance(self.colour_relative, bool)
+                 and math.isfinite(self.colour_relative)),
+             f"colour_relative must be None or a finite number, got {self.colour_relative!r}")
         need(self.scale_contrast >= 0, f"scale_contrast must be >= 0, got {self.scale_contrast}")
         need(1 <= self.scale_radius <= 50, f"scale_radius must be in 1..50, got {self.scale_radius}")
         need(0 < self.scale_min <= 1.0 <= self.scale_max <= 100.0,
@@ -586,12 +600,14 @@ VARIANTS: dict[str, Params] = {
         "sub-region features, MIL selection without instance weights, CT's exhaustive search.",
     ),
     "rcwmil-plus": Params(
-        variant="rcwmil-plus", colour_weight=0.7, motion="velocity", scale_steps=1,
+        variant="rcwmil-plus", colour_weight=0.7, colour_relative=0.0, motion="velocity",
+        scale_steps=1,
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
         scale_negatives=2, scale_contrast=20.0, score_colour=0.33, score_colour_model="first",
         score_luma=0.33, colour_sample=16384, gray_colour=True,
         description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into the search "
-        "(0.7; on gray video a likelihood of the pixels' luma), a constant-velocity search "
+        "(0.7, against the classifier's confidence relative to the grid's best candidate; on "
+        "gray video a likelihood of the pixels' luma), a constant-velocity search "
         "centre, and scale search by scaled Haar rectangles (1.03^-1, 1, 1.03^+1; classifier "
         "score plus a slow target likelihood, penalised away from the current scale, plus 20 x "
         "the box's colour contrast; boxes 1.03^+-2 off learnt as negatives); the reported score"

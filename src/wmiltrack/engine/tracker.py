@@ -352,7 +352,9 @@ class Tracker:
                 x, y, w, h = origin
                 m = p.search_reach + 1
                 table = self._colour.integral(img, (x - m, y - m, x + w + m, y + h + m))
-                cue = (*table, p.colour_weight, p.confidence_offset)
+                rel = p.colour_relative
+                offset = p.confidence_offset if rel is None else -rel
+                cue = (*table, p.colour_weight, offset, rel is not None)
             self._box = origin
             stages = self._stages(coarse)
             pool = self._pool
