@@ -16,7 +16,7 @@ import pytest
 from wmiltrack.cli import main
 from wmiltrack.data.boxes import read_boxes
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.eval.peers import make_tracker, parse_spec
+from wmiltrack.eval.peers import make_tracker, parse_spec, split_specs
 from wmiltrack.eval.report import safe_name
 
 N = 20
@@ -56,6 +56,16 @@ def test_parse_spec() -> None:
         parse_spec("rcwmil:num_selected=3:num_selected=4")
     with pytest.raises(ValueError, match="name=value"):
         parse_spec("rcwmil:=3")
+
+
+def test_split_specs_keeps_commas_in_brackets_and_quotes() -> None:
+    text = "rcwmil, rcwmil-plus:gray_channels=('logluma','orient0'):x=[1, 2],opencv:MIL,,"
+    got = split_specs(text)
+    assert got == ["rcwmil", "rcwmil-plus:gray_channels=('logluma','orient0'):x=[1, 2]",
+                   "opencv:MIL"]
+    assert parse_spec(got[1])[1] == {"gray_channels": ("logluma", "orient0"), "x": [1, 2]}
+    assert split_specs("a:s='x,y',b") == ["a:s='x,y'", "b"]
+    assert split_specs(None) == [] and split_specs(" , ") == []
 
 
 def test_make_tracker_applies_overrides() -> None:

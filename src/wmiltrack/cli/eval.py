@@ -9,12 +9,10 @@ from ..data.layouts import LAYOUTS
 from .options import Subparsers
 
 
-def _split(text: str | None) -> list[str]:
-    return [t.strip() for t in (text or "").split(",") if t.strip()]
-
-
 def _cmd_eval(args: argparse.Namespace) -> int:
-    trackers = _split(args.trackers)
+    from ..eval.peers import split_specs
+
+    trackers = split_specs(args.trackers)
     if args.results is None and not trackers:
         raise ValueError("give --trackers (or --results DIR to score existing box files)")
     from ..eval.pipeline import run_eval
@@ -25,7 +23,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         trackers=trackers,
         results=args.results,
         protocol=args.protocol,
-        sequences=_split(args.sequences) or None,
+        sequences=split_specs(args.sequences) or None,
         jobs=args.jobs,
         repeats=args.repeats,
         seed=args.seed,
@@ -84,8 +82,9 @@ def add_eval(sub: Subparsers) -> None:
     p.add_argument(
         "--trackers",
         default="rcwmil",
-        help="comma-separated names: rcwmil, ct, fct, mil, wmil, osil, opencv:NAME "
-        "(default rcwmil)",
+        help="comma-separated names: rcwmil, ct, fct, mil, wmil, osil, rcwmil-plus, opencv:NAME, "
+        "each optionally with :key=value parameter overrides (values as Python literals; "
+        "commas inside brackets or quotes stay in the value) (default rcwmil)",
     )
     p.add_argument(
         "--results",

@@ -40,6 +40,7 @@ from ..engine.result import Box, Frame, TrackerLike, TrackResult
 
 __all__ = [
     "OPENCV_TRACKERS",
+    "split_specs",
     "OpenCVTracker",
     "installed_opencv",
     "TrackerUnavailable",
@@ -322,6 +323,31 @@ class OpenCVTracker:
             return TrackResult(self._last, math.nan, True)
         box: Box = self._last if self.lost_box == "hold" else (math.nan,) * 4
         return TrackResult(box, math.nan, False)
+
+
+def split_specs(text: str | None) -> list[str]:
+    """Split a comma-separated list of tracker specs, keeping commas inside brackets and quotes
+    (``"rcwmil,rcwmil-plus:gray_channels=('logluma','grad')"`` is two specs), so that a
+    tuple-valued override can be given on the command line. Empty items are dropped."""
+    out: list[str] = []
+    part: list[str] = []
+    depth, quote = 0, ""
+    for ch in text or "":
+        if quote:
+            quote = "" if ch == quote else quote
+        elif ch in "'\"":
+            quote = ch
+        elif ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth = max(depth - 1, 0)
+        elif ch == "," and depth == 0:
+            out.append("".join(part))
+            part = []
+            continue
+        part.append(ch)
+    out.append("".join(part))
+    return [p.strip() for p in out if p.strip()]
 
 
 def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
