@@ -48,14 +48,15 @@ COMPONENTS: dict[str, tuple[dict[str, object], dict[str, object]]] = {
         {"scale_steps": 0, "scale_negatives": 0},
     ),
     "colour": (
-        {"colour_weight": _PLUS.colour_weight, "colour_sample": _PLUS.colour_sample,
-         "gray_colour": _PLUS.gray_colour},
+        {"colour_weight": _PLUS.colour_weight, "colour_relative": _PLUS.colour_relative,
+         "colour_sample": _PLUS.colour_sample, "gray_colour": _PLUS.gray_colour},
         {"colour_weight": 0.0},
     ),
     "motion": ({"motion": _PLUS.motion}, {"motion": "none"}),
     "channels": ({"channels": ("luma", "grad", "opp_rg", "opp_yb")}, {}),
     "gated update": ({"gate_threshold": 0.3}, {}),
     "scale contrast": ({}, {"scale_contrast": 0.0}),
+    "relative merge": ({}, {"colour_relative": None}),
     "luma on gray": ({}, {"gray_colour": False}),
     "first-frame score": ({}, {"score_colour": 0.0, "score_luma": 0.0}),
 }
