@@ -583,3 +583,29 @@ def test_colour_relative_in_the_preset_only() -> None:
         if name != "rcwmil-plus":
             assert p.colour_relative is None and p.colour_weight == 0.0
     assert wmiltrack.Params.for_variant("rcwmil-plus", colour_relative=None).colour_relative is None
+
+
+def test_lost_signal_score_makes_the_lost_state_the_reported_one() -> None:
+    """``lost_signal="score"``: the lost state that motion and recovery read is the reported
+    ``ok``; with the classifier's confidence (the default) the two differ on some frames of an
+    occlusion, where the classifier learns the occluder and the first frame's histograms do not."""
+    frames, gt = zoom_sequence(70, seed=1)
+    rng = np.random.default_rng(7)
+    for i in range(40, 60):
+        x, y, w, h = gt[i].astype(int)
+        frames[i] = frames[i].copy()
+        frames[i][max(y - h // 4, 0):y + h + h // 4, max(x - w // 4, 0):x + w + w // 4] = _occluder(
+            rng, y + h + h // 4 - max(y - h // 4, 0), x + w + w // 4 - max(x - w // 4, 0))
+    differ = {}
+    for signal in ("classifier", "score"):
+        t = wmiltrack.Tracker("rcwmil-plus", seed=0, lost_signal=signal)
+        t.init(frames[0], gt[0])
+        states = []
+        for f in frames[1:]:
+            r = t.update(f)
+            states.append((t._lost, not r.ok))  # noqa: SLF001 (white-box)
+        differ[signal] = sum(a != b for a, b in states)
+        assert any(b for _, b in states)  # the occlusion is reported
+    assert differ["score"] == 0 and differ["classifier"] > 0
+    with pytest.raises(ValueError, match="lost_signal"):
+        wmiltrack.Params.for_variant("rcwmil-plus", lost_signal="iou")

@@ -24,6 +24,7 @@ SubregionMode = Literal["grid", "random"]
 MotionModel = Literal["none", "velocity"]
 ScaleModel = Literal["ratio", "likelihood", "both"]
 ScoreColourModel = Literal["current", "first"]
+LostSignal = Literal["classifier", "score"]
 ZeroDC = Literal["none", "box", "subregion"]
 
 _CHOICES: dict[str, tuple[str, ...]] = {
@@ -39,6 +40,7 @@ _CHOICES: dict[str, tuple[str, ...]] = {
     "motion": ("none", "velocity"),
     "scale_model": ("ratio", "likelihood", "both"),
     "score_colour_model": ("current", "first"),
+    "lost_signal": ("classifier", "score"),
     "zero_dc": ("none", "box", "subregion"),
 }
 
@@ -241,6 +243,10 @@ class Params:
         w * clip(0.5 + colour contrast, 0, 1) + v * clip(0.5 + luma contrast, 0, 1)`` (``w``:
         ``score_colour``); on frames without colour the colour term reads the luma contrast.
         Only the report changes, as for ``score_colour``. 0: off.
+    lost_signal : {"classifier", "score"}
+        What the lost state (``motion``'s reset, ``recovery_radius``) and the gates
+        (``gate_threshold``, ``gate_learning_rate``) read: the classifier's confidence, or the
+        reported score (``TrackResult.score``, with ``score_colour`` / ``score_luma``).
     gate_threshold : float
         Learn only from frames whose confidence is at least this (0: always learn).
     gate_drop : float
@@ -344,6 +350,7 @@ class Params:
     score_colour: float = 0.0
     score_colour_model: ScoreColourModel = "current"
     score_luma: float = 0.0
+    lost_signal: LostSignal = "classifier"
     gate_threshold: float = 0.0
     gate_drop: float = 0.0
     gate_learning_rate: float | None = None

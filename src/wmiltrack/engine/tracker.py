@@ -369,17 +369,20 @@ class Tracker:
                 raw = self._scale_search(raw)
                 self._cue_table = None
             score = confidence(raw, len(self._selected), p.confidence_offset)
-            tracked = score >= p.lost_threshold
+            report = score
+            if (p.score_colour > 0 and self._colour is not None) or p.score_luma > 0:
+                report = self._colour_score(score, img)
+            # What the lost state, the gates, motion and recovery read (Params.lost_signal).
+            signal = report if p.lost_signal == "score" else score
+            tracked = signal >= p.lost_threshold
             k = max(len(self._selected), 1)
-            if score >= p.gate_threshold and self._level_ok(raw / k):
+            if signal >= p.gate_threshold and self._level_ok(raw / k):
                 slow = not tracked and p.gate_learning_rate is not None
                 yield from self._learn_steps(self._track, p.gate_learning_rate if slow else None)
             else:
                 empty = np.zeros((0, 2), dtype=np.int32)
                 self._bags = (empty, empty)
-            self._score = score
-            if (p.score_colour > 0 and self._colour is not None) or p.score_luma > 0:
-                self._score = self._colour_score(score, img)
+            self._score = report
             if self._colour is not None:
                 self._colour.learn(img, self._box)
             self._follow(previous, tracked)
