@@ -108,6 +108,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     trackers = list(VARIANTS) + [f"opencv:{n}" for n in cv_names]
     if args.trackers:
         wanted = [t.strip() for t in args.trackers.split(",") if t.strip()]
+        known = list(VARIANTS) + [f"opencv:{n}" for n in OPENCV_TRACKERS]
+        unknown = [t for t in wanted if t not in known]  # unavailable OpenCV ones: noted above
+        if unknown:
+            ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)}")
         trackers = [t for t in trackers if t in wanted or t == REFERENCE]
 
     dist, ver = installed_opencv()

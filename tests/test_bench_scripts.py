@@ -103,6 +103,11 @@ def test_fps_compare_tiny() -> None:
     assert "| opencv:MIL | 1.0 |" in r.stdout
 
 
+def test_fps_compare_refuses_an_unknown_tracker() -> None:
+    r = _run([str(BENCH / "fps_compare.py"), "--quick", "--trackers", "rcwmil,rcwmil-pls"])
+    assert r.returncode == 2 and "unknown tracker(s): rcwmil-pls" in r.stderr
+
+
 def test_fps_compare_gray_frames(tmp_path: Path) -> None:
     out = tmp_path / "fps.json"
     r = _run([str(BENCH / "fps_compare.py"), "--sizes", "128x96", "--boxes", "24", "--frames", "8",
