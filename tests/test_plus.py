@@ -609,3 +609,24 @@ def test_lost_signal_score_makes_the_lost_state_the_reported_one() -> None:
     assert differ["score"] == 0 and differ["classifier"] > 0
     with pytest.raises(ValueError, match="lost_signal"):
         wmiltrack.Params.for_variant("rcwmil-plus", lost_signal="iou")
+
+
+@pytest.mark.parametrize("value", [0.0, -0.1, 1.5, math.nan, True])
+def test_colour_learning_rate_is_validated(value: object) -> None:
+    with pytest.raises(ValueError, match="colour_learning_rate"):
+        wmiltrack.Params.for_variant("rcwmil-plus", colour_learning_rate=value)
+
+
+def test_colour_learning_rate_reaches_the_colour_model() -> None:
+    """The search's colour model blends frames at ``colour_learning_rate`` (0.02 in the preset,
+    Staple's 0.04 by default); the first frame's copies for the score never learn."""
+    frames, gt = zoom_sequence(3, seed=0)
+    for rate in (None, 0.5):
+        extra = {} if rate is None else {"colour_learning_rate": rate}
+        t = wmiltrack.Tracker("rcwmil-plus", seed=0, **extra)
+        t.init(frames[0], gt[0])
+        first = t._first_colour.histograms.likelihood  # noqa: SLF001 (white-box)
+        t.update(frames[1])
+        assert t._colour.histograms.rate == (0.02 if rate is None else rate)  # noqa: SLF001
+        assert np.array_equal(t._first_colour.histograms.likelihood, first)  # noqa: SLF001
+    assert wmiltrack.Params().colour_learning_rate == 0.04

@@ -213,6 +213,9 @@ class Params:
         appearance the absolute confidence can fall to ~0 over the whole grid (a classifier
         learnt from a few frames is narrow), and the colour cue alone then picks the box;
         measured from the grid's best, the classifier keeps its say.
+    colour_learning_rate : float
+        Weight of each new frame's histograms in the search's colour model, in (0, 1] (Staple:
+        0.04). The first frame's copies that the reported score reads never change.
     colour_sample : int
         The colour and intensity histograms' learning and the reported score's contrasts read
         about this many pixels of a region at most (``engine.colour.ColourModel``'s
@@ -346,6 +349,7 @@ class Params:
     motion_max: float = 30.0
     colour_weight: float = 0.0
     colour_relative: float | None = None
+    colour_learning_rate: float = 0.04
     colour_sample: int = 0
     score_colour: float = 0.0
     score_colour_model: ScoreColourModel = "current"
@@ -490,6 +494,10 @@ class Params:
              f"motion_max must be in [0, {MAX_SEARCH_RADIUS}], got {self.motion_max}")
         need(0.0 <= self.colour_weight <= 1.0,
              f"colour_weight must be in [0, 1], got {self.colour_weight}")
+        need(isinstance(self.colour_learning_rate, (int, float))
+             and not isinstance(self.colour_learning_rate, bool)
+             and 0.0 < self.colour_learning_rate <= 1.0,
+             f"colour_learning_rate must be in (0, 1], got {self.colour_learning_rate!r}")
         need(isinstance(self.colour_sample, int) and not isinstance(self.colour_sample, bool)
              and self.colour_sample >= 0,
              f"colour_sample must be an integer >= 0, got {self.colour_sample!r}")
@@ -611,10 +619,11 @@ VARIANTS: dict[str, Params] = {
         scale_steps=1,
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
         scale_negatives=2, scale_contrast=20.0, score_colour=0.33, score_colour_model="first",
-        score_luma=0.33, colour_sample=16384, gray_colour=True,
+        score_luma=0.33, colour_learning_rate=0.02, colour_sample=16384, gray_colour=True,
         description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into the search "
-        "(0.7, against the classifier's confidence relative to the grid's best candidate; on "
-        "gray video a likelihood of the pixels' luma), a constant-velocity search "
+        "(0.7, against the classifier's confidence relative to the grid's best candidate; "
+        "histograms updated at 0.02; on gray video a likelihood of the pixels' luma), a "
+        "constant-velocity search "
         "centre, and scale search by scaled Haar rectangles (1.03^-1, 1, 1.03^+1; classifier "
         "score plus a slow target likelihood, penalised away from the current scale, plus 20 x "
         "the box's colour contrast; boxes 1.03^+-2 off learnt as negatives); the reported score"

@@ -262,7 +262,8 @@ class Tracker:
         self._box = b
         self._colour: ColourModel | None = None
         if p.colour_weight > 0 and (p.gray_colour or not gray):
-            self._colour = ColourModel(intensity=gray, sample=p.colour_sample)
+            self._colour = ColourModel(learning_rate=p.colour_learning_rate, intensity=gray,
+                                       sample=p.colour_sample)
             self._colour.learn(img, b)
         # The first frame's colour histograms, kept unchanged for the reported score.
         self._first_colour: ColourModel | None = None
