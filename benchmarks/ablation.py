@@ -49,7 +49,8 @@ COMPONENTS: dict[str, tuple[dict[str, object], dict[str, object]]] = {
     ),
     "colour": (
         {"colour_weight": _PLUS.colour_weight, "colour_relative": _PLUS.colour_relative,
-         "colour_sample": _PLUS.colour_sample, "gray_colour": _PLUS.gray_colour},
+         "colour_learning_rate": _PLUS.colour_learning_rate, "colour_sample": _PLUS.colour_sample,
+         "gray_colour": _PLUS.gray_colour},
         {"colour_weight": 0.0},
     ),
     "motion": ({"motion": _PLUS.motion}, {"motion": "none"}),
@@ -57,6 +58,7 @@ COMPONENTS: dict[str, tuple[dict[str, object], dict[str, object]]] = {
     "gated update": ({"gate_threshold": 0.3}, {}),
     "scale contrast": ({}, {"scale_contrast": 0.0}),
     "relative merge": ({}, {"colour_relative": None}),
+    "slow colour learning": ({}, {"colour_learning_rate": 0.04}),
     "luma on gray": ({}, {"gray_colour": False}),
     "first-frame score": ({}, {"score_colour": 0.0, "score_luma": 0.0}),
 }

@@ -39,7 +39,7 @@ from wmiltrack import _core
 from wmiltrack.data.sequences import list_otb_sequences, load_otb_sequence
 from wmiltrack.data.synthetic import make_sequence
 from wmiltrack.eval.metrics import iou
-from wmiltrack.eval.peers import parse_spec
+from wmiltrack.eval.peers import parse_spec, split_specs
 
 
 def roc_auc(pos: np.ndarray, neg: np.ndarray) -> float:
@@ -237,7 +237,7 @@ def main() -> None:
     for s in range(args.synthetic_seeds):
         for name, fr, gt, vis in synthetic_cases(s):
             cases.append(("synthetic", name, fr, gt, vis))
-    for variant in args.variants.split(","):
+    for variant in split_specs(args.variants):
         pooled: dict[str, dict[str, list[np.ndarray]]] = {"otb": {}, "synthetic": {}}
         for seed in seeds + ([-1] if len(seeds) > 1 else []):
             if seed >= 0:
