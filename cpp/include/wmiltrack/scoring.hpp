@@ -52,6 +52,9 @@ struct GridResult {
 //   (1 - weight) * logistic(raw / k - offset) + weight * (mean of the cue over the box)
 // wins (the first such in row-major order), and its raw score is reported; candidates whose
 // raw score is not finite take no part. logistic(z) is computed as 0.5 (1 + tanh(z / 2)).
+// With `relative`, raw is read from the grid's best finite raw score (raw - best for raw): the
+// confidence is then relative to this frame's best candidate, so the classifier's ordering still
+// counts when its absolute confidence has collapsed over the whole grid.
 struct BoxMeanCue {
   const double* table = nullptr;  // (rows + 1) x (cols + 1) integral image, row-major, with a
   int rows = 0;                   // zero first row and column, over the frame region
@@ -61,7 +64,7 @@ struct BoxMeanCue {
   double weight = 0.0;
   double offset = 0.0;
   int k = 1;  // raw scores are divided by k (the number of selected features)
-  bool relative = false;
+  bool relative = false;  // see above
 };
 
 // Scores the boxes `box` + (i*step, j*step) with (i*step)^2 + (j*step)^2 < radius^2 that lie
