@@ -418,7 +418,7 @@ class Params:
         need(0 <= self.neg_inner < self.neg_outer,
              f"need 0 <= neg_inner < neg_outer, got {self.neg_inner}, {self.neg_outer}")
         need(self.neg_count >= 0, f"neg_count must be >= 0, got {self.neg_count}")
-        for name in ("init_pos_radius", "init_neg_inner", "init_neg_outer"):
+        for name in ("init_pos_radius", "init_neg_inner", "init_neg_outer", "colour_relative"):
             v = getattr(self, name)
             need(v is None or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)),
                  f"{name} must be None or a finite number, got {v!r}")
@@ -453,7 +453,7 @@ class Params:
         need(self.min_box_size >= 2, f"min_box_size must be >= 2, got {self.min_box_size}")
         for name in ("confidence_offset", "scale_factor", "scale_penalty", "scale_min", "scale_max",
                      "motion_smoothing", "motion_max", "gate_threshold", "gate_drop", "scale_mix",
-                     "colour_weight", "scale_contrast"):
+                     "colour_weight", "scale_contrast", "colour_learning_rate"):
             v = getattr(self, name)
             need(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v),
                  f"{name} must be a finite number, got {v!r}")
@@ -479,11 +479,6 @@ class Params:
              "scale_negatives needs the scale search (scale_steps > 0)")
         need(1.0 < self.scale_factor <= 2.0, f"scale_factor must be in (1, 2], got {self.scale_factor}")
         need(self.scale_penalty >= 0, f"scale_penalty must be >= 0, got {self.scale_penalty}")
-        need(self.colour_relative is None
-             or (isinstance(self.colour_relative, (int, float))
-                 and not isinstance(self.colour_relative, bool)
-                 and math.isfinite(self.colour_relative)),
-             f"colour_relative must be None or a finite number, got {self.colour_relative!r}")
         need(self.scale_contrast >= 0, f"scale_contrast must be >= 0, got {self.scale_contrast}")
         need(1 <= self.scale_radius <= 50, f"scale_radius must be in 1..50, got {self.scale_radius}")
         need(0 < self.scale_min <= 1.0 <= self.scale_max <= 100.0,
@@ -494,9 +489,7 @@ class Params:
              f"motion_max must be in [0, {MAX_SEARCH_RADIUS}], got {self.motion_max}")
         need(0.0 <= self.colour_weight <= 1.0,
              f"colour_weight must be in [0, 1], got {self.colour_weight}")
-        need(isinstance(self.colour_learning_rate, (int, float))
-             and not isinstance(self.colour_learning_rate, bool)
-             and 0.0 < self.colour_learning_rate <= 1.0,
+        need(0.0 < self.colour_learning_rate <= 1.0,
              f"colour_learning_rate must be in (0, 1], got {self.colour_learning_rate!r}")
         need(isinstance(self.colour_sample, int) and not isinstance(self.colour_sample, bool)
              and self.colour_sample >= 0,

@@ -40,7 +40,6 @@ from ..engine.result import Box, Frame, TrackerLike, TrackResult
 
 __all__ = [
     "OPENCV_TRACKERS",
-    "split_specs",
     "OpenCVTracker",
     "installed_opencv",
     "TrackerUnavailable",
@@ -48,6 +47,7 @@ __all__ = [
     "make_tracker",
     "parse_opencv_name",
     "parse_spec",
+    "split_specs",
 ]
 
 #: Names of the OpenCV trackers that :class:`OpenCVTracker` wraps.
