@@ -1,5 +1,7 @@
 #include "wmiltrack/learning.hpp"
 
+#include "wmiltrack/vmath.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -51,17 +53,18 @@ double row_sq_dev_mean(const MatrixView& v, int m, double centre, double* scratc
 // numpy.maximum(a, b): NaN propagates.
 double max_nan(double a, double b) { return (std::isnan(a) || a >= b) ? a : b; }
 
-// ln sigma(z), and 1 - sigma(z) into *rest, from one exp(-|z|) without overflow (1 - sigma(z)
-// stays exact for large z, where computing 1 - sigma would round to 0).
-double log_sigmoid_and_rest(double z, double* rest) {
-  if (z >= 0) {
-    const double e = std::exp(-z);
-    *rest = e / (1.0 + e);
-    return -std::log1p(e);
+// ln sigma(z_j) into out[j] and 1 - sigma(z_j) into rest[j], j < n, from one exp(-|z|)
+// without overflow (1 - sigma(z) stays exact for large z, where computing 1 - sigma would round
+// to 0). `e` is scratch of n values.
+void log_sigmoid_and_rest(const double* z, int n, double* out, double* rest, double* e) {
+  for (int j = 0; j < n; ++j) e[j] = z[j] >= 0 ? -z[j] : z[j];
+  vmath::exp(e, e, n);
+  vmath::log1p(e, out, n);
+  for (int j = 0; j < n; ++j) {
+    const bool up = z[j] >= 0;
+    rest[j] = (up ? e[j] : 1.0) / (1.0 + e[j]);
+    out[j] = up ? -out[j] : z[j] - out[j];
   }
-  const double e = std::exp(z);
-  *rest = 1.0 / (1.0 + e);
-  return z - std::log1p(e);
 }
 
 // out[j] = w[j] exp(logv[j]) / sum_m w[m] exp(logv[m]), computed without underflow.
@@ -74,9 +77,11 @@ void normalised(const double* logv, const double* w, double* out, int n) {
     for (int j = 0; j < n; ++j) out[j] = 0.0;
     return;
   }
+  for (int j = 0; j < n; ++j) out[j] = logv[j] - top;
+  vmath::exp(out, out, n);
   double total = 0.0;
   for (int j = 0; j < n; ++j) {
-    out[j] = w[j] * std::exp(logv[j] - top);
+    out[j] = w[j] * out[j];
     total += out[j];
   }
   for (int j = 0; j < n; ++j) out[j] /= total;
@@ -155,14 +160,15 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
   const std::size_t Mz = static_cast<std::size_t>(M);
   std::vector<double> H_pos(static_cast<std::size_t>(P), 0.0), H_neg(static_cast<std::size_t>(N), 0.0);
   std::vector<double> g(static_cast<std::size_t>(P + N), 0.0);
-  std::vector<double> tmp(static_cast<std::size_t>(std::max(P, N))), rest(tmp.size());
+  std::vector<double> tmp(static_cast<std::size_t>(std::max(P, N))), rest(tmp.size()),
+      scratch(tmp.size()), minus_h(static_cast<std::size_t>(N));
   const std::vector<double> ones(static_cast<std::size_t>(std::max(N, 1)), 1.0);
   std::vector<unsigned char> used(Mz, 0);
   std::vector<double> score(Mz);
   // Instance-major copy of the log ratios (row j: every feature's h on instance j, the
-  // positives then the negatives), so that the scoring loop runs over features: M
-  // independent sums, each adding its terms in the order j = 0, 1, ... as a feature-by-
-  // feature loop does (the same bits), eight of them at a time in registers.
+  // positives then the negatives), so that the scoring runs over features: M independent
+  // sums, each adding its terms in the order j = 0, 1, ... as a feature-by-feature loop does
+  // (the same bits), several of them at a time (vmath::weighted_rows).
   std::vector<double> hT(static_cast<std::size_t>(P + N) * Mz);
   for (int j = 0; j < P; ++j) {
     for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m)] = h_pos.at(m, j);
@@ -175,37 +181,25 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
   for (int step = 0; step < k; ++step) {
     // Positive bag: d ln(sum_j w_j sigma_j) / dH_j = w_j sigma_j (1 - sigma_j) / sum w sigma.
     if (P > 0) {
-      for (int j = 0; j < P; ++j) tmp[static_cast<std::size_t>(j)] = log_sigmoid_and_rest(H_pos[static_cast<std::size_t>(j)], &rest[static_cast<std::size_t>(j)]);
+      log_sigmoid_and_rest(H_pos.data(), P, tmp.data(), rest.data(), scratch.data());
       normalised(tmp.data(), w_pos, g_pos, P);
       if (code_gradient) {
         // The reference code's w sigma (1 - w sigma) / sum(w sigma) (spec 5, compat).
-        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * (1.0 - w_pos[j] * std::exp(tmp[static_cast<std::size_t>(j)]));
+        vmath::exp(tmp.data(), tmp.data(), P);
+        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * (1.0 - w_pos[j] * tmp[static_cast<std::size_t>(j)]);
       } else {
         for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * rest[static_cast<std::size_t>(j)];
       }
     }
     // Negative bag: d ln(sum_j (1 - sigma_j)) / dH_j = -sigma_j (1 - sigma_j) / sum(1 - sigma).
     if (N > 0) {
-      for (int j = 0; j < N; ++j) tmp[static_cast<std::size_t>(j)] = log_sigmoid_and_rest(-H_neg[static_cast<std::size_t>(j)], &rest[static_cast<std::size_t>(j)]);
+      for (int j = 0; j < N; ++j) minus_h[static_cast<std::size_t>(j)] = -H_neg[static_cast<std::size_t>(j)];
+      log_sigmoid_and_rest(minus_h.data(), N, tmp.data(), rest.data(), scratch.data());
       normalised(tmp.data(), ones.data(), g_neg, N);
       for (int j = 0; j < N; ++j) g_neg[j] = -g_neg[j] * rest[static_cast<std::size_t>(j)];
     }
     // score_m = sum_j h_mj g_j over the positives then the negatives.
-    int m0 = 0;
-    for (; m0 + 8 <= M; m0 += 8) {
-      double a[8] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
-      for (int j = 0; j < P + N; ++j) {
-        const double* row = hT.data() + static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m0);
-        const double gj = g[static_cast<std::size_t>(j)];
-        for (int q = 0; q < 8; ++q) a[q] = a[q] + row[q] * gj;
-      }
-      for (int q = 0; q < 8; ++q) score[static_cast<std::size_t>(m0 + q)] = a[q];
-    }
-    for (int m = m0; m < M; ++m) {
-      double a = 0.0;
-      for (int j = 0; j < P + N; ++j) a = a + hT[static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m)] * g[static_cast<std::size_t>(j)];
-      score[static_cast<std::size_t>(m)] = a;
-    }
+    vmath::weighted_rows(hT.data(), P + N, M, g.data(), score.data());
     int best = -1;
     double best_score = -std::numeric_limits<double>::infinity();
     for (int m = 0; m < M; ++m) {

@@ -2,7 +2,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -12,6 +14,7 @@
 #include "wmiltrack/integral.hpp"
 #include "wmiltrack/learning.hpp"
 #include "wmiltrack/scoring.hpp"
+#include "wmiltrack/vmath.hpp"
 
 namespace {
 int failures = 0;
@@ -553,6 +556,99 @@ void test_learning(std::mt19937& rng) {
   CHECK(threw);
 }
 
+// Distance in units in the last place between two doubles of the same sign (0 for two NaNs).
+std::int64_t ulp_distance(double a, double b) {
+  if (std::isnan(a) && std::isnan(b)) return 0;
+  if (a == b) return 0;
+  if (std::isnan(a) || std::isnan(b) || std::signbit(a) != std::signbit(b)) {
+    return std::numeric_limits<std::int64_t>::max();
+  }
+  std::int64_t ia, ib;
+  std::memcpy(&ia, &a, sizeof a);
+  std::memcpy(&ib, &b, sizeof b);
+  return ia > ib ? ia - ib : ib - ia;
+}
+
+// vmath against the C library: within 1 ulp on random values over each function's range (and
+// the ranges the kernels use), the special values exact, and the same bits on the CPU's best
+// path and on the portable one, for every array length (the tail of an array is padded).
+void test_vmath(std::mt19937& rng) {
+  using Fn = void (*)(const double*, double*, int);
+  struct Case {
+    const char* name;
+    Fn fn;
+    double (*ref)(double);
+    double lo, hi;
+    bool log_spaced;  // x = exp(uniform(lo, hi))
+  };
+  const Case cases[] = {
+      {"exp", vmath::exp, [](double v) { return std::exp(v); }, -1.0, 1.0, false},
+      {"exp", vmath::exp, [](double v) { return std::exp(v); }, -760.0, 720.0, false},
+      {"log", vmath::log, [](double v) { return std::log(v); }, -744.0, 709.0, true},
+      {"log", vmath::log, [](double v) { return std::log(v); }, 0.5, 2.0, false},
+      {"log1p", vmath::log1p, [](double v) { return std::log1p(v); }, -40.0, 0.0, true},
+      {"log1p", vmath::log1p, [](double v) { return std::log1p(v); }, -0.999, 10.0, false},
+  };
+  const int n = 200003;  // odd: a padded tail
+  std::vector<double> x(n), y(n), z(n);
+  for (const Case& c : cases) {
+    std::uniform_real_distribution<double> d(c.lo, c.hi);
+    for (double& v : x) v = c.log_spaced ? std::exp(d(rng)) : d(rng);
+    c.fn(x.data(), y.data(), n);
+    std::int64_t worst = 0;
+    for (int i = 0; i < n; ++i) worst = std::max(worst, ulp_distance(y[i], c.ref(x[i])));
+    if (worst > 1) std::fprintf(stderr, "vmath::%s on [%g, %g]: %lld ulp\n", c.name, c.lo, c.hi,
+                                static_cast<long long>(worst));
+    CHECK(worst <= 1);
+    vmath::force_portable(true);
+    c.fn(x.data(), z.data(), n);
+    vmath::force_portable(false);
+    CHECK(std::memcmp(y.data(), z.data(), sizeof(double) * static_cast<std::size_t>(n)) == 0);
+    for (int len = 0; len <= 9; ++len) {  // short arrays: the same values as in the long one
+      std::vector<double> part(x.begin(), x.begin() + len), out(static_cast<std::size_t>(len));
+      c.fn(part.data(), out.data(), len);
+      for (int i = 0; i < len; ++i) CHECK(std::memcmp(&out[static_cast<std::size_t>(i)], &y[static_cast<std::size_t>(i)], sizeof(double)) == 0);
+    }
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double specials[] = {0.0, -0.0, 1.0, -1.0, inf, -inf, nan, 5e-324, 1e-310, 2.5e-308,
+                             709.78, 709.79, -708.5, -745.1, -745.2, 1e300, -1e300, 1e-20};
+  for (const double v : specials) {
+    double e, l, l1;
+    vmath::exp(&v, &e, 1);
+    vmath::log(&v, &l, 1);
+    vmath::log1p(&v, &l1, 1);
+    CHECK(ulp_distance(e, std::exp(v)) <= 1);
+    CHECK(ulp_distance(l, std::log(v)) <= 1);
+    CHECK(ulp_distance(l1, std::log1p(v)) <= 1 || (v == 0.0 && l1 == 0.0));
+  }
+  // In place, and weighted_rows against a plain loop (the same order of summation: same bits).
+  std::vector<double> w = {0.5, -1.0, 2.0}, separate(3);
+  vmath::exp(w.data(), separate.data(), 3);
+  vmath::exp(w.data(), w.data(), 3);
+  CHECK(std::memcmp(w.data(), separate.data(), 3 * sizeof(double)) == 0);
+  for (const int width : {1, 15, 16, 17, 100}) {
+    const int rows = 37;
+    std::normal_distribution<double> g(0.0, 3.0);
+    std::vector<double> a(static_cast<std::size_t>(rows * width)), gv(static_cast<std::size_t>(rows)),
+        out(static_cast<std::size_t>(width)), portable(out.size());
+    for (double& v : a) v = g(rng);
+    for (double& v : gv) v = g(rng);
+    vmath::weighted_rows(a.data(), rows, width, gv.data(), out.data());
+    vmath::force_portable(true);
+    vmath::weighted_rows(a.data(), rows, width, gv.data(), portable.data());
+    vmath::force_portable(false);
+    for (int m = 0; m < width; ++m) {
+      double acc = 0.0;
+      for (int j = 0; j < rows; ++j) acc = acc + a[static_cast<std::size_t>(j * width + m)] * gv[static_cast<std::size_t>(j)];
+      CHECK(std::memcmp(&acc, &out[static_cast<std::size_t>(m)], sizeof acc) == 0);
+      CHECK(std::memcmp(&acc, &portable[static_cast<std::size_t>(m)], sizeof acc) == 0);
+    }
+  }
+  std::printf("test_core: vmath path %s\n", vmath::isa());
+}
+
 }  // namespace
 
 int main() {
@@ -564,6 +660,7 @@ int main() {
   test_channels(rng);
   test_hardening(rng);
   test_learning(rng);
+  test_vmath(rng);
   if (failures == 0) {
     std::printf("test_core: all checks passed\n");
     return EXIT_SUCCESS;

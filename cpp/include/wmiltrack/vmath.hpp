@@ -1,0 +1,49 @@
+// exp, log and log1p over arrays of doubles, several values per instruction; and one
+// matrix-vector product with a fixed order of summation.
+//
+// Why not the C library: glibc's scalar exp/log cost 10-20 ns a call, and the learning and
+// scoring kernels make thousands of such calls a frame (WMIL selection: three per instance per
+// round; the MILTrack guard: three per feature value). These run 4 values at a time (AVX2 when
+// the CPU has it, chosen at run time; SSE2 otherwise) at a few ns a value.
+//
+// Same bits everywhere: each function is one fixed sequence of IEEE additions, multiplications
+// and divisions and integer bit operations (no FMA: the core is built with -ffp-contract=off),
+// so the AVX2 and SSE2 paths, and every x86-64 CPU, give the same result for the same input.
+// The results are not the C library's: both are within about 1 ulp of the true value, and may
+// differ from each other in the last bit.
+//
+// Algorithms (fdlibm's, as in Sun's freely distributable libm): exp reduces x = k ln2 + r with
+// a two-part ln2 and evaluates exp(r) with a degree-5 rational-form polynomial; log writes
+// x = 2^k m, m in [sqrt(1/2), sqrt(2)), and evaluates log(m) through s = (m-1)/(m+1) with a
+// degree-14 polynomial; log1p(x) is log(1 + x) plus the rounding error of 1 + x, divided by
+// 1 + x (exact to first order, so tiny x keep full relative precision).
+//
+// Special values: exp(-inf) = 0, exp(+inf) = +inf, exp overflows to +inf above ~709.78 and
+// underflows (through the subnormals) to 0 below ~-745.13; log(0) = -inf, log(+inf) = +inf,
+// log of a negative number is NaN; log1p(-1) = -inf, log1p(x < -1) = NaN; NaN gives NaN.
+#pragma once
+
+namespace wmiltrack::vmath {
+
+// y[i] = exp(x[i]) for i < n. x and y may be the same array.
+void exp(const double* x, double* y, int n);
+
+// y[i] = log(x[i]) for i < n. x and y may be the same array.
+void log(const double* x, double* y, int n);
+
+// y[i] = log(1 + x[i]) for i < n. x and y may be the same array.
+void log1p(const double* x, double* y, int n);
+
+// out[m] = sum_j a[j * width + m] * g[j] for m < width, each sum adding its terms in the order
+// j = 0, 1, ..., n - 1 from 0.0 (so the bits are those of a plain loop over j), several m at a
+// time. The weighted-MIL selection scores every feature with this in each round.
+void weighted_rows(const double* a, int n, int width, const double* g, double* out);
+
+// Which code path the calls above take on this CPU: "avx2" or "sse2" on x86-64 with GCC/Clang,
+// "scalar" otherwise (one value at a time). The results are the same on every path.
+const char* isa();
+
+// For tests: force the portable path (true) or go back to the CPU's best (false).
+void force_portable(bool portable);
+
+}  // namespace wmiltrack::vmath
