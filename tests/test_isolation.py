@@ -165,13 +165,15 @@ def _heavy_calls() -> dict[str, Callable[[], object]]:
     mu, sig = np.zeros(m), np.ones(m)
     sel = np.arange(m, dtype=np.int32)
     h_pos, h_neg = rng.normal(size=(400, 300)), rng.normal(size=(400, 300))
+    # WMIL selection is fast (vectorised): a larger problem so that the call lasts > 10 ms.
+    w_pos, w_neg = rng.normal(size=(600, 500)), rng.normal(size=(600, 500))
     return {
         "IntegralImage.compute": lambda: ii.compute(big, (0, 0, 3000, 3000)),
         "project": lambda: _core.project(ii, bank, xs, ys),
         "log_ratio": lambda: _core.log_ratio(values, mu, sig, mu + 1, sig, 1e-30),
         "score_grid": lambda: _core.score_grid(ii, bank, sel, mu, sig, mu + 1, sig, 1e-30, (250, 250, 20, 20),
                                                100, 1, (600, 600)),
-        "wmil_select": lambda: _learn.wmil_select(h_pos, h_neg, np.full(300, 1 / 300), 200, False),
+        "wmil_select": lambda: _learn.wmil_select(w_pos, w_neg, np.full(500, 1 / 500), 600, False),
         "milboost_select": lambda: _learn.milboost_select(h_pos, h_neg, 300, 1e-5),
     }
 
