@@ -214,22 +214,24 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
   }
 }
 
-void milboost_select(const MatrixView& h_pos, const MatrixView& h_neg, const MatrixView& exp_pos,
-                     const MatrixView& exp_neg, int k, double guard, std::int32_t* selected) {
-  check_selection(h_pos, h_neg, k);
+namespace {
+
+// The body of milboost_select, inlined into an AVX2 copy and a baseline copy (below): its
+// loops over the features are plain element-wise IEEE arithmetic, which the compiler
+// vectorises at either width with the same bits (no FMA, no reordering of sums).
+WMILTRACK_KERNEL void milboost_body(const MatrixView& h_pos, const MatrixView& h_neg,
+                                    const MatrixView& exp_pos, const MatrixView& exp_neg, int k,
+                                    double guard, std::int32_t* selected) {
   const int M = h_pos.rows, P = h_pos.cols, N = h_neg.cols;
-  if (exp_pos.rows != P || exp_neg.rows != N || (P > 0 && exp_pos.cols != M) ||
-      (N > 0 && exp_neg.cols != M) || (P > 0 && exp_pos.col_stride != 1) ||
-      (N > 0 && exp_neg.col_stride != 1)) {
-    throw std::invalid_argument("exp_pos/exp_neg must be samples x features with contiguous rows");
-  }
   const std::size_t Mz = static_cast<std::size_t>(M);
   std::vector<double> H_pos(static_cast<std::size_t>(P), 0.0), H_neg(static_cast<std::size_t>(N), 0.0);
-  std::vector<double> D(Mz), prod(Mz), L(Mz);
+  std::vector<double> D(Mz), prod(Mz), L(Mz), logs(Mz);
+  std::vector<double> c_pos(static_cast<std::size_t>(P)), c_neg(static_cast<std::size_t>(N));
   std::vector<unsigned char> used(Mz, 0);
   double* Dp = D.data();
   double* pp = prod.data();
   double* Lp = L.data();
+  double* lg = logs.data();
   const double inv_p = P > 0 ? 1.0 / P : 0.0;
   const double inv_n = N > 0 ? 1.0 / N : 0.0;
   const auto clamp60 = [](double z) { return z > 60.0 ? 60.0 : (z < -60.0 ? -60.0 : z); };
@@ -239,10 +241,15 @@ void milboost_select(const MatrixView& h_pos, const MatrixView& h_neg, const Mat
       pp[m] = 1.0;
       Lp[m] = 0.0;
     }
+    // e^H of every instance, H clamped to [-60, 60].
+    for (int j = 0; j < P; ++j) c_pos[static_cast<std::size_t>(j)] = clamp60(H_pos[static_cast<std::size_t>(j)]);
+    for (int j = 0; j < N; ++j) c_neg[static_cast<std::size_t>(j)] = clamp60(H_neg[static_cast<std::size_t>(j)]);
+    vmath::exp(c_pos.data(), c_pos.data(), P);
+    vmath::exp(c_neg.data(), c_neg.data(), N);
     // Positive bag: prod_j (1 - sigma(H_j + h_mj)) = 1 / prod_j (1 + e^H_j e^h_mj).
     // Capping the product at 1e30 changes 1 - 1/D by < 1e-30, far below the guard.
     for (int j = 0; j < P; ++j) {
-      const double c = std::exp(clamp60(H_pos[static_cast<std::size_t>(j)]));
+      const double c = c_pos[static_cast<std::size_t>(j)];
       const double* e = exp_pos.row(j);
       for (int m = 0; m < M; ++m) {
         const double t = Dp[m] * (1.0 + c * e[m]);
@@ -251,27 +258,33 @@ void milboost_select(const MatrixView& h_pos, const MatrixView& h_neg, const Mat
     }
     // Negatives: sum_j ln(guard + 1 - sigma), as logs of products of <= 60 factors (each
     // factor >= guard = 1e-5, so a product stays above 1e-300). The logs of features
-    // already chosen are never used: skipped.
+    // already chosen are never used: not added.
     int chunk = 0;
     for (int j = 0; j < N; ++j) {
-      const double c = std::exp(clamp60(H_neg[static_cast<std::size_t>(j)]));
+      const double c = c_neg[static_cast<std::size_t>(j)];
       const double* e = exp_neg.row(j);
       for (int m = 0; m < M; ++m) pp[m] = pp[m] * (guard + 1.0 / (1.0 + c * e[m]));
       ++chunk;
       if (chunk == 60 || j == N - 1) {
+        vmath::log(pp, lg, M);
         for (int m = 0; m < M; ++m) {
-          if (!used[static_cast<std::size_t>(m)]) Lp[m] += std::log(pp[m]);
+          if (!used[static_cast<std::size_t>(m)]) Lp[m] += lg[m];
           pp[m] = 1.0;
         }
         chunk = 0;
       }
+    }
+    // -ln(1 - 1/D + guard) for the positive bag's likelihood.
+    if (P > 0) {
+      for (int m = 0; m < M; ++m) lg[m] = 1.0 - 1.0 / Dp[m] + guard;
+      vmath::log(lg, lg, M);
     }
     int best = -1;
     double best_nll = std::numeric_limits<double>::infinity();
     for (int m = 0; m < M; ++m) {
       if (used[static_cast<std::size_t>(m)]) continue;
       double nll = 0.0;
-      if (P > 0) nll = -std::log(1.0 - 1.0 / Dp[m] + guard) * inv_p;
+      if (P > 0) nll = -lg[m] * inv_p;
       nll = nll - Lp[m] * inv_n;
       if (std::isnan(nll)) continue;
       if (best < 0 || nll < best_nll) {
@@ -281,6 +294,43 @@ void milboost_select(const MatrixView& h_pos, const MatrixView& h_neg, const Mat
     }
     take(best, step, h_pos, h_neg, H_pos, H_neg, used, selected);
   }
+}
+
+}  // namespace
+
+// Named copies of the body per instruction set (see vmath.hpp: the portable-build test finds
+// AVX instructions only in functions named *_avx2).
+namespace detail {
+void milboost_select_base(const MatrixView& h_pos, const MatrixView& h_neg,
+                          const MatrixView& exp_pos, const MatrixView& exp_neg, int k,
+                          double guard, std::int32_t* selected) {
+  milboost_body(h_pos, h_neg, exp_pos, exp_neg, k, guard, selected);
+}
+#ifdef WMILTRACK_AVX2_COPIES
+__attribute__((target("avx2"))) void milboost_select_avx2(
+    const MatrixView& h_pos, const MatrixView& h_neg, const MatrixView& exp_pos,
+    const MatrixView& exp_neg, int k, double guard, std::int32_t* selected) {
+  milboost_body(h_pos, h_neg, exp_pos, exp_neg, k, guard, selected);
+}
+#endif
+}  // namespace detail
+
+void milboost_select(const MatrixView& h_pos, const MatrixView& h_neg, const MatrixView& exp_pos,
+                     const MatrixView& exp_neg, int k, double guard, std::int32_t* selected) {
+  check_selection(h_pos, h_neg, k);
+  const int M = h_pos.rows, P = h_pos.cols, N = h_neg.cols;
+  if (exp_pos.rows != P || exp_neg.rows != N || (P > 0 && exp_pos.cols != M) ||
+      (N > 0 && exp_neg.cols != M) || (P > 0 && exp_pos.col_stride != 1) ||
+      (N > 0 && exp_neg.col_stride != 1)) {
+    throw std::invalid_argument("exp_pos/exp_neg must be samples x features with contiguous rows");
+  }
+#ifdef WMILTRACK_AVX2_COPIES
+  if (vmath::avx2()) {
+    detail::milboost_select_avx2(h_pos, h_neg, exp_pos, exp_neg, k, guard, selected);
+    return;
+  }
+#endif
+  detail::milboost_select_base(h_pos, h_neg, exp_pos, exp_neg, k, guard, selected);
 }
 
 }  // namespace wmiltrack

@@ -4,17 +4,10 @@
 #include <cstdint>
 #include <cstring>
 
-// On x86-64 with GCC/Clang the loops are compiled twice, for AVX2 and for the baseline SSE2,
-// and the AVX2 copy is taken when the CPU has it.
-#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__) && !defined(WMILTRACK_NO_SIMD)
-#define WMILTRACK_VMATH_AVX2 1
-// The lane functions pass 32-byte vectors by value, inlined into this file's loops only (GCC's
-// -Wpsabi note about that ABI concerns calls across files: CMakeLists turns it off here).
-// Inlined into each wrapper, so that it is compiled for the wrapper's instruction set.
-#define WMILTRACK_LANES inline __attribute__((always_inline))
-#else
-#define WMILTRACK_LANES inline
-#endif
+// With WMILTRACK_AVX2_COPIES (x86-64, GCC/Clang) the loops are compiled twice, for AVX2 and for
+// the baseline SSE2, and the AVX2 copy is taken when the CPU has it. The lane functions pass
+// 32-byte vectors by value, inlined into this file's loops only (GCC's -Wpsabi note about that
+// ABI concerns calls across files: CMakeLists turns it off here).
 
 namespace wmiltrack::vmath {
 
@@ -51,7 +44,7 @@ constexpr std::uint64_t kTwo52Bits = 0x4330000000000000ULL;
 // with 4 unsigned 64-bit lanes (U) and 4 signed masks (M) on x86-64, plain double / uint64 /
 // bool elsewhere. Every operation is the same IEEE operation in either form, so the bits are
 // the same; comparisons give masks, and `pick(m, a, b)` is the lane-wise m ? a : b.
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
 typedef double D __attribute__((vector_size(32)));
 typedef std::uint64_t U __attribute__((vector_size(32)));
 typedef std::int64_t M __attribute__((vector_size(32)));
@@ -73,7 +66,7 @@ inline U pick(M m, U a, U b) { return m ? a : b; }
 inline D splat(double v) { return v; }
 #endif
 
-WMILTRACK_LANES D exp_lanes(D x) {
+WMILTRACK_KERNEL D exp_lanes(D x) {
   // Clamp far outside the finite range (NaN passes through: both comparisons are false).
   D xc = pick(x < -746.0, splat(-746.0), x);
   xc = pick(xc > 710.0, splat(710.0), xc);
@@ -97,7 +90,7 @@ WMILTRACK_LANES D exp_lanes(D x) {
   return y * as_d((k1 - 1) << 52) * as_d((k2 - 1) << 52);
 }
 
-WMILTRACK_LANES D log_lanes(D x) {
+WMILTRACK_KERNEL D log_lanes(D x) {
   // Subnormals are scaled into the normal range first.
   const M tiny = x < kMinNormal;
   const D xs = pick(tiny, x * kTwo54, x);
@@ -131,7 +124,7 @@ WMILTRACK_LANES D log_lanes(D x) {
   return pick(x == x, out, x);
 }
 
-WMILTRACK_LANES D log1p_lanes(D x) {
+WMILTRACK_KERNEL D log1p_lanes(D x) {
   const D u = 1.0 + x;
   // The rounding error of 1 + x (exact for |x| <= 1; for larger x it is that of u - x).
   const D c = pick(u >= 2.0, 1.0 - (u - x), x - (u - 1.0));
@@ -143,7 +136,7 @@ WMILTRACK_LANES D log1p_lanes(D x) {
 
 // y[i] = f(x[i]), kLanes values a step; the last, partial step goes through a padded copy.
 template <D (*F)(D)>
-WMILTRACK_LANES void apply(const double* x, double* y, int n) {
+WMILTRACK_KERNEL void apply(const double* x, double* y, int n) {
   int i = 0;
   for (; i + kLanes <= n; i += kLanes) {
     D v;
@@ -164,7 +157,7 @@ WMILTRACK_LANES void apply(const double* x, double* y, int n) {
 
 // weighted_rows: 4 * kLanes sums at a time in registers, each adding a[j][m] g[j] in the order
 // j = 0, 1, ...; then the last width % (4 * kLanes) one at a time, the same way.
-WMILTRACK_LANES void weighted_rows_impl(const double* a, int n, int width, const double* g,
+WMILTRACK_KERNEL void weighted_rows_impl(const double* a, int n, int width, const double* g,
                                         double* out) {
   constexpr int kVectors = 4;
   constexpr int kBlock = kVectors * kLanes;
@@ -207,7 +200,7 @@ namespace detail {
   ATTR void log1p_##SUFFIX(const double* x, double* y, int n) { apply<log1p_lanes>(x, y, n); }
 
 WMILTRACK_VMATH_LOOPS(base, )
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
 WMILTRACK_VMATH_LOOPS(avx2, __attribute__((target("avx2"))))
 #endif
 #undef WMILTRACK_VMATH_LOOPS
@@ -217,7 +210,7 @@ namespace {
 
 std::atomic<bool> g_portable{false};
 
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
 bool use_avx2() {
   static const bool has = __builtin_cpu_supports("avx2");
   return has && !g_portable.load(std::memory_order_relaxed);
@@ -227,35 +220,43 @@ bool use_avx2() {
 }  // namespace
 
 void exp(const double* x, double* y, int n) {
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
   if (use_avx2()) return detail::exp_avx2(x, y, n);
 #endif
   detail::exp_base(x, y, n);
 }
 
 void log(const double* x, double* y, int n) {
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
   if (use_avx2()) return detail::log_avx2(x, y, n);
 #endif
   detail::log_base(x, y, n);
 }
 
 void log1p(const double* x, double* y, int n) {
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
   if (use_avx2()) return detail::log1p_avx2(x, y, n);
 #endif
   detail::log1p_base(x, y, n);
 }
 
 void weighted_rows(const double* a, int n, int width, const double* g, double* out) {
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
   if (use_avx2()) return detail::weighted_rows_avx2(a, n, width, g, out);
 #endif
   detail::weighted_rows_base(a, n, width, g, out);
 }
 
+bool avx2() {
+#ifdef WMILTRACK_AVX2_COPIES
+  return use_avx2();
+#else
+  return false;
+#endif
+}
+
 const char* isa() {
-#ifdef WMILTRACK_VMATH_AVX2
+#ifdef WMILTRACK_AVX2_COPIES
   return use_avx2() ? "avx2" : "sse2";
 #else
   return "scalar";

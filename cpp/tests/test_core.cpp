@@ -547,6 +547,15 @@ void test_learning(std::mt19937& rng) {
   milboost_select(vp, vn, MatrixView{ep.data(), P, M, M, 1}, MatrixView{en.data(), N, M, M, 1}, 5,
                   1e-5, sel2.data());
   for (std::int32_t f : sel2) CHECK(f >= 0 && f < M);
+  // The AVX2 and the portable copies of the selections choose the same features.
+  std::vector<std::int32_t> sel_portable(M), sel2_portable(5);
+  vmath::force_portable(true);
+  wmil_select(vp, vn, w.data(), M, false, sel_portable.data());
+  milboost_select(vp, vn, MatrixView{ep.data(), P, M, M, 1}, MatrixView{en.data(), N, M, M, 1}, 5,
+                  1e-5, sel2_portable.data());
+  vmath::force_portable(false);
+  CHECK(sel_portable == sel);
+  CHECK(sel2_portable == sel2);
   threw = false;
   try {
     wmil_select(vp, vn, w.data(), M + 1, false, sel.data());

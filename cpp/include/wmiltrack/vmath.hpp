@@ -23,6 +23,16 @@
 // log of a negative number is NaN; log1p(-1) = -inf, log1p(x < -1) = NaN; NaN gives NaN.
 #pragma once
 
+// Kernels compiled twice, for AVX2 and for the baseline, with the same bits: on x86-64 with
+// GCC/Clang. WMILTRACK_KERNEL marks a body to be inlined into each copy (so that it is compiled
+// for that copy's instruction set).
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__) && !defined(WMILTRACK_NO_SIMD)
+#define WMILTRACK_AVX2_COPIES 1
+#define WMILTRACK_KERNEL inline __attribute__((always_inline))
+#else
+#define WMILTRACK_KERNEL inline
+#endif
+
 namespace wmiltrack::vmath {
 
 // y[i] = exp(x[i]) for i < n. x and y may be the same array.
@@ -38,6 +48,10 @@ void log1p(const double* x, double* y, int n);
 // j = 0, 1, ..., n - 1 from 0.0 (so the bits are those of a plain loop over j), several m at a
 // time. The weighted-MIL selection scores every feature with this in each round.
 void weighted_rows(const double* a, int n, int width, const double* g, double* out);
+
+// Whether this CPU takes the AVX2 copies (false when forced portable, or on a build without
+// them). Other kernels of the core that have an AVX2 copy (WMILTRACK_AVX2_COPIES) ask this.
+bool avx2();
 
 // Which code path the calls above take on this CPU: "avx2" or "sse2" on x86-64 with GCC/Clang,
 // "scalar" otherwise (one value at a time). The results are the same on every path.
