@@ -156,7 +156,7 @@ WMILTRACK_KERNEL void apply(const double* x, double* y, int n) {
 }
 
 // weighted_rows: 4 * kLanes sums at a time in registers, each adding a[j][m] g[j] in the order
-// j = 0, 1, ...; then the last width % (4 * kLanes) one at a time, the same way.
+// j = 0, 1, ...; then kLanes at a time, then one at a time, the same way.
 WMILTRACK_KERNEL void weighted_rows_impl(const double* a, int n, int width, const double* g,
                                         double* out) {
   constexpr int kVectors = 4;
@@ -176,6 +176,15 @@ WMILTRACK_KERNEL void weighted_rows_impl(const double* a, int n, int width, cons
       }
     }
     std::memcpy(out + m0, acc, sizeof acc);
+  }
+  for (; m0 + kLanes <= width; m0 += kLanes) {  // then one vector at a time
+    D acc = splat(0.0);
+    for (int j = 0; j < n; ++j) {
+      D r;
+      std::memcpy(&r, a + static_cast<std::size_t>(j) * stride + m0, sizeof r);
+      acc = acc + r * splat(g[j]);
+    }
+    std::memcpy(out + m0, &acc, sizeof acc);
   }
   for (int m = m0; m < width; ++m) {
     double acc = 0.0;
