@@ -44,14 +44,11 @@ WeakGaussians::WeakGaussians(const double* mu1, const double* sigma1, const doub
 // Values go in chunks of kChunk; the guarded values of a chunk are gathered and computed
 // together with vmath's exp and log (four values per instruction). MILTrack's guard (1e-5)
 // sends every value down the guarded path.
-namespace {
-
-// The body of WeakGaussians::log_ratio for feature (mu1, a1, lb1, mu0, a0, lb0), inlined into
-// an AVX2 copy and a baseline copy (same bits: element-wise IEEE arithmetic, no FMA).
-WMILTRACK_KERNEL void log_ratio_body(double mu1, double a1, double lb1, double mu0, double a0,
-                                     double lb0, double guard, double fast_cut, const double* x,
-                                     int n, double* out, bool accumulate) {
+void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool accumulate,
+                              double* /*scratch*/) const {
   constexpr int kChunk = 64;
+  const double mu1 = mu1_[k], a1 = a1_[k], lb1 = lb1_[k];
+  const double mu0 = mu0_[k], a0 = a0_[k], lb0 = lb0_[k];
   double l1[kChunk], l0[kChunk], h[kChunk], e1[kChunk], e0[kChunk];
   int idx[kChunk];
   for (int i0 = 0; i0 < n; i0 += kChunk) {
@@ -63,11 +60,10 @@ WMILTRACK_KERNEL void log_ratio_body(double mu1, double a1, double lb1, double m
     ArrayMap(h, m) = ArrayMap(l1, m) - ArrayMap(l0, m);
     // Where both log-densities dwarf the guard, the ratio is exact in the log domain; the
     // other values are gathered and take the guarded formula together.
-    // (Without branches: & not &&; mixed chunks would mispredict.)
     int guarded = 0;
     for (int i = 0; i < m; ++i) {
       idx[guarded] = i;
-      guarded += static_cast<int>(!((l1[i] > fast_cut) & (l0[i] > fast_cut)));
+      guarded += !((l1[i] > fast_cut_) && (l0[i] > fast_cut_));
     }
     if (guarded > 0) {
       for (int g = 0; g < guarded; ++g) {
@@ -76,7 +72,7 @@ WMILTRACK_KERNEL void log_ratio_body(double mu1, double a1, double lb1, double m
       }
       vmath::exp(e1, e1, guarded);
       vmath::exp(e0, e0, guarded);
-      for (int g = 0; g < guarded; ++g) e1[g] = (e1[g] + guard) / (e0[g] + guard);
+      for (int g = 0; g < guarded; ++g) e1[g] = (e1[g] + guard_) / (e0[g] + guard_);
       vmath::log(e1, e1, guarded);
       for (int g = 0; g < guarded; ++g) h[idx[g]] = e1[g];
     }
@@ -87,89 +83,6 @@ WMILTRACK_KERNEL void log_ratio_body(double mu1, double a1, double lb1, double m
       for (int i = 0; i < m; ++i) o[i] = h[i];
     }
   }
-}
-
-}  // namespace
-
-namespace detail {
-// A row of score_grid's candidates: consecutive grid columns within one grid row.
-struct Run {
-  int first;             // index of the run's first candidate
-  int count;             // candidates in the run
-  std::ptrdiff_t base;   // table offset of the first candidate's top-left corner
-};
-}  // namespace detail
-
-namespace {
-
-using detail::Run;
-
-// values[run.first + t] += weight * (rectangle sum at candidate t of each run), t < run.count.
-WMILTRACK_KERNEL void add_rect_body(const double* table, const std::vector<Run>& runs,
-                                    const CompiledFeatures::Corners& q, int step, double* values) {
-  for (const Run& run : runs) {
-    const double* tl = table + run.base + q.tl;
-    const double* tr = table + run.base + q.tr;
-    const double* bl = table + run.base + q.bl;
-    const double* br = table + run.base + q.br;
-    double* v = values + run.first;
-    if (step == 1) {
-      for (int t = 0; t < run.count; ++t) v[t] += q.weight * ((br[t] - tr[t]) - (bl[t] - tl[t]));
-    } else {
-      for (int t = 0; t < run.count; ++t) {
-        const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(t) * step;
-        v[t] += q.weight * ((br[o] - tr[o]) - (bl[o] - tl[o]));
-      }
-    }
-  }
-}
-
-}  // namespace
-
-// Named copies of the kernels per instruction set (see vmath.hpp).
-namespace detail {
-void log_ratio_base(double mu1, double a1, double lb1, double mu0, double a0, double lb0,
-                    double guard, double fast_cut, const double* x, int n, double* out,
-                    bool accumulate) {
-  log_ratio_body(mu1, a1, lb1, mu0, a0, lb0, guard, fast_cut, x, n, out, accumulate);
-}
-void add_rect_base(const double* table, const std::vector<Run>& runs,
-                   const CompiledFeatures::Corners& q, int step, double* values) {
-  add_rect_body(table, runs, q, step, values);
-}
-#ifdef WMILTRACK_AVX2_COPIES
-__attribute__((target("avx2"))) void log_ratio_avx2(double mu1, double a1, double lb1,
-                                                    double mu0, double a0, double lb0,
-                                                    double guard, double fast_cut,
-                                                    const double* x, int n, double* out,
-                                                    bool accumulate) {
-  log_ratio_body(mu1, a1, lb1, mu0, a0, lb0, guard, fast_cut, x, n, out, accumulate);
-}
-__attribute__((target("avx2"))) void add_rect_avx2(const double* table,
-                                                   const std::vector<Run>& runs,
-                                                   const CompiledFeatures::Corners& q, int step,
-                                                   double* values) {
-  add_rect_body(table, runs, q, step, values);
-}
-#endif
-}  // namespace detail
-
-// Each value chooses the exact or the guarded formula on its own, so that a value depends on
-// its own inputs only, never on the other samples of the batch or the buffer's alignment.
-// Values go in chunks of 64; the guarded values of a chunk are gathered and computed together
-// with vmath's exp and log (four values per instruction). MILTrack's guard (1e-5) sends every
-// value down the guarded path.
-void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool accumulate,
-                              double* /*scratch*/) const {
-#ifdef WMILTRACK_AVX2_COPIES
-  if (vmath::avx2()) {
-    detail::log_ratio_avx2(mu1_[k], a1_[k], lb1_[k], mu0_[k], a0_[k], lb0_[k], guard_, fast_cut_,
-                           x, n, out, accumulate);
-    return;
-  }
-#endif
-  detail::log_ratio_base(mu1_[k], a1_[k], lb1_[k], mu0_[k], a0_[k], lb0_[k], guard_, fast_cut_, x,
-                         n, out, accumulate);
 }
 
 namespace {
@@ -237,6 +150,11 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
 
   // Gather the candidates that fit in the frame, in row-major order, as runs of
   // consecutive grid columns within one grid row (equally spaced in the table).
+  struct Run {
+    int first;             // index of the run's first candidate
+    int count;             // candidates in the run
+    std::ptrdiff_t base;   // table offset of the first candidate's top-left corner
+  };
   std::vector<int> cand_dx, cand_dy;
   std::vector<Run> runs;
   for (int j = -n; j <= n; ++j) {
@@ -281,19 +199,25 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   std::vector<double> values(static_cast<std::size_t>(c)), total(static_cast<std::size_t>(c), 0.0),
       scratch(2 * static_cast<std::size_t>(c));
   const double* table = ii.data();
-#ifdef WMILTRACK_AVX2_COPIES
-  const bool avx2 = vmath::avx2();
-#endif
   for (int k = 0; k < compiled.size(); ++k) {
     std::fill(values.begin(), values.end(), 0.0);
     for (int r = compiled.first_rect(k); r < compiled.end_rect(k); ++r) {
-#ifdef WMILTRACK_AVX2_COPIES
-      if (avx2) {
-        detail::add_rect_avx2(table, runs, compiled.corners(r), step, values.data());
-        continue;
+      const CompiledFeatures::Corners& q = compiled.corners(r);
+      for (const Run& run : runs) {
+        const double* tl = table + run.base + q.tl;
+        const double* tr = table + run.base + q.tr;
+        const double* bl = table + run.base + q.bl;
+        const double* br = table + run.base + q.br;
+        double* v = values.data() + run.first;
+        if (step == 1) {
+          for (int t = 0; t < run.count; ++t) v[t] += q.weight * ((br[t] - tr[t]) - (bl[t] - tl[t]));
+        } else {
+          for (int t = 0; t < run.count; ++t) {
+            const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(t) * step;
+            v[t] += q.weight * ((br[o] - tr[o]) - (bl[o] - tl[o]));
+          }
+        }
       }
-#endif
-      detail::add_rect_base(table, runs, compiled.corners(r), step, values.data());
     }
     weak.log_ratio(k, values.data(), c, total.data(), true, scratch.data());
   }
