@@ -50,6 +50,14 @@ VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
 REFERENCE = "opencv:MIL"
 
 
+def simd_path() -> str:
+    """The copy of wmiltrack's vectorised kernels that runs here (older versions had none)."""
+    from wmiltrack import _core
+
+    path = getattr(_core, "simd_path", None)
+    return str(path()) if path is not None else "none (this version predates them)"
+
+
 def _fmt(v: float, spec: str = ".0f") -> str:
     return "-" if v is None or math.isnan(v) else format(v, spec)
 
@@ -82,8 +90,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         action="store_true",
         help="convert the frames to one-channel gray first (every tracker gets the same frames)",
     )
+    ap.add_argument(
+        "--portable",
+        action="store_true",
+        help="run wmiltrack's vectorised kernels in their baseline (SSE2) copy even where the CPU "
+        "has AVX2 (the boxes are the same; this measures what AVX2 buys)",
+    )
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
     args = ap.parse_args(argv)
+    if args.portable:
+        from wmiltrack import _core
+
+        if not hasattr(_core, "set_simd_portable"):
+            ap.error("--portable: this version of wmiltrack has no vectorised kernels")
+        _core.set_simd_portable(True)
 
     import cv2
 
@@ -115,8 +135,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         trackers = [t for t in trackers if t in wanted or t == REFERENCE]
 
     dist, ver = installed_opencv()
+    simd = simd_path()
     print(
-        f"# {cpu_model()}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy "
+        f"# {cpu_model()}, {os.cpu_count()} cores; wmiltrack kernels: {simd}; Python "
+        f"{platform.python_version()}, numpy "
         f"{np.__version__}, OpenCV {cv2.__version__} ({dist} {ver}), OpenCV threads "
         f"{cv2.getNumThreads()}; {n_frames} {'gray ' if args.gray else ''}frames per run, "
         f"median of {repeats} runs, "
@@ -177,6 +199,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         doc = {
             "cpu": cpu_model(),
             "cores": os.cpu_count(),
+            "simd": simd,
             "python": platform.python_version(),
             "numpy": np.__version__,
             "opencv": f"{cv2.__version__} ({dist} {ver})",

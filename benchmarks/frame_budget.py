@@ -192,8 +192,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     variants = [v.strip() for v in args.variants.split(",") if v.strip()]
     known = set(wmiltrack.variants())
     variants = [v for v in variants if v in known]
+    from wmiltrack import _core
+
+    simd = getattr(_core, "simd_path", None)
+    kernels = simd() if simd is not None else "none (this version predates them)"
     print(f"# {cpu_model()}; wmiltrack {getattr(wmiltrack, '__version__', '?')} from "
-          f"{Path(wmiltrack.__file__).parent}; median us per frame over {args.frames - 1} updates "
+          f"{Path(wmiltrack.__file__).parent} (vectorised kernels: {kernels}); median us per frame over {args.frames - 1} updates "
           f"x {args.repeats} runs; share of the median update in brackets")
 
     runs: list[tuple[str, list[np.ndarray], Any]] = []

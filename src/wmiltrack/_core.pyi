@@ -15,6 +15,12 @@ _I32 = npt.ArrayLike
 # machine's. The default build is portable (x86-64 baseline) and gives the same bits on any CPU.
 BUILD_NATIVE: Final[bool]
 
+# The copy of the vectorised kernels (exp/log/log1p, WMIL scores, MILBoost selection) this CPU
+# runs: "avx2" (chosen at run time), "sse2" (the baseline) or "scalar"; every copy computes the
+# same bits. set_simd_portable(True) forces the baseline copy, for tests and benchmarks.
+def simd_path() -> str: ...
+def set_simd_portable(portable: bool) -> None: ...
+
 # Channel ids of IntegralImage.compute_channels; every channel is an integer in 0..255.
 # gx, gy: central differences of the luma (neighbours outside the ROI used when the frame
 # has them, the frame's edge replicated), y growing downwards.
