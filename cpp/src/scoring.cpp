@@ -14,8 +14,6 @@ namespace wmiltrack {
 
 namespace {
 constexpr double kEps = 1e-30;
-using ConstArrayMap = Eigen::Map<const Eigen::ArrayXd>;
-using ArrayMap = Eigen::Map<Eigen::ArrayXd>;
 }  // namespace
 
 WeakGaussians::WeakGaussians(const double* mu1, const double* sigma1, const double* mu0,
@@ -24,65 +22,32 @@ WeakGaussians::WeakGaussians(const double* mu1, const double* sigma1, const doub
   if (!(guard > 0.0)) throw std::invalid_argument("weak classifiers: guard must be > 0");
   // ln(p + guard) == ln(p) in double once p > guard * 2^60.
   fast_cut_ = std::log(guard) + 60.0 * std::log(2.0);
-  const auto push = [](double mu, double sigma, std::vector<double>& m, std::vector<double>& a,
-                       std::vector<double>& lb) {
-    if (!(sigma > 0.0) || !std::isfinite(sigma) || !std::isfinite(mu)) {
-      throw std::invalid_argument("weak classifiers: need finite means and sigmas > 0");
-    }
-    m.push_back(mu);
-    a.push_back(1.0 / (2.0 * sigma * sigma + kEps));
-    lb.push_back(-std::log(sigma + kEps));
+  using Map = Eigen::Map<const Eigen::ArrayXd>;
+  const Map m1(mu1, n), s1(sigma1, n), m0(mu0, n), s0(sigma0, n);
+  const auto valid = [](const Map& mu, const Map& sigma) {
+    return (sigma > 0.0).all() && sigma.isFinite().all() && mu.isFinite().all();
   };
-  for (int k = 0; k < n; ++k) {
-    push(mu1[k], sigma1[k], mu1_, a1_, lb1_);
-    push(mu0[k], sigma0[k], mu0_, a0_, lb0_);
+  if (!valid(m1, s1) || !valid(m0, s0)) {
+    throw std::invalid_argument("weak classifiers: need finite means and sigmas > 0");
   }
+  // Per feature: a = 1 / (2 sigma^2 + eps) and lb = -ln(sigma + eps) (the C library's log).
+  const auto neg_log = [](double v) { return -std::log(v); };
+  mu1_ = m1;
+  a1_ = (2.0 * s1 * s1 + kEps).inverse();
+  lb1_ = (s1 + kEps).unaryExpr(neg_log);
+  mu0_ = m0;
+  a0_ = (2.0 * s0 * s0 + kEps).inverse();
+  lb0_ = (s0 + kEps).unaryExpr(neg_log);
 }
 
-// Each value chooses the exact or the guarded formula on its own, so that a value depends on
-// its own inputs only, never on the other samples of the batch or the buffer's alignment.
-// Values go in chunks of kChunk; the guarded values of a chunk are gathered and computed
-// together with vmath's exp and log (four values per instruction). MILTrack's guard (1e-5)
-// sends every value down the guarded path.
+// Each value chooses the exact or the guarded formula on its own (vmath::log_ratio), so that a
+// value depends on its own inputs only, never on the other samples of the batch or the buffer's
+// alignment. MILTrack's guard (1e-5) sends every value down the guarded path.
 void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool accumulate,
                               double* /*scratch*/) const {
-  constexpr int kChunk = 64;
-  const double mu1 = mu1_[k], a1 = a1_[k], lb1 = lb1_[k];
-  const double mu0 = mu0_[k], a0 = a0_[k], lb0 = lb0_[k];
-  double l1[kChunk], l0[kChunk], h[kChunk], e1[kChunk], e0[kChunk];
-  int idx[kChunk];
-  for (int i0 = 0; i0 < n; i0 += kChunk) {
-    const int m = std::min(kChunk, n - i0);
-    const double* v = x + i0;
-    const ConstArrayMap values(v, m);
-    ArrayMap(l1, m) = lb1 - (values - mu1).square() * a1;
-    ArrayMap(l0, m) = lb0 - (values - mu0).square() * a0;
-    ArrayMap(h, m) = ArrayMap(l1, m) - ArrayMap(l0, m);
-    // Where both log-densities dwarf the guard, the ratio is exact in the log domain; the
-    // other values are gathered and take the guarded formula together.
-    int guarded = 0;
-    for (int i = 0; i < m; ++i) {
-      idx[guarded] = i;
-      guarded += !((l1[i] > fast_cut_) && (l0[i] > fast_cut_));
-    }
-    if (guarded > 0) {
-      for (int g = 0; g < guarded; ++g) {
-        e1[g] = l1[idx[g]];
-        e0[g] = l0[idx[g]];
-      }
-      vmath::exp(e1, e1, guarded);
-      vmath::exp(e0, e0, guarded);
-      for (int g = 0; g < guarded; ++g) e1[g] = (e1[g] + guard_) / (e0[g] + guard_);
-      vmath::log(e1, e1, guarded);
-      for (int g = 0; g < guarded; ++g) h[idx[g]] = e1[g];
-    }
-    double* o = out + i0;
-    if (accumulate) {
-      for (int i = 0; i < m; ++i) o[i] += h[i];
-    } else {
-      for (int i = 0; i < m; ++i) o[i] = h[i];
-    }
-  }
+  const vmath::LogRatioTerms t{mu1_[k], a1_[k], lb1_[k], mu0_[k], a0_[k], lb0_[k], guard_,
+                               fast_cut_};
+  vmath::log_ratio(t, x, n, out, accumulate);
 }
 
 namespace {

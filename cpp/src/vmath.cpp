@@ -44,7 +44,8 @@ constexpr std::uint64_t kTwo52Bits = 0x4330000000000000ULL;
 // width: GCC/Clang vectors of 2 doubles (the SSE2 copy) and of 4 (the AVX2 copy) on x86-64,
 // plain double / uint64 / bool elsewhere. D holds the doubles, U as many unsigned 64-bit
 // lanes, M the masks that comparisons give; `pick(m, a, b)` is the lane-wise m ? a : b. Every
-// operation is the same IEEE operation at any width, so the bits are the same.
+// operation is the same IEEE operation at any width, so the bits are the same. first(x) is
+// lane 0; all_true(m) whether every lane of a mask is set.
 #ifdef WMILTRACK_AVX2_COPIES
 #define WMILTRACK_VMATH_WIDTH(NS, N)                                  \
   namespace NS {                                                      \
@@ -57,6 +58,12 @@ constexpr std::uint64_t kTwo52Bits = 0x4330000000000000ULL;
   inline D pick(M m, D a, D b) { return m ? a : b; }                  \
   inline U pick(M m, U a, U b) { return m ? a : b; }                  \
   inline D splat(double v) { return D{} + v; }                        \
+  inline double first(D x) { return x[0]; }                          \
+  inline bool all_true(M m) {                                         \
+    bool all = true;                                                  \
+    for (int q = 0; q < N; ++q) all = all && m[q] != 0;               \
+    return all;                                                       \
+  }                                                                   \
   }
 WMILTRACK_VMATH_WIDTH(lanes2, 2)
 WMILTRACK_VMATH_WIDTH(lanes4, 4)
@@ -79,6 +86,8 @@ inline D as_d(U u) { return from_bits(u); }
 inline D pick(M m, D a, D b) { return m ? a : b; }
 inline U pick(M m, U a, U b) { return m ? a : b; }
 inline D splat(double v) { return v; }
+inline double first(D x) { return x; }
+inline bool all_true(M m) { return m; }
 #include "vmath_lanes.inc"
 }  // namespace lanes1
 namespace base_lanes = lanes1;
@@ -103,6 +112,10 @@ namespace detail {
   }                                                                                            \
   ATTR void log1p_##SUFFIX(const double* x, double* y, int n) {                                \
     NS::apply<NS::log1p_lanes>(x, y, n);                                                       \
+  }                                                                                            \
+  ATTR void log_ratio_##SUFFIX(const LogRatioTerms& t, const double* x, int n, double* out,    \
+                               bool accumulate) {                                              \
+    NS::log_ratio_impl(t, x, n, out, accumulate);                                              \
   }
 
 WMILTRACK_VMATH_LOOPS(base, , base_lanes)
@@ -144,6 +157,13 @@ void log1p(const double* x, double* y, int n) {
   if (use_avx2()) return detail::log1p_avx2(x, y, n);
 #endif
   detail::log1p_base(x, y, n);
+}
+
+void log_ratio(const LogRatioTerms& t, const double* x, int n, double* out, bool accumulate) {
+#ifdef WMILTRACK_AVX2_COPIES
+  if (use_avx2()) return detail::log_ratio_avx2(t, x, n, out, accumulate);
+#endif
+  detail::log_ratio_base(t, x, n, out, accumulate);
 }
 
 void weighted_rows(const double* a, int n, int width, const double* g, double* out) {

@@ -1,6 +1,7 @@
 // Gaussian naive-Bayes weak classifiers and candidate scoring over a search grid.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
 
@@ -27,7 +28,7 @@ class WeakGaussians {
                  double* scratch) const;
 
  private:
-  std::vector<double> mu1_, a1_, lb1_, mu0_, a0_, lb0_;
+  Eigen::ArrayXd mu1_, a1_, lb1_, mu0_, a0_, lb0_;  // per feature (see the constructor)
   double guard_;
   double fast_cut_;  // above this log-density the guard cannot change a double
 };

@@ -49,6 +49,19 @@ void log1p(const double* x, double* y, int n);
 // time. The weighted-MIL selection scores every feature with this in each round.
 void weighted_rows(const double* a, int n, int width, const double* g, double* out);
 
+// One weak classifier's guarded Gaussian log ratio (scoring.hpp's WeakGaussians, which owns the
+// formula): l_c(x) = lb_c - (x - mu_c)^2 a_c and
+//   h(x) = l_1 - l_0                                  where both l_c > cut (the guard cannot
+//                                                     change a double there),
+//   h(x) = log((exp(l_1) + guard) / (exp(l_0) + guard)) elsewhere, with this file's exp/log.
+struct LogRatioTerms {
+  double mu1, a1, lb1, mu0, a0, lb0, guard, cut;
+};
+
+// out[i] = h(x[i]) (or out[i] += h(x[i]) with accumulate) for i < n; each value depends on its
+// own x alone.
+void log_ratio(const LogRatioTerms& t, const double* x, int n, double* out, bool accumulate);
+
 // Whether this CPU takes the AVX2 copies (false when forced portable, or on a build without
 // them). Other kernels of the core that have an AVX2 copy (WMILTRACK_AVX2_COPIES) ask this.
 bool avx2();
