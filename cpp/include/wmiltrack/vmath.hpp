@@ -1,22 +1,25 @@
-// exp, log and log1p over arrays of doubles, several values per instruction; and one
-// matrix-vector product with a fixed order of summation.
+// exp, log and log1p over arrays of doubles, several values per instruction; the weak
+// classifiers' guarded log ratio built on them; and one matrix-vector product with a fixed
+// order of summation.
 //
-// Why not the C library: glibc's scalar exp/log cost 10-20 ns a call, and the learning and
+// Why not the C library: glibc's scalar exp/log cost 5-20 ns a call, and the learning and
 // scoring kernels make thousands of such calls a frame (WMIL selection: three per instance per
-// round; the MILTrack guard: three per feature value). These run 4 values at a time (AVX2 when
-// the CPU has it, chosen at run time; SSE2 otherwise) at a few ns a value.
+// round; the MILTrack guard: three per feature value). These run 4 values at a time with AVX2
+// (chosen at run time when the CPU has it) and 2 with the SSE2 baseline, at a few ns a value.
 //
 // Same bits everywhere: each function is one fixed sequence of IEEE additions, multiplications
 // and divisions and integer bit operations (no FMA: the core is built with -ffp-contract=off),
-// so the AVX2 and SSE2 paths, and every x86-64 CPU, give the same result for the same input.
+// so the AVX2 and SSE2 copies, a scalar build, and every x86-64 CPU give the same result for the
+// same input.
 // The results are not the C library's: both are within about 1 ulp of the true value, and may
 // differ from each other in the last bit.
 //
 // Algorithms (fdlibm's, as in Sun's freely distributable libm): exp reduces x = k ln2 + r with
-// a two-part ln2 and evaluates exp(r) with a degree-5 rational-form polynomial; log writes
-// x = 2^k m, m in [sqrt(1/2), sqrt(2)), and evaluates log(m) through s = (m-1)/(m+1) with a
-// degree-14 polynomial; log1p(x) is log(1 + x) plus the rounding error of 1 + x, divided by
-// 1 + x (exact to first order, so tiny x keep full relative precision).
+// a two-part ln2 and evaluates exp(r) in fdlibm's rational form from a degree-5 polynomial in
+// r^2; log writes x = 2^k m, m in [sqrt(1/2), sqrt(2)), and evaluates log(m) through
+// s = (m-1)/(m+1) with a degree-7 polynomial in s^2; log1p(x) is log(1 + x) plus the rounding
+// error of 1 + x, divided by 1 + x (exact to first order, so tiny x keep full relative
+// precision).
 //
 // Special values: exp(-inf) = 0, exp(+inf) = +inf, exp overflows to +inf above ~709.78 and
 // underflows (through the subnormals) to 0 below ~-745.13; log(0) = -inf, log(+inf) = +inf,
@@ -70,7 +73,8 @@ bool avx2();
 // "scalar" otherwise (one value at a time). The results are the same on every path.
 const char* isa();
 
-// For tests: force the portable path (true) or go back to the CPU's best (false).
+// For tests and benchmarks: force the baseline copies (true) or go back to the CPU's best
+// (false). Process-wide; meant to be set while no tracker runs.
 void force_portable(bool portable);
 
 }  // namespace wmiltrack::vmath
