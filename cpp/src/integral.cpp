@@ -1,5 +1,7 @@
 #include "wmiltrack/integral.hpp"
 
+#include "wmiltrack/vmath.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -18,7 +20,7 @@
 #if defined(WMILTRACK_SSE2_SCAN) && (defined(__GNUC__) || defined(__clang__)) && \
     (defined(__x86_64__) || defined(__i386__))
 #define WMILTRACK_SSSE3_LUMA 1
-#include <tmmintrin.h>
+#include <immintrin.h>
 #endif
 
 namespace wmiltrack {
@@ -79,22 +81,32 @@ void dispatch_pixels(const ImageView& image, const std::uint8_t* src, int n, F&&
 }
 
 #ifdef WMILTRACK_SSSE3_LUMA
+// Byte k of a 48-byte block of 16 BGR pixels is pixel k / 3, channel k % 3. For each channel
+// (b, g, r), three pshufb masks pick its bytes from the block's three 16-byte loads (-1: none
+// from this load).
+alignas(16) constexpr std::int8_t kBgrMasks[9][16] = {
+    {0, 3, 6, 9, 12, 15, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1},
+    {-1, -1, -1, -1, -1, -1, 2, 5, 8, 11, 14, -1, -1, -1, -1, -1},
+    {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 1, 4, 7, 10, 13},
+    {1, 4, 7, 10, 13, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1},
+    {-1, -1, -1, -1, -1, 0, 3, 6, 9, 12, 15, -1, -1, -1, -1, -1},
+    {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 2, 5, 8, 11, 14},
+    {2, 5, 8, 11, 14, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1},
+    {-1, -1, -1, -1, -1, 1, 4, 7, 10, 13, -1, -1, -1, -1, -1, -1},
+    {-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 3, 6, 9, 12, 15},
+};
+
 // bgr_to_gray() of n packed BGR pixels, 16 at a time: the same integer formula (exact, so the
 // same bytes as the scalar loop), with the channels gathered by byte shuffles and the
 // weighted sums made by pmaddwd on (b, g) and (r, 1) pairs. Returns the pixels done.
 __attribute__((target("ssse3"))) int luma_bgr_ssse3(const std::uint8_t* src, int n,
                                                     std::uint8_t* out) {
-  // Byte k of a 48-byte block of 16 pixels: pixel k / 3, channel k % 3. For each channel, the
-  // masks pick its bytes from the three 16-byte loads (-1: none from this load).
-  const __m128i b0 = _mm_setr_epi8(0, 3, 6, 9, 12, 15, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-  const __m128i b1 = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, 2, 5, 8, 11, 14, -1, -1, -1, -1, -1);
-  const __m128i b2 = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 1, 4, 7, 10, 13);
-  const __m128i g0 = _mm_setr_epi8(1, 4, 7, 10, 13, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-  const __m128i g1 = _mm_setr_epi8(-1, -1, -1, -1, -1, 0, 3, 6, 9, 12, 15, -1, -1, -1, -1, -1);
-  const __m128i g2 = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 2, 5, 8, 11, 14);
-  const __m128i r0 = _mm_setr_epi8(2, 5, 8, 11, 14, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1);
-  const __m128i r1 = _mm_setr_epi8(-1, -1, -1, -1, -1, 1, 4, 7, 10, 13, -1, -1, -1, -1, -1, -1);
-  const __m128i r2 = _mm_setr_epi8(-1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0, 3, 6, 9, 12, 15);
+  const auto mask = [](int k) {
+    return _mm_load_si128(reinterpret_cast<const __m128i*>(kBgrMasks[k]));
+  };
+  const __m128i b0 = mask(0), b1 = mask(1), b2 = mask(2);
+  const __m128i g0 = mask(3), g1 = mask(4), g2 = mask(5);
+  const __m128i r0 = mask(6), r1 = mask(7), r2 = mask(8);
   const __m128i zero = _mm_setzero_si128();
   const __m128i w_bg = _mm_set1_epi32(3735 | (19235 << 16));  // (kB, kG) pairs
   const __m128i w_r1 = _mm_set1_epi32(9798 | (16384 << 16));  // (kR, rounding) pairs
@@ -128,6 +140,69 @@ __attribute__((target("ssse3"))) int luma_bgr_ssse3(const std::uint8_t* src, int
   return c;
 }
 
+// Helpers of luma_bgr_avx2, always inlined into it (so that its AVX2 code stays in the one
+// named function).
+#define WMILTRACK_AVX2_INLINE inline __attribute__((target("avx2"), always_inline))
+// Mask k of kBgrMasks in both lanes.
+WMILTRACK_AVX2_INLINE __m256i avx2_mask(int k) {
+  return _mm256_broadcastsi128_si256(_mm_load_si128(reinterpret_cast<const __m128i*>(kBgrMasks[k])));
+}
+// The 16-byte load k of pixels c .. c+15 (at p) in the low lane, of pixels c+16 .. c+31 in the
+// high lane.
+WMILTRACK_AVX2_INLINE __m256i avx2_load(const std::uint8_t* p, int k) {
+  const __m128i lo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16 * k));
+  const __m128i hi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 48 + 16 * k));
+  return _mm256_inserti128_si256(_mm256_castsi128_si256(lo), hi, 1);
+}
+// One channel's bytes from the three loads.
+WMILTRACK_AVX2_INLINE __m256i avx2_channel(__m256i v0, __m256i v1, __m256i v2, __m256i m0,
+                                           __m256i m1, __m256i m2) {
+  return _mm256_or_si256(_mm256_or_si256(_mm256_shuffle_epi8(v0, m0), _mm256_shuffle_epi8(v1, m1)),
+                         _mm256_shuffle_epi8(v2, m2));
+}
+#undef WMILTRACK_AVX2_INLINE
+
+}  // namespace
+
+namespace detail {
+// luma_bgr_ssse3 for 32 pixels a step: two 16-pixel blocks, one in each 128-bit lane, through
+// the same in-lane shuffles and integer arithmetic (so the same bytes). Run only where
+// vmath::avx2() says so; named so that the portable-build test finds it (see vmath.hpp).
+__attribute__((target("avx2"))) int luma_bgr_avx2(const std::uint8_t* src, int n,
+                                                   std::uint8_t* out) {
+  const __m256i b0 = avx2_mask(0), b1 = avx2_mask(1), b2 = avx2_mask(2);
+  const __m256i g0 = avx2_mask(3), g1 = avx2_mask(4), g2 = avx2_mask(5);
+  const __m256i r0 = avx2_mask(6), r1 = avx2_mask(7), r2 = avx2_mask(8);
+  const __m256i zero = _mm256_setzero_si256();
+  const __m256i w_bg = _mm256_set1_epi32(3735 | (19235 << 16));  // (kB, kG) pairs
+  const __m256i w_r1 = _mm256_set1_epi32(9798 | (16384 << 16));  // (kR, rounding) pairs
+  const __m256i one = _mm256_set1_epi16(1);
+  int c = 0;
+  for (; c + 32 <= n; c += 32) {
+    const std::uint8_t* p = src + 3 * c;
+    const __m256i v0 = avx2_load(p, 0), v1 = avx2_load(p, 1), v2 = avx2_load(p, 2);
+    const __m256i b = avx2_channel(v0, v1, v2, b0, b1, b2);
+    const __m256i g = avx2_channel(v0, v1, v2, g0, g1, g2);
+    const __m256i r = avx2_channel(v0, v1, v2, r0, r1, r2);
+    __m256i half[2];
+    for (int h = 0; h < 2; ++h) {
+      const __m256i b16 = h == 0 ? _mm256_unpacklo_epi8(b, zero) : _mm256_unpackhi_epi8(b, zero);
+      const __m256i g16 = h == 0 ? _mm256_unpacklo_epi8(g, zero) : _mm256_unpackhi_epi8(g, zero);
+      const __m256i r16 = h == 0 ? _mm256_unpacklo_epi8(r, zero) : _mm256_unpackhi_epi8(r, zero);
+      const __m256i lo = _mm256_add_epi32(_mm256_madd_epi16(_mm256_unpacklo_epi16(b16, g16), w_bg),
+                                          _mm256_madd_epi16(_mm256_unpacklo_epi16(r16, one), w_r1));
+      const __m256i hi = _mm256_add_epi32(_mm256_madd_epi16(_mm256_unpackhi_epi16(b16, g16), w_bg),
+                                          _mm256_madd_epi16(_mm256_unpackhi_epi16(r16, one), w_r1));
+      half[h] = _mm256_packs_epi32(_mm256_srai_epi32(lo, 15), _mm256_srai_epi32(hi, 15));
+    }
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + c), _mm256_packus_epi16(half[0], half[1]));
+  }
+  return c;
+}
+}  // namespace detail
+
+namespace {
+
 // Whether the CPU runs luma_bgr_ssse3 (asked once).
 bool have_ssse3() {
   static const bool yes = __builtin_cpu_supports("ssse3");
@@ -139,6 +214,12 @@ bool have_ssse3() {
 void luma_row(const ImageView& image, int y, int xa, int xb, std::uint8_t* out) {
   const std::uint8_t* src = image.data + y * image.row_stride + xa * image.col_stride;
 #ifdef WMILTRACK_SSSE3_LUMA
+  if (image.channels == 3 && image.col_stride == 3 && image.channel_stride == 1 && vmath::avx2()) {
+    const int done = detail::luma_bgr_avx2(src, xb - xa, out);
+    src += 3 * done;
+    out += done;
+    xa += done;
+  }
   if (image.channels == 3 && image.col_stride == 3 && image.channel_stride == 1 && have_ssse3()) {
     const int done = luma_bgr_ssse3(src, xb - xa, out);
     src += 3 * done;
