@@ -214,17 +214,15 @@ bool have_ssse3() {
 void luma_row(const ImageView& image, int y, int xa, int xb, std::uint8_t* out) {
   const std::uint8_t* src = image.data + y * image.row_stride + xa * image.col_stride;
 #ifdef WMILTRACK_SSSE3_LUMA
-  if (image.channels == 3 && image.col_stride == 3 && image.channel_stride == 1 && vmath::avx2()) {
-    const int done = detail::luma_bgr_avx2(src, xb - xa, out);
-    src += 3 * done;
-    out += done;
-    xa += done;
-  }
-  if (image.channels == 3 && image.col_stride == 3 && image.channel_stride == 1 && have_ssse3()) {
-    const int done = luma_bgr_ssse3(src, xb - xa, out);
-    src += 3 * done;
-    out += done;
-    xa += done;
+  // Packed BGR: 32 pixels a step with AVX2, then 16 with SSSE3, then the loops below.
+  if (image.channels == 3 && image.col_stride == 3 && image.channel_stride == 1) {
+    const auto advance = [&](int done) {
+      src += 3 * done;
+      out += done;
+      xa += done;
+    };
+    if (vmath::avx2()) advance(detail::luma_bgr_avx2(src, xb - xa, out));
+    if (have_ssse3()) advance(luma_bgr_ssse3(src, xb - xa, out));
   }
 #endif
   if (image.channels == 1) {

@@ -6,7 +6,7 @@
 
 // With WMILTRACK_AVX2_COPIES (x86-64, GCC/Clang) the loops are compiled twice, for AVX2 and for
 // the baseline SSE2, and the AVX2 copy is taken when the CPU has it. The lane functions pass
-// 32-byte vectors by value, inlined into this file's loops only (GCC's -Wpsabi note about that
+// vectors by value, inlined into this file's loops only (GCC's -Wpsabi note about that
 // ABI concerns calls across files: CMakeLists turns it off here).
 
 namespace wmiltrack::vmath {
@@ -129,67 +129,61 @@ namespace {
 
 std::atomic<bool> g_portable{false};
 
+}  // namespace
+
+bool avx2() {
 #ifdef WMILTRACK_AVX2_COPIES
-bool use_avx2() {
   static const bool has = __builtin_cpu_supports("avx2");
   return has && !g_portable.load(std::memory_order_relaxed);
-}
+#else
+  return false;
 #endif
-
-}  // namespace
+}
 
 void exp(const double* x, double* y, int n) {
 #ifdef WMILTRACK_AVX2_COPIES
-  if (use_avx2()) return detail::exp_avx2(x, y, n);
+  if (avx2()) return detail::exp_avx2(x, y, n);
 #endif
   detail::exp_base(x, y, n);
 }
 
 void log(const double* x, double* y, int n) {
 #ifdef WMILTRACK_AVX2_COPIES
-  if (use_avx2()) return detail::log_avx2(x, y, n);
+  if (avx2()) return detail::log_avx2(x, y, n);
 #endif
   detail::log_base(x, y, n);
 }
 
 void log1p(const double* x, double* y, int n) {
 #ifdef WMILTRACK_AVX2_COPIES
-  if (use_avx2()) return detail::log1p_avx2(x, y, n);
+  if (avx2()) return detail::log1p_avx2(x, y, n);
 #endif
   detail::log1p_base(x, y, n);
 }
 
 void log_ratio(const LogRatioTerms& t, const double* x, int n, double* out, bool accumulate) {
 #ifdef WMILTRACK_AVX2_COPIES
-  if (use_avx2()) return detail::log_ratio_avx2(t, x, n, out, accumulate);
+  if (avx2()) return detail::log_ratio_avx2(t, x, n, out, accumulate);
 #endif
   detail::log_ratio_base(t, x, n, out, accumulate);
 }
 
 void weighted_rows(const double* a, int n, int width, const double* g, double* out) {
 #ifdef WMILTRACK_AVX2_COPIES
-  if (use_avx2()) return detail::weighted_rows_avx2(a, n, width, g, out);
+  if (avx2()) return detail::weighted_rows_avx2(a, n, width, g, out);
 #endif
   detail::weighted_rows_base(a, n, width, g, out);
 }
 
-bool avx2() {
-#ifdef WMILTRACK_AVX2_COPIES
-  return use_avx2();
-#else
-  return false;
-#endif
-}
-
 const char* isa() {
 #ifdef WMILTRACK_AVX2_COPIES
-  return use_avx2() ? "avx2" : "sse2";
+  return avx2() ? "avx2" : "sse2";
 #else
   return "scalar";
 #endif
 }
 
+// (Without WMILTRACK_AVX2_COPIES there is one path and g_portable is never read.)
 void force_portable(bool portable) { g_portable.store(portable, std::memory_order_relaxed); }
-// (Without the x86-64 build g_portable is never read: there is one path.)
 
 }  // namespace wmiltrack::vmath
