@@ -192,6 +192,7 @@ def _box_cases() -> Iterator[Case]:
     """Boxes partly/wholly outside, empty, non-finite, too small, frame-sized; every variant."""
     frames = _base_frames()
     fh, fw = frames[0].shape[:2]
+    huge = np.zeros((4100, 4200), np.uint8)  # 17.2 million pixels
     for v in VARIANTS:
         p = Params.for_variant(v)
         mw, mh = min_box_size(p)
@@ -222,6 +223,9 @@ def _box_cases() -> Iterator[Case]:
         yield Case(f"{v}/box-clipped-below-minimum", _init(v, frames[0], (fw - mw + 1, 10, 40, 40)), ValueError,
                    rf"after clipping.*needs at least {mw}x{mh}")
         yield Case(f"{v}/box-one-pixel", _init(v, frames[0], (10, 10, 1, 1)), ValueError, "needs at least")
+        # too large for the core's exact 32-bit rectangle sums
+        yield Case(f"{v}/box-beyond-32-bit-sums", _init(v, huge, (0, 0, 4200, 4100)), ValueError,
+                   "sums in 32 bits")
     # not four numbers (variant-independent)
     for label, box in [("three-numbers", (1, 2, 3)), ("five-numbers", (1, 2, 3, 4, 5)), ("none", None),
                        ("string", "1234"), ("string-items", ("1", "2", "30", "40")), ("nested", ((1, 2), (3, 4))),

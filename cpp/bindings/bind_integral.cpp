@@ -114,6 +114,7 @@ void require_plane(const IntegralImage& self, int plane) {
 }  // namespace
 
 void bind_integral(py::module_& m) {
+  m.attr("MAX_RECT_AREA") = kMaxExactRectArea;
   m.attr("CH_LUMA") = static_cast<int>(kLuma);
   m.attr("CH_GRAD") = static_cast<int>(kGrad);
   m.attr("CH_OPP_RG") = static_cast<int>(kOppRG);
@@ -188,7 +189,7 @@ void bind_integral(py::module_& m) {
             const auto ii = computed_table(self);
             require_plane(*ii, plane);
             CArray<double> out({ii->height() + 1, ii->width() + 1});
-            std::copy(ii->plane(plane), ii->plane(plane) + out.size(), out.mutable_data());
+            ii->copy_plane(plane, out.mutable_data());
             return out;
           },
           py::arg("plane") = 0,

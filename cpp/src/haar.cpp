@@ -43,6 +43,12 @@ FeatureBank::FeatureBank(std::vector<std::int32_t> starts, std::vector<Rect> rec
     if (r.x > std::numeric_limits<int>::max() - r.w || r.y > std::numeric_limits<int>::max() - r.h) {
       throw std::invalid_argument("feature bank: a rectangle's far edge overflows an int");
     }
+    if (static_cast<std::int64_t>(r.w) * r.h > kMaxExactRectArea) {
+      throw std::invalid_argument(
+          "feature bank: a rectangle of " + std::to_string(static_cast<std::int64_t>(r.w) * r.h) +
+          " pixels; at most " + std::to_string(kMaxExactRectArea) +
+          " (the integral image sums in 32 bits)");
+    }
     x0 = std::min(x0, r.x);
     y0 = std::min(y0, r.y);
     x1 = std::max(x1, r.x + r.w);
@@ -75,6 +81,7 @@ CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* 
       const std::ptrdiff_t top = p * plane_size + q.y * stride + q.x;
       const std::ptrdiff_t bottom = top + q.h * stride;
       corners_.push_back(Corners{top, top + q.w, bottom, bottom + q.w, bank.weights()[r]});
+      max_rect_area_ = std::max(max_rect_area_, static_cast<std::int64_t>(q.w) * q.h);
     }
     starts_.push_back(static_cast<std::int32_t>(corners_.size()));
   }
@@ -130,15 +137,14 @@ void project(const IntegralImage& ii, const FeatureBank& bank, const std::int32_
   // Feature by feature, rectangle by rectangle over all boxes: the boxes of a bag are
   // neighbours, so one rectangle's corners for all of them share cache lines. Each value
   // still sums its rectangles in order from 0.0, as CompiledFeatures::value does.
-  const double* table = ii.data();
+  const IntegralImage::Entry* table = ii.data();
   for (int k = 0; k < n_out; ++k) {
     double* o = out + static_cast<std::ptrdiff_t>(k) * n_boxes;
     std::fill(o, o + n_boxes, 0.0);
     for (int r = compiled.first_rect(k); r < compiled.end_rect(k); ++r) {
-      const CompiledFeatures::Corners& c = compiled.corners(r);
+      const double weight = compiled.corners(r).weight;
       for (int n = 0; n < n_boxes; ++n) {
-        const double* b = table + base[static_cast<std::size_t>(n)];
-        o[n] += c.weight * ((b[c.br] - b[c.tr]) - (b[c.bl] - b[c.tl]));
+        o[n] += weight * compiled.rect_sum(table + base[static_cast<std::size_t>(n)], r);
       }
     }
   }

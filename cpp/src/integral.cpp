@@ -245,27 +245,15 @@ void luma_row_ext(const ImageView& image, int y, int x0, int w, std::uint8_t* ex
   if (xb == x0 + w) ext[w + 1] = ext[w];
 }
 
-// Widest ROI whose row sums of 0..255 values fit in an int32.
-constexpr int kMaxInt32RowWidth = 2147483647 / 255;
-
-// One table row from one row of channel values: out[c + 1] = prev[c + 1] + sum(v[0..c]).
-// Every partial sum is an integer below 2^53, so the doubles are exact, and the result is the
-// same whichever loop computes it. With SSE2 the row sums are an in-register prefix scan of
-// 4 int32 lanes (16 pixels per step); otherwise a scalar scan into `scan` and a second loop
-// (conversion plus the row above) that the compiler vectorises.
-void accumulate_row(const std::uint8_t* v, int w, const double* prev, double* out,
-                    std::int32_t* scan) {
-  out[0] = 0.0;
-  if (w > kMaxInt32RowWidth) {  // never for a real frame; exact in 64 bits
-    std::int64_t row_sum = 0;
-    for (int c = 0; c < w; ++c) {
-      row_sum += v[c];
-      out[c + 1] = prev[c + 1] + static_cast<double>(row_sum);
-    }
-    return;
-  }
+// One table row from one row of channel values: out[c + 1] = prev[c + 1] + sum(v[0..c]),
+// modulo 2^32 (IntegralImage::Entry). Unsigned arithmetic wraps, so any width is fine: every
+// entry is the true sum modulo 2^32, which is all a rectangle's sum needs. With SSE2 the row
+// sums are an in-register prefix scan of 4 lanes (16 pixels per step), added to the row
+// above in the same registers; otherwise a plain loop.
+void accumulate_row(const std::uint8_t* v, int w, const std::uint32_t* prev, std::uint32_t* out) {
+  out[0] = 0;
   int c = 0;
-  std::int32_t row_sum = 0;
+  std::uint32_t row_sum = 0;
 #ifdef WMILTRACK_SSE2_SCAN
   const __m128i zero = _mm_setzero_si128();
   __m128i carry = zero;  // the running sum, in every lane
@@ -280,26 +268,16 @@ void accumulate_row(const std::uint8_t* v, int w, const double* prev, double* ou
       x = _mm_add_epi32(x, _mm_slli_si128(x, 8));
       x = _mm_add_epi32(x, carry);
       carry = _mm_shuffle_epi32(x, 0xFF);
-      const double* p = prev + c + 4 * j + 1;
-      double* o = out + c + 4 * j + 1;
-      _mm_storeu_pd(o, _mm_add_pd(_mm_loadu_pd(p), _mm_cvtepi32_pd(x)));
-      _mm_storeu_pd(o + 2, _mm_add_pd(_mm_loadu_pd(p + 2),
-                                      _mm_cvtepi32_pd(_mm_unpackhi_epi64(x, x))));
+      const __m128i above = _mm_loadu_si128(reinterpret_cast<const __m128i*>(prev + c + 4 * j + 1));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c + 4 * j + 1), _mm_add_epi32(above, x));
     }
   }
-  row_sum = _mm_cvtsi128_si32(carry);
-  for (; c < w; ++c) {
-    row_sum += v[c];
-    out[c + 1] = prev[c + 1] + static_cast<double>(row_sum);
-  }
-  (void)scan;
-#else
-  for (; c < w; ++c) {
-    row_sum += v[c];
-    scan[c] = row_sum;
-  }
-  for (c = 0; c < w; ++c) out[c + 1] = prev[c + 1] + static_cast<double>(scan[c]);
+  row_sum = static_cast<std::uint32_t>(_mm_cvtsi128_si32(carry));
 #endif
+  for (; c < w; ++c) {
+    row_sum += v[c];
+    out[c + 1] = prev[c + 1] + row_sum;
+  }
 }
 
 // The kLogLuma table (computed once, thread-safe static initialisation).
@@ -336,7 +314,7 @@ std::uint8_t log_luma(std::uint8_t luma) { return log_luma_table()[luma]; }
 // when complete: an exception (a bad argument, std::bad_alloc) leaves *this as it was.
 void IntegralImage::compute(const ImageView& image, Rect roi) {
   // The luma table alone, through the vectorised row code of build_channels: the same exact
-  // integer sums as a plain running-sum loop, so the same doubles.
+  // integer sums as a plain running-sum loop, so the same entries.
   IntegralImage next;
   next.build_channels(image, roi, {kLuma});
   swap(next);
@@ -347,6 +325,26 @@ void IntegralImage::compute_channels(const ImageView& image, Rect roi,
   IntegralImage next;
   next.build_channels(image, roi, channels);
   swap(next);
+}
+
+void IntegralImage::copy_plane(int k, double* out) const {
+  // Each pixel is the modular difference of four neighbouring entries (exact: 0..255); the
+  // true sums are rebuilt from the pixels.
+  const Entry* t = plane(k);
+  const std::ptrdiff_t s = stride();
+  std::fill_n(out, s, 0.0);
+  for (int y = 1; y <= height_; ++y) {
+    const Entry* up = t + (y - 1) * s;
+    const Entry* row = t + y * s;
+    double* o = out + y * s;
+    const double* o_up = o - s;
+    o[0] = 0.0;
+    double row_sum = 0.0;
+    for (int x = 1; x <= width_; ++x) {
+      row_sum += static_cast<double>((row[x] - row[x - 1]) - (up[x] - up[x - 1]));
+      o[x] = o_up[x] + row_sum;
+    }
+  }
 }
 
 void IntegralImage::swap(IntegralImage& other) noexcept {
@@ -391,7 +389,7 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   const std::ptrdiff_t ps = plane_size();
   // Every entry but row 0 is written below: no need to clear the whole buffer.
   data_.resize(static_cast<std::size_t>(ps) * static_cast<std::size_t>(n_planes));
-  for (int k = 0; k < n_planes; ++k) std::fill_n(data_.data() + k * ps, s, 0.0);
+  for (int k = 0; k < n_planes; ++k) std::fill_n(data_.data() + k * ps, s, Entry{0});
 
   const bool gradients = need_grad || need_orient || need_gxy;
   const std::size_t ext = static_cast<std::size_t>(w) + 2;
@@ -410,7 +408,6 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   std::uint8_t* log_l = grad + 7 * wz;
   std::uint8_t* grad_x = grad + 8 * wz;
   std::uint8_t* grad_y = grad + 9 * wz;
-  std::vector<std::int32_t> scan(wz);
   const int last_row = image.rows - 1;
   if (gradients) {
     luma_row_ext(image, std::max(y0_ - 1, 0), x0_, w, above);
@@ -527,8 +524,8 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
                               : ch == kGradX ? grad_x
                               : ch == kGradY ? grad_y
                                              : orient[ch - kOrient0];
-      double* plane_k = data_.data() + k * ps;
-      accumulate_row(v, w, plane_k + r * s, plane_k + (r + 1) * s, scan.data());
+      Entry* plane_k = data_.data() + k * ps;
+      accumulate_row(v, w, plane_k + r * s, plane_k + (r + 1) * s);
     }
   }
 }

@@ -79,6 +79,42 @@ void test_integral(std::mt19937& rng) {
     ii.compute(f.view(), Rect{-10, -10, 200, 200});
     CHECK(ii.x0() == 0 && ii.y0() == 0 && ii.width() == 53 && ii.height() == 37);
     CHECK(ii.sum(Rect{0, 0, 53, 37}) == static_cast<double>(naive_sum(f, 0, 0, 53, 37)));
+    // copy_plane gives the true sums.
+    std::vector<double> table(static_cast<std::size_t>(ii.plane_size()));
+    ii.copy_plane(0, table.data());
+    bool same = true;
+    for (int y = 0; y <= 37; ++y)
+      for (int x = 0; x <= 53; ++x)
+        same = same && table[y * ii.stride() + x] == static_cast<double>(naive_sum(f, 0, 0, x, y));
+    CHECK(same);
+  }
+  {
+    // Sums past 2^32: the 32-bit entries wrap, rectangles up to kMaxExactRectArea stay exact
+    // and larger ones are summed in bands. Every pixel 255 (one byte, strides 0), 4200 x 4100.
+    const std::uint8_t white = 255;
+    ImageView v;
+    v.data = &white;
+    v.rows = 4100;
+    v.cols = 4200;
+    v.row_stride = 0;
+    v.col_stride = 0;
+    IntegralImage big;
+    big.compute(v, Rect{0, 0, 4200, 4100});
+    const auto white_sum = [](std::int64_t w, std::int64_t h) { return 255.0 * static_cast<double>(w * h); };
+    CHECK(big.sum(Rect{0, 0, 4200, 4100}) == white_sum(4200, 4100));        // 4.39e9 > 2^32
+    CHECK(big.sum(Rect{100, 50, 4100, 4000}) == white_sum(4100, 4000));
+    CHECK(big.sum(Rect{4000, 4000, 200, 100}) == white_sum(200, 100));    // entries wrapped
+    const int side = 4104;  // 4104^2 = 16 842 816 <= kMaxExactRectArea: one band
+    CHECK(static_cast<std::int64_t>(side) * side <= kMaxExactRectArea);
+    CHECK(big.sum(Rect{50, 0, side, side - 8}) == white_sum(side, side - 8));
+    // A feature bank refuses a rectangle whose sum could reach 2^32.
+    bool refused = false;
+    try {
+      FeatureBank({0, 1}, {Rect{0, 0, 4200, 4100}}, {1.0});
+    } catch (const std::invalid_argument&) {
+      refused = true;
+    }
+    CHECK(refused);
   }
   bool threw = false;
   try {
@@ -306,9 +342,9 @@ void test_channels(std::mt19937& rng) {
         }
         exact = exact && ii.sum(Rect{ii.x0(), ii.y0(), ii.width(), ii.height()}, k) ==
                              naive_channel_sum(f, chans[k], ii.x0(), ii.y0(), ii.width(), ii.height());
-        const double* p = ii.plane(k);
-        for (int c = 0; c <= ii.width(); ++c) exact = exact && p[c] == 0.0;
-        for (int r = 0; r <= ii.height(); ++r) exact = exact && p[r * ii.stride()] == 0.0;
+        const IntegralImage::Entry* p = ii.plane(k);
+        for (int c = 0; c <= ii.width(); ++c) exact = exact && p[c] == 0;
+        for (int r = 0; r <= ii.height(); ++r) exact = exact && p[r * ii.stride()] == 0;
       }
       CHECK(exact);
     }
@@ -443,7 +479,7 @@ void test_hardening(std::mt19937& rng) {
   const Frame f = random_frame(30, 40, 3, rng);
   IntegralImage ii;
   ii.compute(f.view(), Rect{2, 3, 20, 10});
-  const std::vector<double> before(ii.data(), ii.data() + ii.plane_size());
+  const std::vector<IntegralImage::Entry> before(ii.data(), ii.data() + ii.plane_size());
   threw = false;
   try {
     ii.compute_channels(f.view(), Rect{100, 100, 5, 5}, {kLuma});
@@ -451,7 +487,7 @@ void test_hardening(std::mt19937& rng) {
     threw = true;
   }
   CHECK(threw);
-  // A view that claims a huge frame: its table (2^60 doubles per plane) exceeds the vector's
+  // A view that claims a huge frame: its table (2^60 entries per plane) exceeds the vector's
   // max_size, so resize throws std::length_error before touching the pixels. (A real
   // std::bad_alloc takes the same path; it is tested from Python: ASan's and valgrind's
   // operator new abort instead of throwing.)

@@ -24,6 +24,7 @@ def set_simd_portable(portable: bool) -> None: ...
 # Channel ids of IntegralImage.compute_channels; every channel is an integer in 0..255.
 # gx, gy: central differences of the luma (neighbours outside the ROI used when the frame
 # has them, the frame's edge replicated), y growing downwards.
+MAX_RECT_AREA: Final[int]  # largest feature rectangle (pixels): its sums are exact in 32 bits
 CH_LUMA: Final[int]  # 0: OpenCV BGR2GRAY, as compute()
 CH_GRAD: Final[int]  # 1: (|gx| + |gy|) // 2
 CH_OPP_RG: Final[int]  # 2: (R - G + 255) // 2, colour frames only

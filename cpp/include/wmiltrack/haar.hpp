@@ -14,7 +14,8 @@ class FeatureBank {
   // `starts` has one entry per feature plus a final one: feature f owns rectangles
   // starts[f] .. starts[f+1]-1. Rectangles are relative to the box's top-left corner.
   // `planes` (empty = all 0) gives each rectangle the integral-image plane it sums over
-  // (IntegralImage::compute_channels); plane indices must be >= 0.
+  // (IntegralImage::compute_channels); plane indices must be >= 0. A rectangle may hold at
+  // most kMaxExactRectArea pixels (its sum must be exact in the table's 32-bit entries).
   FeatureBank(std::vector<std::int32_t> starts, std::vector<Rect> rects,
               std::vector<double> weights, std::vector<std::int32_t> planes = {});
 
@@ -57,14 +58,19 @@ class CompiledFeatures {
 
   int size() const { return static_cast<int>(starts_.size()) - 1; }
 
-  // Value of feature k for the box whose top-left table entry is `base`.
-  double value(const double* base, int k) const {
+  // Value of feature k for the box whose top-left table entry is `base`: the weighted sum of
+  // its rectangles' exact sums, added in order from 0.0.
+  double value(const IntegralImage::Entry* base, int k) const {
     double v = 0.0;
-    for (int r = starts_[k]; r < starts_[k + 1]; ++r) {
-      const Corners& c = corners_[r];
-      v += c.weight * ((base[c.br] - base[c.tr]) - (base[c.bl] - base[c.tl]));
-    }
+    for (int r = starts_[k]; r < starts_[k + 1]; ++r) v += corners_[r].weight * rect_sum(base, r);
     return v;
+  }
+
+  // Rectangle r's sum at the box whose top-left table entry is `base` (modular, then exact:
+  // FeatureBank keeps every rectangle within kMaxExactRectArea).
+  double rect_sum(const IntegralImage::Entry* base, int r) const {
+    const Corners& c = corners_[r];
+    return static_cast<double>((base[c.br] - base[c.tr]) - (base[c.bl] - base[c.tl]));
   }
 
   // Table offsets of one rectangle's four corners, relative to the box's top-left entry.
@@ -73,12 +79,15 @@ class CompiledFeatures {
     double weight;
   };
   int first_rect(int k) const { return starts_[k]; }
+  // The largest rectangle's area in pixels (0 for no rectangle).
+  std::int64_t max_rect_area() const { return max_rect_area_; }
   int end_rect(int k) const { return starts_[k + 1]; }
   const Corners& corners(int r) const { return corners_[r]; }
 
  private:
   std::vector<std::int32_t> starts_;
   std::vector<Corners> corners_;
+  std::int64_t max_rect_area_ = 0;
 };
 
 // Checks that features at every box lie inside the integral image's region and that the

@@ -75,13 +75,25 @@ def min_box_size(params: Params) -> tuple[int, int]:
     return need, need
 
 
+def box_area_ok(w: int, h: int) -> bool:
+    """Whether a ``w x h`` box is within the core's largest exact rectangle sum
+    (``_core.MAX_RECT_AREA`` pixels, about 4100 x 4100: the integral image sums in 32 bits)."""
+    return w * h <= _core.MAX_RECT_AREA
+
+
 def check_box_size(params: Params, w: int, h: int) -> None:
-    """Raise ``ValueError`` when a ``w x h`` box is too small for the variant's features."""
+    """Raise ``ValueError`` when a ``w x h`` box is too small for the variant's features, or
+    too large for the core's 32-bit sums."""
     mw, mh = min_box_size(params)
     if w < mw or h < mh:
         raise ValueError(
             f"box is {w}x{h} pixels (after clipping to the frame); variant {params.variant!r} "
             f"needs at least {mw}x{mh}"
+        )
+    if not box_area_ok(w, h):
+        raise ValueError(
+            f"box is {w}x{h} = {w * h} pixels (after clipping to the frame); at most "
+            f"{_core.MAX_RECT_AREA} (the integral image sums in 32 bits): track on a downscaled video"
         )
 
 

@@ -23,6 +23,7 @@ from .features import (
     EDGE_CHANNELS,
     BankArrays,
     available_channels,
+    box_area_ok,
     check_box_size,
     make_bank,
     min_box_size,
@@ -510,7 +511,7 @@ class Tracker:
             return False
         w, h = self._box_size(index)
         mw, mh = min_box_size(p)
-        return mw <= w <= self._frame_wh[0] and mh <= h <= self._frame_wh[1]
+        return mw <= w <= self._frame_wh[0] and mh <= h <= self._frame_wh[1] and box_area_ok(w, h)
 
     @staticmethod
     def _centred(box: IntBox, w: int, h: int, dx: float = 0.0, dy: float = 0.0) -> IntBox:
