@@ -347,6 +347,15 @@ void IntegralImage::copy_plane(int k, double* out) const {
   }
 }
 
+void IntegralImage::rebuild(const ImageView& image, Rect roi, const std::vector<int>& channels) {
+  try {
+    build_channels(image, roi, channels);
+  } catch (...) {
+    data_.clear();  // not computed (the capacity stays for the next rebuild)
+    throw;
+  }
+}
+
 void IntegralImage::swap(IntegralImage& other) noexcept {
   std::swap(x0_, other.x0_);
   std::swap(y0_, other.y0_);

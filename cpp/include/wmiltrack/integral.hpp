@@ -110,6 +110,11 @@ class IntegralImage {
   // border for the gradient channels), independent of the frame's size.
   void compute_channels(const ImageView& image, Rect roi, const std::vector<int>& channels);
 
+  // compute_channels() in place, reusing this table's buffer (no new allocation when the
+  // table is no larger than before), with the basic guarantee only: a throw leaves the
+  // table not computed.
+  void rebuild(const ImageView& image, Rect roi, const std::vector<int>& channels);
+
   // False until a compute() or compute_channels() succeeded: the table is empty then and
   // nothing may be read from it (sum(), plane(), data()).
   bool computed() const { return !data_.empty(); }
