@@ -168,7 +168,9 @@ def _heavy_calls() -> dict[str, Callable[[], object]]:
     # WMIL selection is fast (vectorised): a larger problem so that the call lasts > 10 ms.
     w_pos, w_neg = rng.normal(size=(600, 500)), rng.normal(size=(600, 500))
     return {
-        "IntegralImage.compute": lambda: ii.compute(big, (0, 0, 3000, 3000)),
+        # A 3000 x 3000 table now takes ~6 ms (its buffer is reused): four in a row, each of
+        # which must release the GIL for the counter to keep up.
+        "IntegralImage.compute": lambda: [ii.compute(big, (0, 0, 3000, 3000)) for _ in range(4)],
         "project": lambda: _core.project(ii, bank, xs, ys),
         "log_ratio": lambda: _core.log_ratio(values, mu, sig, mu + 1, sig, 1e-30),
         "score_grid": lambda: _core.score_grid(ii, bank, sel, mu, sig, mu + 1, sig, 1e-30, (250, 250, 20, 20),

@@ -46,31 +46,43 @@ void grid_values_scalar(const IntegralImage::Entry* table, const std::vector<Gri
 }  // namespace
 
 #ifdef WMILTRACK_GRID_SIMD
+namespace {
+// The sum of rectangles c[0..n) at `b`, weighted and added in order from 0.0 (as
+// CompiledFeatures::value does).
+inline double corners_value(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
+                            int n) {
+  double v = 0.0;
+  for (int r = 0; r < n; ++r) {
+    v += c[r].weight * static_cast<double>((b[c[r].br] - b[c[r].tr]) - (b[c[r].bl] - b[c[r].tl]));
+  }
+  return v;
+}
+}  // namespace
+
 namespace detail {
-// grid_values_scalar for step 1, 4 candidates a step (SSE2). A run's last step overlaps the
+// values[run.first + t] = the feature with rectangles c[0..n) at candidate t of each run, the
+// candidates of a run consecutive in `table`, 4 a step (SSE2). A run's last step overlaps the
 // one before when the count is not a multiple of 4: it recomputes the same values.
 void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
-                      const CompiledFeatures& f, int k, double* values) {
-  const int r0 = f.first_rect(k), r1 = f.end_rect(k);
+                      const CompiledFeatures::Corners* c, int n, double* values) {
   for (const GridRun& run : runs) {
     const IntegralImage::Entry* b0 = table + run.base;
     double* o = values + run.first;
     if (run.count < 4) {
-      for (int t = 0; t < run.count; ++t) o[t] = f.value(b0 + t, k);
+      for (int t = 0; t < run.count; ++t) o[t] = corners_value(b0 + t, c, n);
       continue;
     }
     for (int t = 0;; t += 4) {
       t = std::min(t, run.count - 4);
       const IntegralImage::Entry* b = b0 + t;
       __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
-      for (int r = r0; r < r1; ++r) {
-        const CompiledFeatures::Corners& c = f.corners(r);
+      for (int r = 0; r < n; ++r) {
         const auto at = [b](std::ptrdiff_t off) {
           return _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + off));
         };
-        const __m128i sum = _mm_sub_epi32(_mm_sub_epi32(at(c.br), at(c.tr)),
-                                          _mm_sub_epi32(at(c.bl), at(c.tl)));
-        const __m128d w = _mm_set1_pd(c.weight);
+        const __m128i sum = _mm_sub_epi32(_mm_sub_epi32(at(c[r].br), at(c[r].tr)),
+                                          _mm_sub_epi32(at(c[r].bl), at(c[r].tl)));
+        const __m128d w = _mm_set1_pd(c[r].weight);
         lo = _mm_add_pd(lo, _mm_mul_pd(w, _mm_cvtepi32_pd(sum)));
         hi = _mm_add_pd(hi, _mm_mul_pd(w, _mm_cvtepi32_pd(_mm_srli_si128(sum, 8))));
       }
@@ -85,28 +97,26 @@ void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridR
 // the portable-build test finds it (see vmath.hpp).
 __attribute__((target("avx2"))) void grid_values_avx2(const IntegralImage::Entry* table,
                                                       const std::vector<GridRun>& runs,
-                                                      const CompiledFeatures& f, int k,
+                                                      const CompiledFeatures::Corners* c, int n,
                                                       double* values) {
-  const int r0 = f.first_rect(k), r1 = f.end_rect(k);
   for (const GridRun& run : runs) {
     const IntegralImage::Entry* b0 = table + run.base;
     double* o = values + run.first;
     if (run.count < 8) {
-      for (int t = 0; t < run.count; ++t) o[t] = f.value(b0 + t, k);
+      for (int t = 0; t < run.count; ++t) o[t] = corners_value(b0 + t, c, n);
       continue;
     }
     for (int t = 0;; t += 8) {
       t = std::min(t, run.count - 8);
       const IntegralImage::Entry* b = b0 + t;
       __m256d lo = _mm256_setzero_pd(), hi = _mm256_setzero_pd();
-      for (int r = r0; r < r1; ++r) {
-        const CompiledFeatures::Corners& c = f.corners(r);
-        const __m256i br = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c.br));
-        const __m256i tr = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c.tr));
-        const __m256i bl = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c.bl));
-        const __m256i tl = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c.tl));
+      for (int r = 0; r < n; ++r) {
+        const __m256i br = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c[r].br));
+        const __m256i tr = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c[r].tr));
+        const __m256i bl = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c[r].bl));
+        const __m256i tl = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + c[r].tl));
         const __m256i sum = _mm256_sub_epi32(_mm256_sub_epi32(br, tr), _mm256_sub_epi32(bl, tl));
-        const __m256d w = _mm256_set1_pd(c.weight);
+        const __m256d w = _mm256_set1_pd(c[r].weight);
         lo = _mm256_add_pd(lo, _mm256_mul_pd(w, _mm256_cvtepi32_pd(_mm256_castsi256_si128(sum))));
         hi = _mm256_add_pd(hi, _mm256_mul_pd(w, _mm256_cvtepi32_pd(_mm256_extracti128_si256(sum, 1))));
       }
@@ -117,6 +127,73 @@ __attribute__((target("avx2"))) void grid_values_avx2(const IntegralImage::Entry
   }
 }
 }  // namespace detail
+
+namespace {
+// What the vector loops read: a table, the runs' bases in it and the rectangles' corner
+// offsets (the integral image itself, or a copy split by column phase).
+struct GridTable {
+  const IntegralImage::Entry* table;
+  std::vector<GridRun> runs;
+  std::vector<CompiledFeatures::Corners> own;  // remapped corners (empty: the compiled ones)
+  std::vector<IntegralImage::Entry> copy;      // the split copy (empty: the integral image)
+  const CompiledFeatures* compiled;
+
+  GridTable(const IntegralImage::Entry* t, const std::vector<GridRun>& r, const CompiledFeatures& f)
+      : table(t), runs(r), compiled(&f) {}
+  const CompiledFeatures::Corners* corners(int r) const {
+    return own.empty() ? &compiled->corners(r) : own.data() + r;
+  }
+};
+
+// The part of plane 0 that a step-`step` grid's candidates reach (extent `e` from each
+// candidate's corner), copied split by column phase: phase p, row r, entry j holds the
+// table's entry at row R0 + r, column C0 + p + j * step. Candidate columns differ by
+// multiples of the step, so a corner at column offset C0 + a from the region's first
+// candidate column lies in phase a % step, and consecutive candidates are consecutive entries.
+GridTable decimate(const IntegralImage& ii, const Rect& e, int step, const std::vector<GridRun>& runs,
+                   const CompiledFeatures& f) {
+  const std::ptrdiff_t s = ii.stride();
+  std::ptrdiff_t row0 = std::numeric_limits<std::ptrdiff_t>::max(), row1 = -1;
+  std::ptrdiff_t col0 = row0, col1 = -1;
+  for (const GridRun& run : runs) {
+    const std::ptrdiff_t row = run.base / s, col = run.base % s;
+    row0 = std::min(row0, row);
+    row1 = std::max(row1, row);
+    col0 = std::min(col0, col);
+    col1 = std::max(col1, col + static_cast<std::ptrdiff_t>(run.count - 1) * step);
+  }
+  const std::ptrdiff_t r_first = row0 + e.y, r_last = row1 + e.y + e.h;
+  const std::ptrdiff_t c_first = col0 + e.x, c_last = col1 + e.x + e.w;
+  const std::ptrdiff_t rows = r_last - r_first + 1;
+  const std::ptrdiff_t width = (c_last - c_first) / step + 1;  // entries per phase row
+  const std::ptrdiff_t phase_size = rows * width;
+  GridTable g(nullptr, runs, f);
+  g.copy.resize(static_cast<std::size_t>(phase_size * step));
+  const IntegralImage::Entry* table = ii.data();
+  for (std::ptrdiff_t r = 0; r < rows; ++r) {
+    const IntegralImage::Entry* src = table + (r_first + r) * s + c_first;
+    for (int p = 0; p < step; ++p) {
+      IntegralImage::Entry* dst = g.copy.data() + p * phase_size + r * width;
+      for (std::ptrdiff_t j = 0; p + j * step <= c_last - c_first; ++j) dst[j] = src[p + j * step];
+    }
+  }
+  g.table = g.copy.data();
+  for (GridRun& run : g.runs) {
+    const std::ptrdiff_t row = run.base / s, col = run.base % s;
+    run.base = (row - row0) * width + (col - col0) / step;
+  }
+  const auto remap = [&](std::ptrdiff_t off) {
+    const std::ptrdiff_t dr = off / s - e.y, a = off % s - e.x;  // both >= 0
+    return (a % step) * phase_size + dr * width + a / step;
+  };
+  g.own.reserve(static_cast<std::size_t>(f.num_rects()));
+  for (int r = 0; r < f.num_rects(); ++r) {
+    const CompiledFeatures::Corners& q = f.corners(r);
+    g.own.push_back(CompiledFeatures::Corners{remap(q.tl), remap(q.tr), remap(q.bl), remap(q.br), q.weight});
+  }
+  return g;
+}
+}  // namespace
 #endif
 
 namespace {
@@ -266,15 +343,22 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   std::vector<double> values(static_cast<std::size_t>(c)), total(static_cast<std::size_t>(c), 0.0);
   const IntegralImage::Entry* table = ii.data();
 #ifdef WMILTRACK_GRID_SIMD
-  const bool vector = step == 1 && compiled.max_rect_area() <= kMaxSignedRectArea;
+  const bool vector = compiled.max_rect_area() <= kMaxSignedRectArea &&
+                      (step == 1 || ii.num_channels() == 1);
   const bool wide = vector && vmath::avx2();
+  // A grid of step > 1 reads every step-th entry of a row: the vector loops read it from a
+  // copy of the table's rows split by column phase (entry j of phase p is column p + j*step),
+  // where a run's candidates are consecutive. The entries are copied exactly.
+  GridTable grid{table, runs, compiled};
+  if (vector && step > 1) grid = decimate(ii, e, step, runs, compiled);
 #endif
   for (int k = 0; k < compiled.size(); ++k) {
 #ifdef WMILTRACK_GRID_SIMD
+    const int r0 = compiled.first_rect(k), n_rects = compiled.end_rect(k) - r0;
     if (wide) {
-      detail::grid_values_avx2(table, runs, compiled, k, values.data());
+      detail::grid_values_avx2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
     } else if (vector) {
-      detail::grid_values_sse2(table, runs, compiled, k, values.data());
+      detail::grid_values_sse2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
     } else {
       grid_values_scalar(table, runs, step, compiled, k, values.data());
     }

@@ -696,8 +696,72 @@ void test_vmath(std::mt19937& rng) {
 
 }  // namespace
 
+// score_grid's scores, bit for bit, against project() and the weak classifiers summed feature
+// by feature from 0.0, for every step (the vector loops read a phase-split copy for step > 1),
+// on both copies of the vector loops and on the frame's edge.
+void test_grid_exact(std::mt19937& rng) {
+  const Frame f = random_frame(90, 110, 3, rng);
+  std::vector<std::int32_t> starts{0};
+  std::vector<Rect> rects;
+  std::vector<double> weights;
+  std::uniform_int_distribution<int> pos(0, 17), size(1, 7), count(1, 4);
+  std::uniform_real_distribution<double> weight(-2.0, 2.0);
+  for (int k = 0; k < 12; ++k) {
+    for (int r = count(rng); r > 0; --r) {
+      rects.push_back(Rect{pos(rng), pos(rng), size(rng), size(rng)});
+      weights.push_back(weight(rng));
+    }
+    starts.push_back(static_cast<std::int32_t>(rects.size()));
+  }
+  const FeatureBank bank(starts, rects, weights);
+  const std::vector<std::int32_t> sel{3, 0, 7, 11, 5};
+  std::vector<double> mu1(5), s1(5), mu0(5), s0(5);
+  std::normal_distribution<double> centre(0.0, 400.0);
+  std::uniform_real_distribution<double> spread(20.0, 300.0);
+  for (int k = 0; k < 5; ++k) {
+    mu1[k] = centre(rng), mu0[k] = centre(rng), s1[k] = spread(rng), s0[k] = spread(rng);
+  }
+  const WeakGaussians weak(mu1.data(), s1.data(), mu0.data(), s0.data(), 5, 1e-30);
+  IntegralImage ii;
+  ii.compute(f.view(), Rect{0, 0, 110, 90});
+  bool exact = true;
+  for (const bool portable : {false, true}) {
+    vmath::force_portable(portable);
+    for (const Rect box : {Rect{40, 30, 25, 24}, Rect{3, 60, 25, 24}}) {
+      for (int step = 1; step <= 5; ++step) {
+        const int n = grid_half_size(20, step), side = 2 * n + 1;
+        std::vector<double> scores(static_cast<std::size_t>(side * side));
+        score_grid(ii, bank, sel.data(), 5, weak, box, 20, step, 110, 90, scores.data());
+        for (int j = -n; j <= n; ++j) {
+          for (int i = -n; i <= n; ++i) {
+            const double got = scores[static_cast<std::size_t>((j + n) * side + i + n)];
+            const int x = box.x + i * step, y = box.y + j * step;
+            const bool in = (i * step) * (i * step) + (j * step) * (j * step) < 400 && x >= 0 &&
+                            y >= 0 && x + box.w <= 110 && y + box.h <= 90;
+            if (!in) {
+              exact = exact && std::isinf(got);
+              continue;
+            }
+            double values[5], total = 0.0;
+            project(ii, bank, sel.data(), 5, &x, &y, 1, values);
+            for (int k = 0; k < 5; ++k) {
+              double h;
+              weak.log_ratio(k, values + k, 1, &h, false, nullptr);
+              total += h;
+            }
+            exact = exact && got == total;
+          }
+        }
+      }
+    }
+  }
+  vmath::force_portable(false);
+  CHECK(exact);
+}
+
 int main() {
   std::mt19937 rng(1234);
+  test_grid_exact(rng);
   test_integral(rng);
   test_projection_and_scoring(rng);
   test_overflow_guards(rng);

@@ -79,6 +79,7 @@ class CompiledFeatures {
     double weight;
   };
   int first_rect(int k) const { return starts_[k]; }
+  int num_rects() const { return static_cast<int>(corners_.size()); }
   // The largest rectangle's area in pixels (0 for no rectangle).
   std::int64_t max_rect_area() const { return max_rect_area_; }
   int end_rect(int k) const { return starts_[k + 1]; }
