@@ -311,6 +311,34 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     assert _core.search_many([], 2) == []
     assert _core.learn_many([], 2) == []
 
+    # frame_step: search, then learn on the search's table at boxes relative to where it landed.
+    t = trackers[1]
+    pool = t._pool  # noqa: SLF001 (white-box)
+    offsets = np.array([[0, 0], [1, -1], [-6, 5], [7, 0]], np.int32)
+
+    def learn(ii, corners):  # noqa: ANN001, ANN202
+        return (ii, t._bank, corners[:, 0], corners[:, 1], 2, pool.mu1, pool.sigma1,  # noqa: SLF001
+                pool.mu0, pool.sigma0, 0.85, False, False, True, False, 1e-3, 1e-30, "wmil",
+                np.array([0.6, 0.4]), 20, False, None, None)
+
+    ii = _core.IntegralImage()
+    found, learnt = _core.frame_step(job(t, ii), learn(ii, offsets))
+    assert found == single[1]
+    x, y = t.box[0] + sum(r[0] for r in found), t.box[1] + sum(r[1] for r in found)
+    alone = _core.IntegralImage()
+    _core.search(*job(t, alone))
+    expected = _core.learn(*learn(alone, offsets + np.array([x, y], np.int32))[:9],
+                           lam=0.85, first_pos=False, first_neg=False, direct_first=True, mil=False,
+                           sigma_floor=1e-3, guard=1e-30, select="wmil", w_pos=np.array([0.6, 0.4]), k=20)
+    for a, b in zip(learnt, expected):
+        assert (a is None and b is None) or np.array_equal(a, b)
+    with pytest.raises(ValueError, match="must compute its integral image"):
+        _core.frame_step(job(t, ii)[:11] + (None, None, None), learn(ii, offsets))
+    with pytest.raises(ValueError, match="the search's IntegralImage"):
+        _core.frame_step(job(t, ii), learn(alone, offsets))
+    fresh = _core.IntegralImage()  # never computed before: the search computes it first
+    assert _core.frame_step(job(t, fresh), learn(fresh, offsets))[0] == found
+
 
 @pytest.mark.parametrize("relative", [None, False, True])
 def test_search_with_a_colour_cue_takes_the_merged_first_maximum(relative: bool | None) -> None:

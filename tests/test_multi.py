@@ -202,3 +202,32 @@ def test_one_integral_image_when_it_covers_fewer_pixels() -> None:
     assert not far.last_shared
     with pytest.raises(ValueError, match="share"):
         MultiTracker("rcwmil", share="sometimes")
+
+
+@pytest.mark.parametrize("variant", ["rcwmil", "ct", "fct", "mil", "wmil", "osil"])
+def test_fused_frame_step_gives_the_two_call_results(variant: str, monkeypatch) -> None:
+    """Tracker.update makes one core call per frame for a paper preset whose bags stay inside
+    the frame wherever its search lands (the negatives drawn before the search); a
+    MultiTracker makes the search and learning calls separately. Same results every frame."""
+    seq = make_sequence(40, size=(360, 480), target_size=(40, 36), seed=3, occlusion=False)
+    frames = seq.load()
+    box = tuple(seq.groundtruth[0])
+    fused_calls = 0
+    frame_step = wmiltrack._core.frame_step
+
+    def counting(*args):
+        nonlocal fused_calls
+        fused_calls += 1
+        return frame_step(*args)
+
+    monkeypatch.setattr(wmiltrack._core, "frame_step", counting)
+    t = wmiltrack.Tracker(variant, seed=7)
+    t.init(frames[0], box)
+    fused = [t.update(f) for f in frames[1:]]
+    assert fused_calls >= len(frames) // 2, f"the fused step ran on {fused_calls} frames only"
+    calls = fused_calls
+    with MultiTracker(variant, seed=7) as mt:
+        mt.add(frames[0], box)
+        separate = [mt.update(f)[0] for f in frames[1:]]
+    assert fused_calls == calls  # MultiTracker never fuses
+    assert fused == separate

@@ -96,6 +96,7 @@ CANDIDATES = {(25, 4): 121, (10, 1): 305, (20, 1): 1245, (25, 1): 1941}
 def test_search_grids(variant: str, monkeypatch: pytest.MonkeyPatch) -> None:
     calls = []
     real, real_search = tracker_mod._core.score_grid, tracker_mod._core.search
+    real_step = tracker_mod._core.frame_step
 
     def spy(*args, **kw):
         out = real(*args, **kw)
@@ -107,9 +108,15 @@ def test_search_grids(variant: str, monkeypatch: pytest.MonkeyPatch) -> None:
         calls.extend((r, s, stage[3], len(args[2])) for (r, s), stage in zip(args[9], out))
         return out
 
+    def spy_step(search, learn):  # the search and the learning step in one call
+        out = real_step(search, learn)
+        calls.extend((r, s, stage[3], len(search[2])) for (r, s), stage in zip(search[9], out[0]))
+        return out
+
     t, _ = bank(variant)
     monkeypatch.setattr(tracker_mod._core, "score_grid", spy)
     monkeypatch.setattr(tracker_mod._core, "search", spy_search)
+    monkeypatch.setattr(tracker_mod._core, "frame_step", spy_step)
     t.update(FRAME)
     assert [(r, s) for r, s, _, _ in calls] == SEARCH[variant]
     assert [n for _, _, n, _ in calls] == [CANDIDATES[g] for g in SEARCH[variant]]

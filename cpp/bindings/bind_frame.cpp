@@ -1,6 +1,9 @@
 #include <pybind11/stl.h>
 
+#include <cstdint>
+#include <limits>
 #include <memory>
+#include <stdexcept>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -149,10 +152,28 @@ struct LearnJob {
   py::object selected = py::none(), h = py::none();
   std::int32_t* sel_ptr = nullptr;
   double* h_ptr = nullptr;
+  std::vector<std::int32_t> moved_x, moved_y;  // the boxes moved by shift()
+
+  // Moves every box by (dx, dy) (frame_step: the boxes were given relative to the search's
+  // landing point).
+  void shift(int dx, int dy) {
+    const auto moved = [](const Int32Array& a, int d, std::vector<std::int32_t>& out) {
+      out.resize(static_cast<std::size_t>(a.size()));
+      for (py::ssize_t i = 0; i < a.size(); ++i) {
+        const std::int64_t v = static_cast<std::int64_t>(a.data()[i]) + d;
+        if (v < std::numeric_limits<std::int32_t>::min() || v > std::numeric_limits<std::int32_t>::max()) {
+          throw std::out_of_range("a bag box lies outside the int32 range");
+        }
+        out[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(v);
+      }
+    };
+    moved(xs, dx, moved_x);
+    moved(ys, dy, moved_y);
+  }
 
   void run() {
-    step.xs = xs.data();
-    step.ys = ys.data();
+    step.xs = moved_x.empty() ? xs.data() : moved_x.data();
+    step.ys = moved_y.empty() ? ys.data() : moved_y.data();
     if (step.n_extra > 0) step.extra_neg = extra_neg.data();
     if (has_second) {
       step.second_mu = second[0].mutable_data();
@@ -272,6 +293,26 @@ using LearnArgs =
                bool, bool, bool, double, double, std::string, py::object, int, bool, py::object,
                py::object>;
 
+SearchJob make_search(const SearchArgs& a) {
+  require(std::get<0>(a) != nullptr && std::get<1>(a) != nullptr,
+          "every job needs an IntegralImage and a FeatureBank");
+  return make_search(*std::get<0>(a), std::get<11>(a), std::get<12>(a), *std::get<1>(a),
+                     std::get<2>(a), std::get<3>(a), std::get<4>(a), std::get<5>(a),
+                     std::get<6>(a), std::get<7>(a), std::get<8>(a), std::get<9>(a),
+                     std::get<10>(a), std::get<13>(a));
+}
+
+LearnJob make_learn(const LearnArgs& a) {
+  require(std::get<0>(a) != nullptr && std::get<1>(a) != nullptr,
+          "every job needs an IntegralImage and a FeatureBank");
+  return make_learn(*std::get<0>(a), *std::get<1>(a), std::get<2>(a), std::get<3>(a),
+                    std::get<4>(a), std::get<5>(a), std::get<6>(a), std::get<7>(a),
+                    std::get<8>(a), std::get<9>(a), std::get<10>(a), std::get<11>(a),
+                    std::get<12>(a), std::get<13>(a), std::get<14>(a), std::get<15>(a),
+                    std::get<16>(a), std::get<17>(a), std::get<18>(a), std::get<19>(a),
+                    std::get<20>(a), std::get<21>(a));
+}
+
 void require_threads(int threads) {
   require(threads >= 1, "threads must be >= 1, got " + std::to_string(threads));
 }
@@ -333,15 +374,7 @@ void bind_frame(py::module_& m) {
         require_threads(threads);
         std::vector<SearchJob> jobs;
         jobs.reserve(jobs_in.size());
-        for (const SearchArgs& a : jobs_in) {
-          require(std::get<0>(a) != nullptr && std::get<1>(a) != nullptr,
-                  "every job needs an IntegralImage and a FeatureBank");
-          jobs.push_back(make_search(*std::get<0>(a), std::get<11>(a), std::get<12>(a),
-                                     *std::get<1>(a), std::get<2>(a), std::get<3>(a),
-                                     std::get<4>(a), std::get<5>(a), std::get<6>(a),
-                                     std::get<7>(a), std::get<8>(a), std::get<9>(a),
-                                     std::get<10>(a), std::get<13>(a)));
-        }
+        for (const SearchArgs& a : jobs_in) jobs.push_back(make_search(a));
         for (std::size_t i = 0; i < jobs.size(); ++i) {
           for (std::size_t j = 0; j < jobs.size(); ++j) {
             require(i == j || !jobs[i].frame || jobs[i].ii != jobs[j].ii,
@@ -393,21 +426,45 @@ void bind_frame(py::module_& m) {
       "updated (None without one).");
 
   m.def(
+      "frame_step",
+      [](const SearchArgs& search_args, const LearnArgs& learn_args) {
+        SearchJob search = make_search(search_args);
+        require(search.frame.has_value(), "frame_step: the search must compute its integral image "
+                                          "(frame and roi given)");
+        require(std::get<0>(learn_args) == std::get<0>(search_args),
+                "frame_step: the learning step must read the search's IntegralImage");
+        Rect box = search.box;  // where the search lands
+        {
+          py::gil_scoped_release release;
+          search.run();
+          for (const GridResult& r : search.out) {
+            if (r.candidates > 0) {
+              box.x += r.dx;
+              box.y += r.dy;
+            }
+          }
+        }
+        LearnJob learn = make_learn(learn_args);  // on the table the search computed
+        learn.shift(box.x, box.y);
+        {
+          py::gil_scoped_release release;
+          learn.run();
+        }
+        return py::make_tuple(search_result(search), learn_result(learn));
+      },
+      py::arg("search"), py::arg("learn"),
+      "A tracker's whole frame step in one call: search() with the arguments `search` (which\n"
+      "must compute the integral image: frame and roi given), then learn() with the arguments\n"
+      "`learn` on that integral image, its boxes (xs, ys) taken relative to the box where the\n"
+      "search landed. The same results as the two calls. Returns (search's result, learn's).");
+
+  m.def(
       "learn_many",
       [](const std::vector<LearnArgs>& jobs_in, int threads) {
         require_threads(threads);
         std::vector<LearnJob> jobs;
         jobs.reserve(jobs_in.size());
-        for (const LearnArgs& a : jobs_in) {
-          require(std::get<0>(a) != nullptr && std::get<1>(a) != nullptr,
-                  "every job needs an IntegralImage and a FeatureBank");
-          jobs.push_back(make_learn(
-              *std::get<0>(a), *std::get<1>(a), std::get<2>(a), std::get<3>(a), std::get<4>(a),
-              std::get<5>(a), std::get<6>(a), std::get<7>(a), std::get<8>(a), std::get<9>(a),
-              std::get<10>(a), std::get<11>(a), std::get<12>(a), std::get<13>(a),
-              std::get<14>(a), std::get<15>(a), std::get<16>(a), std::get<17>(a),
-              std::get<18>(a), std::get<19>(a), std::get<20>(a), std::get<21>(a)));
-        }
+        for (const LearnArgs& a : jobs_in) jobs.push_back(make_learn(a));
         return run_all(jobs, threads, learn_result);
       },
       py::arg("jobs"), py::arg("threads"),

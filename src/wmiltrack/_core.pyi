@@ -182,6 +182,13 @@ def learn(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
     mu2, sigma2); extra_neg adds negatives as feature values, second is a second target model
     (mu, sigma, lam, first) updated from the positives alone."""
 
+def frame_step(search: tuple[object, ...], learn: tuple[object, ...]
+               ) -> tuple[tuple[tuple[int, int, float, int], ...],
+                          tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
+                                _F64 | None, _F64 | None]]:
+    """search() (which must compute its integral image) then learn() on that image, the
+    learning boxes relative to where the search landed: (search's result, learn's)."""
+
 def search_many(jobs: Sequence[tuple[object, ...]], threads: int
                 ) -> list[tuple[tuple[int, int, float, int], ...]]:
     """search() for several targets in one call, on up to `threads` threads."""

@@ -93,14 +93,25 @@ class BagSampler:
             candidates = self.neg_offsets
         else:
             candidates = self.neg_offsets[self._inside(self.neg_offsets, box, frame_w, frame_h)]
+        out: np.ndarray = self.draw(candidates, rng) + np.array(box[:2], dtype=np.int32)
+        return out
+
+    def draw(self, candidates: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The negatives' offsets drawn from ``candidates`` (rows of ``neg_offsets``), in order."""
         if self.mode == "exact":
             if candidates.shape[0] > self.neg_count:
                 pick = rng.choice(candidates.shape[0], size=self.neg_count, replace=False)
                 candidates = candidates[np.sort(pick)]
-        else:
-            candidates = candidates[rng.random(candidates.shape[0]) < self.keep_prob][: self.neg_count]
-        out: np.ndarray = candidates + np.array(box[:2], dtype=np.int32)
-        return out
+            return candidates
+        kept: np.ndarray = candidates[rng.random(candidates.shape[0]) < self.keep_prob][: self.neg_count]
+        return kept
+
+    def inside_anywhere(self, box: tuple[int, int, int, int], reach: int, frame_w: int,
+                        frame_h: int) -> bool:
+        """Whether both bags stay inside the frame around every box within ``reach`` pixels of
+        ``box``: then the bags' offsets, and the random draw of the negatives, do not depend
+        on where a search from ``box`` lands (so the draw may come before the search)."""
+        return self._all_inside(max(self._pos_reach, self._neg_reach) + reach, box, frame_w, frame_h)
 
 
 def instance_weights(distances: np.ndarray, mode: str) -> np.ndarray:

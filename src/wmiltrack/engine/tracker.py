@@ -46,18 +46,26 @@ class _Learn(tuple):  # type: ignore[type-arg]
     """A request for the core's learning step (``_core.learn``'s arguments, in order)."""
 
 
+class _Step(tuple):  # type: ignore[type-arg]
+    """A request for a whole frame step in one core call (``_core.frame_step``'s arguments:
+    a search and a learning step whose boxes are offsets from where the search lands)."""
+
+
 _LEARN_KEYS = ("lam", "first_pos", "first_neg", "direct_first", "mil", "sigma_floor", "guard",
                "select", "w_pos", "k", "code_gradient", "extra_neg", "second")
 
 Steps = Generator[tuple[Any, ...], Any, Any]
 """A frame step written as a generator: it yields requests for the core (:class:`_Search`,
-:class:`_Learn`) and receives their results, so that one tracker runs them one by one
-(:func:`_drive`) and :func:`update_many` runs those of many trackers in parallel."""
+:class:`_Learn`, or for one tracker alone a fused :class:`_Step`) and receives their results,
+so that one tracker runs them one by one (:func:`_drive`) and :func:`update_many` runs those
+of many trackers in parallel."""
 
 
 def _run(request: tuple[Any, ...]) -> Any:
     if isinstance(request, _Search):
         return _core.search(*request)
+    if isinstance(request, _Step):
+        return _core.frame_step(*request)
     return _core.learn(*request[:9], **dict(zip(_LEARN_KEYS, request[9:])))
 
 
@@ -280,6 +288,13 @@ class Tracker:
         self._search_origins: list[IntBox] = []
         self._search_stages: list[tuple[int, int]] = []
         self._score = 1.0
+        # A paper-family step: luma only, no colour, scale, motion, recovery or anchor, and it
+        # learns from every frame at the full rate (so the step can be fused into one call).
+        self._plain = (self._chan_names is None and self._colour is None and self._scale_pool is None
+                       and self._first_luma is None and p.scale_steps == 0 and p.scale_negatives == 0
+                       and p.motion == "none" and p.recovery_radius == 0 and self._anchor_weight == 0
+                       and p.gate_threshold <= 0.0 and p.gate_drop <= 0.0
+                       and p.gate_learning_rate is None)
         self._initialized = True
 
     reinit = init
@@ -318,7 +333,7 @@ class Tracker:
         """
         self._require_init()
         img = as_frame(frame)
-        result: TrackResult = _drive(self._update_steps(img, integral))
+        result: TrackResult = _drive(self._update_steps(img, integral, fuse=True))
         return result
 
     def _check_frame(self, img: np.ndarray) -> None:
@@ -329,8 +344,13 @@ class Tracker:
                 "call init() to restart on frames of the new size"
             )
 
-    def _update_steps(self, img: np.ndarray, integral: _core.IntegralImage | None) -> Steps:
-        """:meth:`update` on a checked frame, as a generator of core requests (see ``Steps``)."""
+    def _update_steps(self, img: np.ndarray, integral: _core.IntegralImage | None,
+                      fuse: bool = False) -> Steps:
+        """:meth:`update` on a checked frame, as a generator of core requests (see ``Steps``).
+
+        With ``fuse``, a paper preset whose bags stay inside the frame wherever the search
+        lands makes one request for the whole step (:meth:`_fused_step`): the same random
+        draws in the same order, so the same boxes, with one crossing into the core."""
         self._check_frame(img)
         wh = self._frame_wh
         p = self._params
@@ -360,10 +380,14 @@ class Tracker:
             self._box = origin
             stages = self._stages(coarse)
             pool = self._pool
-            results = yield _Search((self._ii, self._bank_at(self._scale_index)[0], self._selected,
-                                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,
-                                     self._box, stages, wh, img if direct else None,
-                                     roi if direct else None, cue))
+            search = (self._ii, self._bank_at(self._scale_index)[0], self._selected,
+                      pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,
+                      self._box, stages, wh, img if direct else None,
+                      roi if direct else None, cue)
+            if fuse and direct and self._plain and self._track.inside_anywhere(
+                    origin, p.search_reach, *wh):
+                return (yield from self._fused_step(search, stages, previous))
+            results = yield _Search(search)
             raw = self._apply_search(stages, results)
             self._scale_boxes = []
             if p.scale_steps > 0 and math.isfinite(raw):
@@ -718,17 +742,25 @@ class Tracker:
         pos, dist = sampler.positives(self._box, fw, fh)
         neg = sampler.negatives(self._box, fw, fh, self._rng)
         self._bags = (pos, neg)
+        # rcwmil-plus: the box at wrong scales as more negatives, and the scale model.
+        wrong = self._wrong_scale_values() if p.scale_negatives > 0 else []
+        extra = np.concatenate(wrong, axis=1) if wrong else None
+        request = self._learn_request(np.concatenate((pos, neg)), pos.shape[0], sampler, dist,
+                                      learning_rate, extra)
+        self._take_learnt((yield _Learn(request)), pos.shape[0], neg.shape[0] + len(wrong))
+
+    def _learn_request(self, corners: np.ndarray, n_pos: int, sampler: BagSampler,
+                       dist: np.ndarray, learning_rate: float | None,
+                       extra: np.ndarray | None) -> tuple[Any, ...]:
+        """``_core.learn``'s arguments for the bags with these top-left ``corners`` (the
+        ``n_pos`` positives, at ``dist`` from the box, then the negatives)."""
+        p = self._params
         pool = self._pool
-        n_pos, n_neg = pos.shape[0], neg.shape[0]
-        corners = np.concatenate((pos, neg))
         if p.selection == "none" or n_pos == 0:
             select = "none"
         else:
             select = "wmil" if p.selection == "wmil" else "ratios"
         w = sampler.weights(dist, p.instance_weights) if select == "wmil" else None
-        # rcwmil-plus: the box at wrong scales as more negatives, and the scale model.
-        wrong = self._wrong_scale_values() if p.scale_negatives > 0 else []
-        extra = np.concatenate(wrong, axis=1) if wrong else None
         scale_pool = self._scale_pool
         second = None if scale_pool is None else (scale_pool.mu1, scale_pool.sigma1,
                                                   p.scale_learning_rate, scale_pool.first(1))
@@ -737,16 +769,22 @@ class Tracker:
             a = self._anchor_weight
             mu1_in = (1.0 - a) * pool.mu1 + a * self._anchor[0]
             sigma1_in = (1.0 - a) * pool.sigma1 + a * self._anchor[1]
-        mu1, sigma1, mu0, sigma0, selected, h, mu2, sigma2 = yield _Learn((
-            self._ii, self._bank_at(self._scale_index)[0], corners[:, 0], corners[:, 1], n_pos,
-            mu1_in, sigma1_in, pool.mu0, pool.sigma0,
-            p.learning_rate if learning_rate is None else learning_rate,
-            pool.first(1), pool.first(0), p.first_update == "direct", p.classifier == "mil",
-            p.sigma_floor, p.guard, select, w, p.num_selected, p.gradient == "code", extra,
-            second))
-        pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg + len(wrong) > 0)
+        return (self._ii, self._bank_at(self._scale_index)[0], corners[:, 0], corners[:, 1], n_pos,
+                mu1_in, sigma1_in, pool.mu0, pool.sigma0,
+                p.learning_rate if learning_rate is None else learning_rate,
+                pool.first(1), pool.first(0), p.first_update == "direct", p.classifier == "mil",
+                p.sigma_floor, p.guard, select, w, p.num_selected, p.gradient == "code", extra,
+                second)
+
+    def _take_learnt(self, learnt: tuple[Any, ...], n_pos: int, n_neg: int) -> None:
+        """Keep the model and the selection that a learning request returned."""
+        p = self._params
+        pool = self._pool
+        mu1, sigma1, mu0, sigma0, selected, h, mu2, sigma2 = learnt
+        pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg > 0)
         if self._anchor_weight > 0 and n_pos > 0 and self._anchor is None:
             self._anchor = (mu1.copy(), sigma1.copy())
+        scale_pool = self._scale_pool
         if scale_pool is not None:
             scale_pool.assign(mu2, sigma2, scale_pool.mu0, scale_pool.sigma0, n_pos > 0, False)
         if selected is not None:
@@ -754,6 +792,31 @@ class Tracker:
         elif h is not None:
             self._selected = milboost_select(h[:, :n_pos], h[:, n_pos:], p.num_selected,
                                              guard=p.guard)
+
+    def _fused_step(self, search: tuple[Any, ...], stages: list[tuple[int, int]],
+                    previous: IntBox) -> Steps:
+        """The rest of :meth:`update` for a paper preset (:attr:`_plain`) as one core request:
+        the negatives are drawn first (their offsets cannot depend on where the search lands:
+        the caller checked that every box it may reach keeps both bags inside the frame),
+        and the core learns at the box the search found. The same draws, requests and state
+        changes as the unfused step, in one call."""
+        p = self._params
+        sampler = self._track
+        pos_rel = sampler.pos_offsets
+        neg_rel = sampler.draw(sampler.neg_offsets, self._rng)
+        request = self._learn_request(np.concatenate((pos_rel, neg_rel)), pos_rel.shape[0],
+                                      sampler, sampler.pos_dist, None, None)
+        results, learnt = yield _Step((search, request))
+        raw = self._apply_search(stages, results)
+        self._scale_boxes = []
+        score = confidence(raw, len(self._selected), p.confidence_offset)
+        origin = np.array(self._box[:2], dtype=np.int32)
+        self._bags = (pos_rel + origin, neg_rel + origin)
+        self._take_learnt(learnt, pos_rel.shape[0], neg_rel.shape[0])
+        self._score = score
+        self._follow(previous, score >= p.lost_threshold)
+        x, y, w, h = self._box
+        return TrackResult((float(x), float(y), float(w), float(h)), score, score >= p.lost_threshold)
 
 
 def update_many(trackers: list[Tracker], frame: np.ndarray, *,
