@@ -311,33 +311,67 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     assert _core.search_many([], 2) == []
     assert _core.learn_many([], 2) == []
 
-    # frame_step: search, then learn on the search's table at boxes relative to where it landed.
+    # frame_step: search, bags sampled where it landed (numpy's draws), learning on them.
+    from wmiltrack.engine.sampling import BagSampler
+
     t = trackers[1]
     pool = t._pool  # noqa: SLF001 (white-box)
-    offsets = np.array([[0, 0], [1, -1], [-6, 5], [7, 0]], np.int32)
+    sampler = BagSampler(t.params)
 
-    def learn(ii, corners):  # noqa: ANN001, ANN202
-        return (ii, t._bank, corners[:, 0], corners[:, 1], 2, pool.mu1, pool.sigma1,  # noqa: SLF001
-                pool.mu0, pool.sigma0, 0.85, False, False, True, False, 1e-3, 1e-30, "wmil",
-                np.array([0.6, 0.4]), 20, False, None, None)
+    def learn(ii, corners, n_pos, w):  # noqa: ANN001, ANN202
+        return (ii, t._bank, corners[:, 0], corners[:, 1], n_pos, pool.mu1, pool.sigma1,  # noqa: SLF001
+                pool.mu0, pool.sigma0, 0.85, False, False, True, False, 1e-3, 1e-30, "wmil", w, 20,
+                False, None, None)
 
-    ii = _core.IntegralImage()
-    found, learnt = _core.frame_step(job(t, ii), learn(ii, offsets))
+    empty = np.zeros((0, 2), np.int32)
+    ii, rng = _core.IntegralImage(), np.random.default_rng(3)
+    found, learnt, (xs, ys, n_pos) = _core.frame_step(job(t, ii), learn(ii, empty, 0, None),
+                                                      (rng, *sampler.core_spec("exp")))
     assert found == single[1]
-    x, y = t.box[0] + sum(r[0] for r in found), t.box[1] + sum(r[1] for r in found)
-    alone = _core.IntegralImage()
+    landed = tuple(int(v) for v in t.box)
+    landed = (landed[0] + sum(r[0] for r in found), landed[1] + sum(r[1] for r in found), *landed[2:])
+    alone, rng_alone = _core.IntegralImage(), np.random.default_rng(3)
     _core.search(*job(t, alone))
-    expected = _core.learn(*learn(alone, offsets + np.array([x, y], np.int32))[:9],
-                           lam=0.85, first_pos=False, first_neg=False, direct_first=True, mil=False,
-                           sigma_floor=1e-3, guard=1e-30, select="wmil", w_pos=np.array([0.6, 0.4]), k=20)
+    pos, dist = sampler.positives(landed, 200, 160)
+    neg = sampler.negatives(landed, 200, 160, rng_alone)
+    assert n_pos == len(pos) and np.array_equal(np.stack((xs, ys), 1), np.concatenate((pos, neg)))
+    assert rng.bit_generator.state == rng_alone.bit_generator.state
+    args = learn(alone, np.concatenate((pos, neg)), len(pos), sampler.weights(dist, "exp"))
+    expected = _core.learn(*args[:9], **dict(zip(("lam", "first_pos", "first_neg", "direct_first", "mil",
+                                                  "sigma_floor", "guard", "select", "w_pos", "k",
+                                                  "code_gradient", "extra_neg", "second"), args[9:])))
     for a, b in zip(learnt, expected):
         assert (a is None and b is None) or np.array_equal(a, b)
+    bags = (rng, *sampler.core_spec("exp"))
     with pytest.raises(ValueError, match="must compute its integral image"):
-        _core.frame_step(job(t, ii)[:11] + (None, None, None), learn(ii, offsets))
+        _core.frame_step(job(t, ii)[:11] + (None, None, None), learn(ii, empty, 0, None), bags)
     with pytest.raises(ValueError, match="the search's IntegralImage"):
-        _core.frame_step(job(t, ii), learn(alone, offsets))
+        _core.frame_step(job(t, ii), learn(alone, empty, 0, None), bags)
+    with pytest.raises(ValueError, match="bags must be"):
+        _core.frame_step(job(t, ii), learn(ii, empty, 0, None), bags[:3])
     fresh = _core.IntegralImage()  # never computed before: the search computes it first
-    assert _core.frame_step(job(t, fresh), learn(fresh, offsets))[0] == found
+    assert _core.frame_step(job(t, fresh), learn(fresh, empty, 0, None), bags)[0] == found
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_cores_draws_continue_numpys_stream(seed: int) -> None:
+    """numpy_choice_sorted / numpy_bernoulli_first give the numbers numpy's Generator.choice
+    (replace=False) and random() < p give, and leave the generator in the same state (also
+    with half of a 64-bit draw buffered by an odd number of 32-bit draws before)."""
+    for n, k in [(1320, 50), (2616, 50), (51, 50), (50, 50), (4172, 65), (9999, 199), (10, 3), (1, 1)]:
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        a.integers(0, 7, size=seed % 3)
+        b.integers(0, 7, size=seed % 3)
+        assert _core.numpy_choice_sorted(b, n, k) == sorted(a.choice(n, size=k, replace=False).tolist())
+        assert a.bit_generator.state == b.bit_generator.state
+    for n, p, limit in [(2616, 0.0133, 50), (4172, 0.012, 65), (100, 0.5, 10), (0, 0.5, 3)]:
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        assert _core.numpy_bernoulli_first(b, n, p, limit) == np.flatnonzero(a.random(n) < p)[:limit].tolist()
+        assert a.bit_generator.state == b.bit_generator.state
+    with pytest.raises(ValueError):
+        _core.numpy_choice_sorted(np.random.default_rng(0), 5, 6)
+    with pytest.raises(TypeError, match="Generator"):
+        _core.numpy_choice_sorted(np.random.SeedSequence(0), 5, 2)
 
 
 @pytest.mark.parametrize("relative", [None, False, True])

@@ -204,12 +204,15 @@ def test_one_integral_image_when_it_covers_fewer_pixels() -> None:
         MultiTracker("rcwmil", share="sometimes")
 
 
+@pytest.mark.parametrize("size", [(360, 480), (120, 160)])
 @pytest.mark.parametrize("variant", ["rcwmil", "ct", "fct", "mil", "wmil", "osil"])
-def test_fused_frame_step_gives_the_two_call_results(variant: str, monkeypatch) -> None:
-    """Tracker.update makes one core call per frame for a paper preset whose bags stay inside
-    the frame wherever its search lands (the negatives drawn before the search); a
-    MultiTracker makes the search and learning calls separately. Same results every frame."""
-    seq = make_sequence(40, size=(360, 480), target_size=(40, 36), seed=3, occlusion=False)
+def test_fused_frame_step_gives_the_two_call_results(variant: str, size: tuple[int, int],
+                                                     monkeypatch) -> None:
+    """Tracker.update makes one core call per frame for a paper preset (search, bags drawn
+    in the core from the tracker's numpy generator, learning); a MultiTracker makes the search
+    and learning calls separately and samples in Python. Same results every frame, in a large
+    frame and in a small one where the bags are cut by the frame's edges."""
+    seq = make_sequence(40, size=size, target_size=(40, 36), seed=3, occlusion=False)
     frames = seq.load()
     box = tuple(seq.groundtruth[0])
     fused_calls = 0
@@ -224,10 +227,23 @@ def test_fused_frame_step_gives_the_two_call_results(variant: str, monkeypatch) 
     t = wmiltrack.Tracker(variant, seed=7)
     t.init(frames[0], box)
     fused = [t.update(f) for f in frames[1:]]
-    assert fused_calls >= len(frames) // 2, f"the fused step ran on {fused_calls} frames only"
-    calls = fused_calls
+    assert fused_calls == len(frames) - 1
     with MultiTracker(variant, seed=7) as mt:
         mt.add(frames[0], box)
         separate = [mt.update(f)[0] for f in frames[1:]]
-    assert fused_calls == calls  # MultiTracker never fuses
+    assert fused_calls == len(frames) - 1  # MultiTracker never fuses
     assert fused == separate
+
+
+def test_a_numpy_whose_draws_differ_keeps_the_two_call_step(monkeypatch) -> None:
+    """When the core's copies of numpy's draws do not match the installed numpy (checked once
+    per process), Tracker.update samples in Python and makes two core calls: same boxes."""
+    from wmiltrack.engine import tracker
+
+    seq = make_sequence(15, size=(240, 320), target_size=(40, 36), seed=4, occlusion=False)
+    frames = seq.load()
+    box = tuple(seq.groundtruth[0])
+    expected = single("rcwmil", 2, frames, box)
+    monkeypatch.setattr(tracker, "core_draws_match_numpy", lambda: False)
+    monkeypatch.setattr(wmiltrack._core, "frame_step", None)  # must not be called
+    assert single("rcwmil", 2, frames, box) == expected

@@ -108,8 +108,8 @@ def test_search_grids(variant: str, monkeypatch: pytest.MonkeyPatch) -> None:
         calls.extend((r, s, stage[3], len(args[2])) for (r, s), stage in zip(args[9], out))
         return out
 
-    def spy_step(search, learn):  # the search and the learning step in one call
-        out = real_step(search, learn)
+    def spy_step(search, learn, bags):  # the whole frame step in one call
+        out = real_step(search, learn, bags)
         calls.extend((r, s, stage[3], len(search[2])) for (r, s), stage in zip(search[9], out[0]))
         return out
 

@@ -11,6 +11,7 @@
 
 #include "common.hpp"
 #include "wmiltrack/frame.hpp"
+#include "wmiltrack/sampling.hpp"
 #include "wmiltrack/scoring.hpp"
 
 namespace wmiltrack::bindings {
@@ -152,28 +153,9 @@ struct LearnJob {
   py::object selected = py::none(), h = py::none();
   std::int32_t* sel_ptr = nullptr;
   double* h_ptr = nullptr;
-  std::vector<std::int32_t> moved_x, moved_y;  // the boxes moved by shift()
-
-  // Moves every box by (dx, dy) (frame_step: the boxes were given relative to the search's
-  // landing point).
-  void shift(int dx, int dy) {
-    const auto moved = [](const Int32Array& a, int d, std::vector<std::int32_t>& out) {
-      out.resize(static_cast<std::size_t>(a.size()));
-      for (py::ssize_t i = 0; i < a.size(); ++i) {
-        const std::int64_t v = static_cast<std::int64_t>(a.data()[i]) + d;
-        if (v < std::numeric_limits<std::int32_t>::min() || v > std::numeric_limits<std::int32_t>::max()) {
-          throw std::out_of_range("a bag box lies outside the int32 range");
-        }
-        out[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(v);
-      }
-    };
-    moved(xs, dx, moved_x);
-    moved(ys, dy, moved_y);
-  }
-
   void run() {
-    step.xs = moved_x.empty() ? xs.data() : moved_x.data();
-    step.ys = moved_y.empty() ? ys.data() : moved_y.data();
+    step.xs = xs.data();
+    step.ys = ys.data();
     if (step.n_extra > 0) step.extra_neg = extra_neg.data();
     if (has_second) {
       step.second_mu = second[0].mutable_data();
@@ -313,6 +295,79 @@ LearnJob make_learn(const LearnArgs& a) {
                     std::get<20>(a), std::get<21>(a));
 }
 
+// ---- bag sampling -------------------------------------------------------------------------
+
+// A numpy.random.Generator's bit generator, held (with its lock) for the draws of one call.
+class NumpyBits {
+ public:
+  explicit NumpyBits(const py::object& rng) {
+    if (!py::hasattr(rng, "bit_generator") || !py::hasattr(rng.attr("bit_generator"), "capsule")) {
+      throw py::type_error("rng must be a numpy.random.Generator");
+    }
+    const py::object bitgen = rng.attr("bit_generator");
+    const auto capsule = bitgen.attr("capsule").cast<py::capsule>();
+    require(std::string(capsule.name() ? capsule.name() : "") == "BitGenerator",
+            "rng: expected a numpy.random.Generator");
+    bits_ = *capsule.get_pointer<BitSource>();
+    lock_ = bitgen.attr("lock");
+    lock_.attr("acquire")();
+  }
+  NumpyBits(const NumpyBits&) = delete;
+  NumpyBits& operator=(const NumpyBits&) = delete;
+  ~NumpyBits() { lock_.attr("release")(); }
+  BitSource& bits() { return bits_; }
+
+ private:
+  BitSource bits_{};
+  py::object lock_;
+};
+
+// BagSampler's offsets and draw settings, checked and copied.
+struct BagJob {
+  py::object rng;
+  std::vector<std::int32_t> pos, neg;
+  std::vector<double> terms;
+  BagSpec spec;
+};
+
+BagJob make_bags(const py::tuple& args) {
+  require(args.size() == 8, "bags must be (rng, pos_offsets, pos_terms, weights, neg_offsets, "
+                            "exact, neg_count, keep_prob)");
+  BagJob job;
+  job.rng = args[0];
+  const auto offsets = [](const py::handle& obj, const char* name) {
+    const Int32Array a = int32_array(obj, name);
+    require(a.ndim() == 2 && a.shape[1] == 2, std::string(name) + " must be an (n, 2) array");
+    return a.values;
+  };
+  job.pos = offsets(args[1], "pos_offsets");
+  job.neg = offsets(args[4], "neg_offsets");
+  const auto mode = args[3].cast<std::string>();
+  BagSpec& spec = job.spec;
+  spec.weights = mode == "exp"      ? InstanceWeights::kExp
+                 : mode == "exp_sq" ? InstanceWeights::kExpSq
+                 : mode == "uniform" ? InstanceWeights::kUniform
+                                     : InstanceWeights::kNone;
+  require(spec.weights != InstanceWeights::kNone || mode == "none",
+          "weights must be 'exp', 'exp_sq', 'uniform' or 'none', got '" + mode + "'");
+  spec.n_pos_offsets = static_cast<int>(job.pos.size() / 2);
+  spec.n_neg_offsets = static_cast<int>(job.neg.size() / 2);
+  if (spec.weights == InstanceWeights::kExp || spec.weights == InstanceWeights::kExpSq) {
+    const auto terms = args[2].cast<CArray<double>>();
+    require(terms.ndim() == 1 && terms.shape(0) == spec.n_pos_offsets,
+            "pos_terms must hold one term per positive offset");
+    job.terms.assign(terms.data(), terms.data() + terms.size());
+  }
+  spec.exact = args[5].cast<bool>();
+  spec.neg_count = args[6].cast<int>();
+  spec.keep_prob = args[7].cast<double>();
+  require(spec.neg_count >= 0, "neg_count must be >= 0");
+  spec.pos = job.pos.data();
+  spec.neg = job.neg.data();
+  spec.pos_terms = job.terms.empty() ? nullptr : job.terms.data();
+  return job;
+}
+
 void require_threads(int threads) {
   require(threads >= 1, "threads must be >= 1, got " + std::to_string(threads));
 }
@@ -427,14 +482,17 @@ void bind_frame(py::module_& m) {
 
   m.def(
       "frame_step",
-      [](const SearchArgs& search_args, const LearnArgs& learn_args) {
+      [](const SearchArgs& search_args, LearnArgs learn_args, const py::tuple& bags_args) {
         SearchJob search = make_search(search_args);
         require(search.frame.has_value(), "frame_step: the search must compute its integral image "
                                           "(frame and roi given)");
         require(std::get<0>(learn_args) == std::get<0>(search_args),
                 "frame_step: the learning step must read the search's IntegralImage");
+        BagJob bag_job = make_bags(bags_args);
         Rect box = search.box;  // where the search lands
+        Bags bags;
         {
+          NumpyBits rng(bag_job.rng);
           py::gil_scoped_release release;
           search.run();
           for (const GridResult& r : search.out) {
@@ -443,20 +501,55 @@ void bind_frame(py::module_& m) {
               box.y += r.dy;
             }
           }
+          bags = sample_bags(bag_job.spec, box, search.fw, search.fh, rng.bits());
+        }
+        // The learning step's boxes and weights are the ones drawn here.
+        py::array_t<std::int32_t> xs(static_cast<py::ssize_t>(bags.xs.size()), bags.xs.data());
+        py::array_t<std::int32_t> ys(static_cast<py::ssize_t>(bags.ys.size()), bags.ys.data());
+        std::get<2>(learn_args) = xs;
+        std::get<3>(learn_args) = ys;
+        std::get<4>(learn_args) = bags.n_pos;
+        if (bags.n_pos == 0) std::get<16>(learn_args) = "none";
+        std::get<17>(learn_args) = py::none();
+        if (std::get<16>(learn_args) == "wmil") {
+          std::get<17>(learn_args) =
+              py::array_t<double>(static_cast<py::ssize_t>(bags.w_pos.size()), bags.w_pos.data());
         }
         LearnJob learn = make_learn(learn_args);  // on the table the search computed
-        learn.shift(box.x, box.y);
         {
           py::gil_scoped_release release;
           learn.run();
         }
-        return py::make_tuple(search_result(search), learn_result(learn));
+        return py::make_tuple(search_result(search), learn_result(learn),
+                              py::make_tuple(xs, ys, bags.n_pos));
       },
-      py::arg("search"), py::arg("learn"),
+      py::arg("search"), py::arg("learn"), py::arg("bags"),
       "A tracker's whole frame step in one call: search() with the arguments `search` (which\n"
-      "must compute the integral image: frame and roi given), then learn() with the arguments\n"
-      "`learn` on that integral image, its boxes (xs, ys) taken relative to the box where the\n"
-      "search landed. The same results as the two calls. Returns (search's result, learn's).");
+      "must compute the integral image: frame and roi given); then the bags around the box\n"
+      "where it landed, sampled as BagSampler does from bags = (rng, pos_offsets, pos_terms,\n"
+      "weights, neg_offsets, exact, neg_count, keep_prob), the negatives drawn from the numpy\n"
+      "Generator `rng` (continuing its stream as numpy's choice / random would); then learn()\n"
+      "with the arguments `learn` on the search's integral image, its xs, ys, n_pos and w_pos\n"
+      "replaced by the bags (and select='none' when no positive fits in the frame). Returns\n"
+      "(search's result, learn's result, (xs, ys, n_pos) of the bags).");
+
+  m.def(
+      "numpy_choice_sorted",
+      [](const py::object& rng, std::int64_t n, std::int64_t k) {
+        NumpyBits bits(rng);
+        return choice_sorted(bits.bits(), n, k);
+      },
+      py::arg("rng"), py::arg("n"), py::arg("k"),
+      "sorted(Generator.choice(n, k, replace=False)), drawn from `rng` as numpy draws it.");
+  m.def(
+      "numpy_bernoulli_first",
+      [](const py::object& rng, std::int64_t n, double p, std::int64_t limit) {
+        NumpyBits bits(rng);
+        return bernoulli_first(bits.bits(), n, p, limit);
+      },
+      py::arg("rng"), py::arg("n"), py::arg("p"), py::arg("limit"),
+      "The first `limit` indices i with Generator.random(n)[i] < p, drawn from `rng` as numpy\n"
+      "draws them.");
 
   m.def(
       "learn_many",

@@ -59,7 +59,10 @@ Int32Array int32_array(const py::handle& obj, const char* name) {
   out.shape.assign(a.shape(), a.shape() + a.ndim());
   out.values.resize(static_cast<std::size_t>(a.size()));
   const char kind = a.dtype().kind();
-  if (kind == 'u' && a.itemsize() == 8) {
+  if (kind == 'i' && a.itemsize() == 4) {  // already int32: copied as is
+    const auto c = as_c_array<std::int32_t>(a);
+    std::copy(c.data(), c.data() + c.size(), out.values.begin());
+  } else if (kind == 'u' && a.itemsize() == 8) {
     const auto c = as_c_array<std::uint64_t>(a);
     for (py::ssize_t i = 0; i < c.size(); ++i) {
       const std::uint64_t v = c.data()[i];

@@ -12,6 +12,7 @@
 
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/integral.hpp"
+#include "wmiltrack/sampling.hpp"
 #include "wmiltrack/learning.hpp"
 #include "wmiltrack/scoring.hpp"
 #include "wmiltrack/vmath.hpp"
@@ -759,8 +760,76 @@ void test_grid_exact(std::mt19937& rng) {
   CHECK(exact);
 }
 
+// Bag sampling on a plain bit source: every box inside the frame, the positives in offset
+// order, the negatives distinct and in offset order, exactly neg_count of them (exact draw)
+// or at most that many (Bernoulli), WMIL weights summing to 1; choice_sorted picks k distinct
+// sorted indices below n.
+std::uint64_t splitmix(void* st) {
+  std::uint64_t& s = *static_cast<std::uint64_t*>(st);
+  std::uint64_t z = (s += 0x9E3779B97F4A7C15ULL);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+std::uint32_t splitmix32(void* st) { return static_cast<std::uint32_t>(splitmix(st) >> 32); }
+double splitmix_double(void* st) { return static_cast<double>(splitmix(st) >> 11) * 0x1.0p-53; }
+
+void test_sampling() {
+  std::uint64_t state = 42;
+  BitSource bits{&state, splitmix, splitmix32, splitmix_double, splitmix};
+  for (int k : {0, 1, 7, 50}) {
+    const std::vector<std::int64_t> picks = choice_sorted(bits, 60, k);
+    bool ok = static_cast<int>(picks.size()) == k;
+    for (std::size_t i = 0; i < picks.size(); ++i) {
+      ok = ok && picks[i] >= 0 && picks[i] < 60 && (i == 0 || picks[i] > picks[i - 1]);
+    }
+    CHECK(ok);
+  }
+  std::vector<std::int32_t> pos, neg;
+  for (int dy = -3; dy <= 3; ++dy)
+    for (int dx = -3; dx <= 3; ++dx)
+      if (dx * dx + dy * dy < 16) pos.push_back(dx), pos.push_back(dy);
+  for (int dy = -20; dy <= 20; ++dy)
+    for (int dx = -20; dx <= 20; ++dx)
+      if (dx * dx + dy * dy >= 64 && dx * dx + dy * dy < 400) neg.push_back(dx), neg.push_back(dy);
+  std::vector<double> terms(pos.size() / 2);
+  for (std::size_t i = 0; i < terms.size(); ++i) terms[i] = std::exp(-std::hypot(pos[2 * i], pos[2 * i + 1]));
+  for (const bool exact : {true, false}) {
+    for (const Rect box : {Rect{50, 40, 20, 16}, Rect{0, 2, 20, 16}, Rect{78, 60, 22, 20}}) {
+      BagSpec spec;
+      spec.pos = pos.data();
+      spec.n_pos_offsets = static_cast<int>(pos.size() / 2);
+      spec.pos_terms = terms.data();
+      spec.weights = InstanceWeights::kExp;
+      spec.neg = neg.data();
+      spec.n_neg_offsets = static_cast<int>(neg.size() / 2);
+      spec.exact = exact;
+      spec.neg_count = 30;
+      spec.keep_prob = 0.05;
+      const Bags b = sample_bags(spec, box, 100, 80, bits);
+      bool ok = b.xs.size() == b.ys.size() && static_cast<int>(b.w_pos.size()) == b.n_pos;
+      double wsum = 0.0;
+      for (const double w : b.w_pos) wsum += w;
+      ok = ok && (b.n_pos == 0 || std::abs(wsum - 1.0) < 1e-12);
+      const int n_neg = static_cast<int>(b.xs.size()) - b.n_pos;
+      ok = ok && n_neg <= 30 && (!exact || n_neg == 30);
+      for (std::size_t i = 0; i < b.xs.size(); ++i) {
+        ok = ok && b.xs[i] >= 0 && b.ys[i] >= 0 && b.xs[i] + box.w <= 100 && b.ys[i] + box.h <= 80;
+        // offset order (row-major: dy, then dx) within each bag, so no repeats
+        if (i > 0 && static_cast<int>(i) != b.n_pos) {
+          const std::int64_t a = (static_cast<std::int64_t>(b.ys[i - 1]) << 32) + b.xs[i - 1];
+          const std::int64_t c = (static_cast<std::int64_t>(b.ys[i]) << 32) + b.xs[i];
+          ok = ok && a < c;
+        }
+      }
+      CHECK(ok);
+    }
+  }
+}
+
 int main() {
   std::mt19937 rng(1234);
+  test_sampling();
   test_grid_exact(rng);
   test_integral(rng);
   test_projection_and_scoring(rng);

@@ -6,11 +6,35 @@ enumerated in row-major order (dy outer, dx inner) so that results are reproduci
 
 from __future__ import annotations
 
+import functools
 import math
+from typing import Any
 
 import numpy as np
 
+from .. import _core
 from .params import Params
+
+
+@functools.cache
+def core_draws_match_numpy() -> bool:
+    """Whether the core's copies of numpy's draws (``_core.frame_step`` samples the bags in
+    C++) give the installed numpy's numbers and leave its generator in the same state. numpy
+    does not promise that ``Generator.choice`` keeps its algorithm across versions; where it
+    differs, trackers sample in Python (two core calls a frame, the same boxes)."""
+    for seed in (0, 1, 2):
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        a.integers(0, 7, size=seed)
+        b.integers(0, 7, size=seed)
+        picks = sorted(a.choice(1320, size=50, replace=False).tolist())
+        if _core.numpy_choice_sorted(b, 1320, 50) != picks:
+            return False
+        kept = np.flatnonzero(a.random(2616) < 0.0133)[:50].tolist()
+        if _core.numpy_bernoulli_first(b, 2616, 0.0133, 50) != kept:
+            return False
+        if a.bit_generator.state != b.bit_generator.state:
+            return False
+    return True
 
 
 def disc_offsets(radius: float) -> np.ndarray:
@@ -41,6 +65,7 @@ class BagSampler:
         self.pos_dist = np.hypot(self.pos_offsets[:, 0], self.pos_offsets[:, 1])
         self.pos_dist.setflags(write=False)  # handed out as is by positives()
         self._full_weights: dict[str, np.ndarray] = {}
+        self._core_specs: dict[str, tuple[Any, ...]] = {}
         self.neg_offsets = annulus_offsets(inner, outer)
         self.neg_count = count
         self.mode = p.neg_sampling
@@ -106,12 +131,21 @@ class BagSampler:
         kept: np.ndarray = candidates[rng.random(candidates.shape[0]) < self.keep_prob][: self.neg_count]
         return kept
 
-    def inside_anywhere(self, box: tuple[int, int, int, int], reach: int, frame_w: int,
-                        frame_h: int) -> bool:
-        """Whether both bags stay inside the frame around every box within ``reach`` pixels of
-        ``box``: then the bags' offsets, and the random draw of the negatives, do not depend
-        on where a search from ``box`` lands (so the draw may come before the search)."""
-        return self._all_inside(max(self._pos_reach, self._neg_reach) + reach, box, frame_w, frame_h)
+    def core_spec(self, weights: str) -> tuple[Any, ...]:
+        """This sampler for the core's ``frame_step`` (``bags`` without its leading ``rng``):
+        the offsets, the positives' weight terms for ``weights`` (an ``instance_weights``
+        mode, or ``"none"``: no weights), and the negatives' draw."""
+        spec = self._core_specs.get(weights)
+        if spec is None:
+            terms = None
+            if weights == "exp":  # instance_weights' terms, before the division by their sum
+                terms = np.exp(-self.pos_dist)
+            elif weights == "exp_sq":
+                terms = np.exp(-(self.pos_dist**2))
+            spec = (self.pos_offsets, terms, weights, self.neg_offsets, self.mode == "exact",
+                    self.neg_count, self.keep_prob)
+            self._core_specs[weights] = spec
+        return spec
 
 
 def instance_weights(distances: np.ndarray, mode: str) -> np.ndarray:

@@ -34,7 +34,7 @@ from .features import (
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .params import CONFIDENCE_OFFSET, Params
 from .result import TrackResult
-from .sampling import BagSampler
+from .sampling import BagSampler, core_draws_match_numpy
 from .selection import milboost_select
 
 
@@ -48,7 +48,8 @@ class _Learn(tuple):  # type: ignore[type-arg]
 
 class _Step(tuple):  # type: ignore[type-arg]
     """A request for a whole frame step in one core call (``_core.frame_step``'s arguments:
-    a search and a learning step whose boxes are offsets from where the search lands)."""
+    a search, a learning step, and the bag sampler whose bags the core draws where the
+    search lands)."""
 
 
 _LEARN_KEYS = ("lam", "first_pos", "first_neg", "direct_first", "mil", "sigma_floor", "guard",
@@ -289,8 +290,10 @@ class Tracker:
         self._search_stages: list[tuple[int, int]] = []
         self._score = 1.0
         # A paper-family step: luma only, no colour, scale, motion, recovery or anchor, and it
-        # learns from every frame at the full rate (so the step can be fused into one call).
-        self._plain = (self._chan_names is None and self._colour is None and self._scale_pool is None
+        # learns from every frame at the full rate, so the step can be fused into one call
+        # (with the bags drawn in the core, where the core's draws match this numpy's).
+        self._plain = (core_draws_match_numpy() and self._chan_names is None and self._colour is None
+                       and self._scale_pool is None
                        and self._first_luma is None and p.scale_steps == 0 and p.scale_negatives == 0
                        and p.motion == "none" and p.recovery_radius == 0 and self._anchor_weight == 0
                        and p.gate_threshold <= 0.0 and p.gate_drop <= 0.0
@@ -348,9 +351,9 @@ class Tracker:
                       fuse: bool = False) -> Steps:
         """:meth:`update` on a checked frame, as a generator of core requests (see ``Steps``).
 
-        With ``fuse``, a paper preset whose bags stay inside the frame wherever the search
-        lands makes one request for the whole step (:meth:`_fused_step`): the same random
-        draws in the same order, so the same boxes, with one crossing into the core."""
+        With ``fuse``, a paper preset makes one request for the whole step
+        (:meth:`_fused_step`): the same random draws in the same order, so the same boxes,
+        with one crossing into the core."""
         self._check_frame(img)
         wh = self._frame_wh
         p = self._params
@@ -384,8 +387,7 @@ class Tracker:
                       pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,
                       self._box, stages, wh, img if direct else None,
                       roi if direct else None, cue)
-            if fuse and direct and self._plain and self._track.inside_anywhere(
-                    origin, p.search_reach, *wh):
+            if fuse and direct and self._plain:
                 return (yield from self._fused_step(search, stages, previous))
             results = yield _Search(search)
             raw = self._apply_search(stages, results)
@@ -745,22 +747,26 @@ class Tracker:
         # rcwmil-plus: the box at wrong scales as more negatives, and the scale model.
         wrong = self._wrong_scale_values() if p.scale_negatives > 0 else []
         extra = np.concatenate(wrong, axis=1) if wrong else None
-        request = self._learn_request(np.concatenate((pos, neg)), pos.shape[0], sampler, dist,
+        select = self._select_kind(pos.shape[0])
+        w = sampler.weights(dist, p.instance_weights) if select == "wmil" else None
+        request = self._learn_request(np.concatenate((pos, neg)), pos.shape[0], select, w,
                                       learning_rate, extra)
         self._take_learnt((yield _Learn(request)), pos.shape[0], neg.shape[0] + len(wrong))
 
-    def _learn_request(self, corners: np.ndarray, n_pos: int, sampler: BagSampler,
-                       dist: np.ndarray, learning_rate: float | None,
-                       extra: np.ndarray | None) -> tuple[Any, ...]:
+    def _select_kind(self, n_pos: int) -> str:
+        """The learning step's ``select``: WMIL in the core, the log ratios for a MILBoost
+        selection here, or none (no selection, or no positive this frame)."""
+        p = self._params
+        if p.selection == "none" or n_pos == 0:
+            return "none"
+        return "wmil" if p.selection == "wmil" else "ratios"
+
+    def _learn_request(self, corners: np.ndarray, n_pos: int, select: str, w: np.ndarray | None,
+                       learning_rate: float | None, extra: np.ndarray | None) -> tuple[Any, ...]:
         """``_core.learn``'s arguments for the bags with these top-left ``corners`` (the
-        ``n_pos`` positives, at ``dist`` from the box, then the negatives)."""
+        ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives)."""
         p = self._params
         pool = self._pool
-        if p.selection == "none" or n_pos == 0:
-            select = "none"
-        else:
-            select = "wmil" if p.selection == "wmil" else "ratios"
-        w = sampler.weights(dist, p.instance_weights) if select == "wmil" else None
         scale_pool = self._scale_pool
         second = None if scale_pool is None else (scale_pool.mu1, scale_pool.sigma1,
                                                   p.scale_learning_rate, scale_pool.first(1))
@@ -796,23 +802,22 @@ class Tracker:
     def _fused_step(self, search: tuple[Any, ...], stages: list[tuple[int, int]],
                     previous: IntBox) -> Steps:
         """The rest of :meth:`update` for a paper preset (:attr:`_plain`) as one core request:
-        the negatives are drawn first (their offsets cannot depend on where the search lands:
-        the caller checked that every box it may reach keeps both bags inside the frame),
-        and the core learns at the box the search found. The same draws, requests and state
-        changes as the unfused step, in one call."""
+        the core searches, samples the bags where the search landed (drawing the negatives
+        from this tracker's generator exactly as :class:`BagSampler` would) and learns. The
+        same draws and state changes as the unfused step, in one call."""
         p = self._params
-        sampler = self._track
-        pos_rel = sampler.pos_offsets
-        neg_rel = sampler.draw(sampler.neg_offsets, self._rng)
-        request = self._learn_request(np.concatenate((pos_rel, neg_rel)), pos_rel.shape[0],
-                                      sampler, sampler.pos_dist, None, None)
-        results, learnt = yield _Step((search, request))
+        select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
+        weights = p.instance_weights if select == "wmil" else "none"
+        bags = (self._rng, *self._track.core_spec(weights))
+        empty = np.zeros((0, 2), dtype=np.int32)
+        request = self._learn_request(empty, 0, select, None, None, None)
+        results, learnt, (xs, ys, n_pos) = yield _Step((search, request, bags))
         raw = self._apply_search(stages, results)
         self._scale_boxes = []
         score = confidence(raw, len(self._selected), p.confidence_offset)
-        origin = np.array(self._box[:2], dtype=np.int32)
-        self._bags = (pos_rel + origin, neg_rel + origin)
-        self._take_learnt(learnt, pos_rel.shape[0], neg_rel.shape[0])
+        corners = np.stack((xs, ys), axis=1)
+        self._bags = (corners[:n_pos], corners[n_pos:])
+        self._take_learnt(learnt, n_pos, corners.shape[0] - n_pos)
         self._score = score
         self._follow(previous, score >= p.lost_threshold)
         x, y, w, h = self._box

@@ -1,0 +1,71 @@
+// Bag sampling in the core: the positives and the drawn negatives around a box, with the draw
+// continuing a numpy.random.Generator's stream exactly (the same numbers numpy's own `choice`
+// and `random` would give), so that a tracker's whole frame step can run in one call and still
+// give the boxes of the Python sampler.
+//
+// Why our own copies of numpy's draws: the core must not depend on numpy, and numpy exposes its
+// bit generators (bitgen_t: state and next_* functions) but not Generator.choice's algorithm.
+// choice_sorted() and bernoulli_first() reproduce what Generator.choice(n, k, replace=False)
+// and Generator.random(n) < p consume and return; tests/test_core_kernels.py checks them
+// against numpy (picks, flags and the generator's state afterwards).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "wmiltrack/integral.hpp"
+
+namespace wmiltrack {
+
+// A source of random bits with numpy's bitgen_t layout (numpy/random/bitgen.h), so that the
+// binding can hand numpy's generator over as it is.
+struct BitSource {
+  void* state;
+  std::uint64_t (*next_uint64)(void* st);
+  std::uint32_t (*next_uint32)(void* st);
+  double (*next_double)(void* st);
+  std::uint64_t (*next_raw)(void* st);
+};
+
+// Generator.choice(n, k, replace=False) for n <= 10000 or k <= n / 50 (Floyd's algorithm with
+// numpy's bounded draws, then the shuffle of the k picks that numpy makes), returned sorted.
+// Throws std::invalid_argument outside that range or for k > n.
+std::vector<std::int64_t> choice_sorted(BitSource& bits, std::int64_t n, std::int64_t k);
+
+// The indices i < n with Generator.random() < p, drawn in order, the first `limit` of them
+// (all n values are drawn, as numpy's random(n) does).
+std::vector<std::int64_t> bernoulli_first(BitSource& bits, std::int64_t n, double p, std::int64_t limit);
+
+// How a bag's positives are weighted (Params.instance_weights) for WMIL selection.
+enum class InstanceWeights {
+  kNone,     // no weights (no WMIL selection)
+  kExp,      // terms exp(-d), divided by their sum (numpy's pairwise sum)
+  kExpSq,    // terms exp(-d^2) as they are
+  kUniform,  // 1 / n
+};
+
+// The sampler of one tracker (engine/sampling.py's BagSampler): offsets of the top-left corner.
+struct BagSpec {
+  const std::int32_t* pos = nullptr;  // (n_pos_offsets, 2) dx, dy, row-major disc order
+  int n_pos_offsets = 0;
+  const double* pos_terms = nullptr;  // the weight term of each positive offset (kExp, kExpSq)
+  InstanceWeights weights = InstanceWeights::kNone;
+  const std::int32_t* neg = nullptr;  // (n_neg_offsets, 2) dx, dy, row-major annulus order
+  int n_neg_offsets = 0;
+  bool exact = true;      // exactly neg_count distinct offsets (choice); else Bernoulli
+  int neg_count = 0;
+  double keep_prob = 0.0;  // the Bernoulli probability
+};
+
+struct Bags {
+  std::vector<std::int32_t> xs, ys;  // the positives' corners, then the negatives'
+  int n_pos = 0;
+  std::vector<double> w_pos;  // n_pos weights (empty for kNone)
+};
+
+// The bags around `box` in a frame_w x frame_h frame: the positives inside the frame, the
+// negatives drawn from the offsets inside the frame (exactly as BagSampler.positives,
+// negatives and weights do, numpy's draws included).
+Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h, BitSource& bits);
+
+}  // namespace wmiltrack

@@ -1,0 +1,148 @@
+#include "wmiltrack/sampling.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "wmiltrack/learning.hpp"
+
+namespace wmiltrack {
+
+namespace {
+
+// Smallest all-ones bit mask >= max.
+std::uint64_t mask_of(std::uint64_t max) {
+  std::uint64_t mask = max;
+  mask |= mask >> 1;
+  mask |= mask >> 2;
+  mask |= mask >> 4;
+  mask |= mask >> 8;
+  mask |= mask >> 16;
+  mask |= mask >> 32;
+  return mask;
+}
+
+// A uniform integer in [0, rng] as numpy's random_bounded_uint64(bitgen, 0, rng, 0, false)
+// draws it for rng < 2^32 - 1: Lemire's multiply-and-reject on 32-bit draws.
+std::uint64_t bounded(BitSource& bits, std::uint64_t rng) {
+  if (rng == 0) return 0;
+  const std::uint32_t r = static_cast<std::uint32_t>(rng);
+  const std::uint32_t excl = r + 1;
+  std::uint64_t m = static_cast<std::uint64_t>(bits.next_uint32(bits.state)) * excl;
+  std::uint32_t leftover = static_cast<std::uint32_t>(m & 0xFFFFFFFFULL);
+  if (leftover < excl) {
+    const std::uint32_t threshold = (UINT32_MAX - r) % excl;
+    while (leftover < threshold) {
+      m = static_cast<std::uint64_t>(bits.next_uint32(bits.state)) * excl;
+      leftover = static_cast<std::uint32_t>(m & 0xFFFFFFFFULL);
+    }
+  }
+  return m >> 32;
+}
+
+bool inside(std::int64_t x, std::int64_t y, const Rect& box, int frame_w, int frame_h) {
+  return x >= 0 && y >= 0 && x + box.w <= frame_w && y + box.h <= frame_h;
+}
+
+}  // namespace
+
+std::vector<std::int64_t> choice_sorted(BitSource& bits, std::int64_t n, std::int64_t k) {
+  if (k < 0 || k > n) throw std::invalid_argument("choice: need 0 <= k <= n");
+  if (n > 10000 && k > n / 50) {
+    throw std::invalid_argument("choice: numpy shuffles the tail for n > 10000 and k > n / 50; "
+                                "not reproduced here");
+  }
+  if (n > 0xFFFFFFFELL) throw std::invalid_argument("choice: n must be below 2^32 - 1");
+  std::vector<std::int64_t> picks(static_cast<std::size_t>(k));
+  // Floyd's algorithm with numpy's open-addressing set of 1 + mask(1.2 k) slots.
+  const std::uint64_t mask = mask_of(static_cast<std::uint64_t>(1.2 * static_cast<double>(k)));
+  std::vector<std::uint64_t> set(mask + 1, UINT64_MAX);
+  for (std::int64_t j = n - k; j < n; ++j) {
+    const std::uint64_t val = bounded(bits, static_cast<std::uint64_t>(j));
+    std::uint64_t loc = val & mask;
+    while (set[loc] != UINT64_MAX && set[loc] != val) loc = (loc + 1) & mask;
+    std::uint64_t pick = val;
+    if (set[loc] != UINT64_MAX) {  // val taken already: j instead
+      pick = static_cast<std::uint64_t>(j);
+      loc = pick & mask;
+      while (set[loc] != UINT64_MAX) loc = (loc + 1) & mask;
+    }
+    set[loc] = pick;
+    picks[static_cast<std::size_t>(j - (n - k))] = static_cast<std::int64_t>(pick);
+  }
+  // numpy then shuffles the picks (its draws must be made; the order is dropped by sorting).
+  for (std::int64_t i = k - 1; i >= 1; --i) {
+    const std::uint64_t j = bounded(bits, static_cast<std::uint64_t>(i));
+    std::swap(picks[static_cast<std::size_t>(i)], picks[static_cast<std::size_t>(j)]);
+  }
+  std::sort(picks.begin(), picks.end());
+  return picks;
+}
+
+std::vector<std::int64_t> bernoulli_first(BitSource& bits, std::int64_t n, double p, std::int64_t limit) {
+  std::vector<std::int64_t> kept;
+  for (std::int64_t i = 0; i < n; ++i) {
+    const double u = bits.next_double(bits.state);
+    if (u < p && static_cast<std::int64_t>(kept.size()) < limit) kept.push_back(i);
+  }
+  return kept;
+}
+
+Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h, BitSource& bits) {
+  Bags bags;
+  std::vector<double> terms;
+  for (int i = 0; i < spec.n_pos_offsets; ++i) {
+    const std::int64_t x = static_cast<std::int64_t>(box.x) + spec.pos[2 * i];
+    const std::int64_t y = static_cast<std::int64_t>(box.y) + spec.pos[2 * i + 1];
+    if (!inside(x, y, box, frame_w, frame_h)) continue;
+    bags.xs.push_back(static_cast<std::int32_t>(x));
+    bags.ys.push_back(static_cast<std::int32_t>(y));
+    if (spec.pos_terms != nullptr) terms.push_back(spec.pos_terms[i]);
+  }
+  bags.n_pos = static_cast<int>(bags.xs.size());
+  const std::size_t np = static_cast<std::size_t>(bags.n_pos);
+  switch (spec.weights) {
+    case InstanceWeights::kNone:
+      break;
+    case InstanceWeights::kExp: {
+      const double sum = 0.0 + pairwise_sum(terms.data(), bags.n_pos, 1);  // numpy's w.sum()
+      for (const double t : terms) bags.w_pos.push_back(t / sum);
+      break;
+    }
+    case InstanceWeights::kExpSq:
+      bags.w_pos = terms;
+      break;
+    case InstanceWeights::kUniform:
+      bags.w_pos.assign(np, 1.0 / static_cast<double>(np));
+      break;
+  }
+  // The negatives' candidates: the offsets whose box lies inside the frame, in order.
+  std::vector<std::int32_t> cx, cy;
+  for (int i = 0; i < spec.n_neg_offsets; ++i) {
+    const std::int64_t x = static_cast<std::int64_t>(box.x) + spec.neg[2 * i];
+    const std::int64_t y = static_cast<std::int64_t>(box.y) + spec.neg[2 * i + 1];
+    if (!inside(x, y, box, frame_w, frame_h)) continue;
+    cx.push_back(static_cast<std::int32_t>(x));
+    cy.push_back(static_cast<std::int32_t>(y));
+  }
+  const std::int64_t n = static_cast<std::int64_t>(cx.size());
+  std::vector<std::int64_t> keep;
+  if (spec.exact) {
+    if (n > spec.neg_count) {
+      keep = choice_sorted(bits, n, spec.neg_count);
+    } else {
+      keep.resize(static_cast<std::size_t>(n));
+      for (std::int64_t i = 0; i < n; ++i) keep[static_cast<std::size_t>(i)] = i;
+    }
+  } else {
+    keep = bernoulli_first(bits, n, spec.keep_prob, spec.neg_count);
+  }
+  for (const std::int64_t i : keep) {
+    bags.xs.push_back(cx[static_cast<std::size_t>(i)]);
+    bags.ys.push_back(cy[static_cast<std::size_t>(i)]);
+  }
+  return bags;
+}
+
+}  // namespace wmiltrack
