@@ -301,14 +301,13 @@ LearnJob make_learn(const LearnArgs& a) {
 class NumpyBits {
  public:
   explicit NumpyBits(const py::object& rng) {
-    if (!py::hasattr(rng, "bit_generator") || !py::hasattr(rng.attr("bit_generator"), "capsule")) {
+    const py::object bitgen = py::getattr(rng, "bit_generator", py::none());
+    const py::object cap = bitgen.is_none() ? py::none() : py::getattr(bitgen, "capsule", py::none());
+    const char* name = py::isinstance<py::capsule>(cap) ? cap.cast<py::capsule>().name() : nullptr;
+    if (name == nullptr || std::string(name) != "BitGenerator") {
       throw py::type_error("rng must be a numpy.random.Generator");
     }
-    const py::object bitgen = rng.attr("bit_generator");
-    const auto capsule = bitgen.attr("capsule").cast<py::capsule>();
-    require(std::string(capsule.name() ? capsule.name() : "") == "BitGenerator",
-            "rng: expected a numpy.random.Generator");
-    bits_ = *capsule.get_pointer<BitSource>();
+    bits_ = *cap.cast<py::capsule>().get_pointer<BitSource>();
     lock_ = bitgen.attr("lock");
     lock_.attr("acquire")();
   }

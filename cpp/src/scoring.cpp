@@ -276,10 +276,10 @@ int merged_best(const BoxMeanCue& cue, const Rect& box, const std::vector<int>& 
 
 }  // namespace
 
-GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* selected,
-                      int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
-                      int step, int frame_width, int frame_height, double* scores,
-                      const BoxMeanCue* cue) {
+namespace {
+
+void check_grid(const IntegralImage& ii, int n_selected, const WeakGaussians& weak, const Rect& box,
+                int radius, int step) {
   if (!ii.computed()) throw std::invalid_argument("score_grid: the integral image has not been computed");
   if (radius < 1 || step < 1) throw std::invalid_argument("score_grid: radius and step must be >= 1");
   if (radius > kMaxSearchRadius) {
@@ -289,13 +289,16 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   if (weak.size() != n_selected) {
     throw std::invalid_argument("score_grid: one weak classifier per selected feature is needed");
   }
+}
+
+// score_grid on checked arguments with the selected features already compiled (`e`: the
+// bank's extent), so that the stages of a search compile them once.
+GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeatures& compiled,
+                      const WeakGaussians& weak, const Rect& box, int radius, int step,
+                      int frame_width, int frame_height, double* scores, const BoxMeanCue* cue) {
   const int n = grid_half_size(radius, step);
   const int side = 2 * n + 1;
   const long r2 = static_cast<long>(radius) * radius;
-  const Rect& e = bank.extent();
-  // Compiled first: a feature index outside the bank or a rectangle on a plane the integral
-  // image lacks is an error even when no candidate fits in the frame.
-  const CompiledFeatures compiled(bank, selected, n_selected, ii);
 
   // Gather the candidates that fit in the frame, in row-major order, as runs of
   // consecutive grid columns within one grid row (equally spaced in the table).
@@ -393,6 +396,20 @@ GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const st
   return result;
 }
 
+}  // namespace
+
+GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* selected,
+                      int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
+                      int step, int frame_width, int frame_height, double* scores,
+                      const BoxMeanCue* cue) {
+  check_grid(ii, n_selected, weak, box, radius, step);
+  // Compiled first: a feature index outside the bank or a rectangle on a plane the integral
+  // image lacks is an error even when no candidate fits in the frame.
+  const CompiledFeatures compiled(bank, selected, n_selected, ii);
+  return grid_stage(ii, bank.extent(), compiled, weak, box, radius, step, frame_width,
+                    frame_height, scores, cue);
+}
+
 double template_fit(const IntegralImage& ii, const FeatureBank& bank, int x, int y,
                     const double* mu, const double* sigma) {
   const int m = bank.size();
@@ -412,8 +429,14 @@ std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
                                int frame_height, const BoxMeanCue* cue) {
   std::vector<GridResult> out;
   out.reserve(stages.size());
+  if (stages.empty()) return out;
+  // The features are compiled once for every stage (after the first stage's checks, in
+  // score_grid's order).
+  check_grid(ii, n_selected, weak, box, stages.front().radius, stages.front().step);
+  const CompiledFeatures compiled(bank, selected, n_selected, ii);
   for (const SearchStage& stage : stages) {
-    const GridResult r = score_grid(ii, bank, selected, n_selected, weak, box, stage.radius,
+    check_grid(ii, n_selected, weak, box, stage.radius, stage.step);
+    const GridResult r = grid_stage(ii, bank.extent(), compiled, weak, box, stage.radius,
                                     stage.step, frame_width, frame_height, nullptr, cue);
     if (r.candidates > 0) {
       box.x += r.dx;

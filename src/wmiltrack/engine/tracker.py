@@ -52,6 +52,9 @@ class _Step(tuple):  # type: ignore[type-arg]
     search lands)."""
 
 
+_NO_CORNERS = np.zeros((0, 2), dtype=np.int32)  # a learning request whose boxes the core samples
+_NO_CORNERS.setflags(write=False)
+
 _LEARN_KEYS = ("lam", "first_pos", "first_neg", "direct_first", "mil", "sigma_floor", "guard",
                "select", "w_pos", "k", "code_gradient", "extra_neg", "second")
 
@@ -284,6 +287,9 @@ class Tracker:
         if p.score_luma > 0:
             self._first_luma = ColourModel(intensity=True, sample=p.colour_sample)
             self._first_luma.learn(img, b)
+        # The last bags learnt from: (positives, negatives) corners, or (xs, ys, n_pos) as the
+        # core's frame step returns them (samples() splits them when asked).
+        self._bags: tuple[Any, ...] = ()
         self._compute_integral(img, b, self._first.reach)
         self._learn(self._first)
         self._search_origins: list[IntBox] = []
@@ -444,6 +450,10 @@ class Tracker:
             scales (empty without scale search); ``"box"``: the box.
         """
         self._require_init()
+        if len(self._bags) == 3:  # (xs, ys, n_pos) from the core's frame step
+            xs, ys, n_pos = self._bags
+            corners = np.stack((xs, ys), axis=1)
+            self._bags = (corners[:n_pos], corners[n_pos:])
         pos, neg = self._bags
         return {
             "positive": pos.copy(),
@@ -809,15 +819,13 @@ class Tracker:
         select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
         weights = p.instance_weights if select == "wmil" else "none"
         bags = (self._rng, *self._track.core_spec(weights))
-        empty = np.zeros((0, 2), dtype=np.int32)
-        request = self._learn_request(empty, 0, select, None, None, None)
+        request = self._learn_request(_NO_CORNERS, 0, select, None, None, None)
         results, learnt, (xs, ys, n_pos) = yield _Step((search, request, bags))
         raw = self._apply_search(stages, results)
         self._scale_boxes = []
         score = confidence(raw, len(self._selected), p.confidence_offset)
-        corners = np.stack((xs, ys), axis=1)
-        self._bags = (corners[:n_pos], corners[n_pos:])
-        self._take_learnt(learnt, n_pos, corners.shape[0] - n_pos)
+        self._bags = (xs, ys, n_pos)  # split by samples() when asked
+        self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos)
         self._score = score
         self._follow(previous, score >= p.lost_threshold)
         x, y, w, h = self._box
