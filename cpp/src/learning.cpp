@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -169,7 +170,8 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
   // positives then the negatives), so that the scoring runs over features: M independent
   // sums, each adding its terms in the order j = 0, 1, ... as a feature-by-feature loop does
   // (the same bits), several of them at a time (vmath::weighted_rows).
-  std::vector<double> hT(static_cast<std::size_t>(P + N) * Mz);
+  // (Every entry is written below: not cleared first.)
+  const std::unique_ptr<double[]> hT(new double[static_cast<std::size_t>(P + N) * Mz]);
   for (int j = 0; j < P; ++j) {
     for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m)] = h_pos.at(m, j);
   }
@@ -199,7 +201,7 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
       for (int j = 0; j < N; ++j) g_neg[j] = -g_neg[j] * rest[static_cast<std::size_t>(j)];
     }
     // score_m = sum_j h_mj g_j over the positives then the negatives.
-    vmath::weighted_rows(hT.data(), P + N, M, g.data(), score.data());
+    vmath::weighted_rows(hT.get(), P + N, M, g.data(), score.data());
     int best = -1;
     double best_score = -std::numeric_limits<double>::infinity();
     for (int m = 0; m < M; ++m) {
