@@ -247,3 +247,21 @@ def test_a_numpy_whose_draws_differ_keeps_the_two_call_step(monkeypatch) -> None
     monkeypatch.setattr(tracker, "core_draws_match_numpy", lambda: False)
     monkeypatch.setattr(wmiltrack._core, "frame_step", None)  # must not be called
     assert single("rcwmil", 2, frames, box) == expected
+
+
+def test_an_exact_draw_numpy_would_shuffle_stays_in_python(monkeypatch) -> None:
+    """An exact negative draw from more than 10 000 offsets may take numpy's tail shuffle,
+    which the core does not repeat: such a tracker samples in Python (two core calls) and still
+    tracks, with the same boxes as a MultiTracker."""
+    seq = make_sequence(6, size=(360, 480), target_size=(40, 36), seed=5, occlusion=False)
+    frames = seq.load()
+    box = tuple(seq.groundtruth[0])
+    overrides = {"neg_outer": 62.0, "neg_count": 300}  # about 12 000 offsets, 300 > 12 000 // 50
+    monkeypatch.setattr(wmiltrack._core, "frame_step", None)  # must not be called
+    t = wmiltrack.Tracker("rcwmil", seed=1, **overrides)
+    t.init(frames[0], box)
+    alone = [t.update(f) for f in frames[1:]]
+    with MultiTracker("rcwmil", seed=1, **overrides) as mt:
+        mt.add(frames[0], box)
+        together = [mt.update(f)[0] for f in frames[1:]]
+    assert alone == together

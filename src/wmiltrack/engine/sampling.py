@@ -131,6 +131,12 @@ class BagSampler:
         kept: np.ndarray = candidates[rng.random(candidates.shape[0]) < self.keep_prob][: self.neg_count]
         return kept
 
+    def drawn_in_core(self) -> bool:
+        """Whether the core can draw this sampler's negatives as numpy would: a Bernoulli draw,
+        or an exact one from at most 10 000 offsets (numpy's ``choice`` then always takes
+        Floyd's algorithm, which the core repeats; above that it may shuffle instead)."""
+        return self.mode != "exact" or self.neg_offsets.shape[0] <= 10_000
+
     def core_spec(self, weights: str) -> tuple[Any, ...]:
         """This sampler for the core's ``frame_step`` (``bags`` without its leading ``rng``):
         the offsets, the positives' weight terms for ``weights`` (an ``instance_weights``

@@ -298,7 +298,8 @@ class Tracker:
         # A paper-family step: luma only, no colour, scale, motion, recovery or anchor, and it
         # learns from every frame at the full rate, so the step can be fused into one call
         # (with the bags drawn in the core, where the core's draws match this numpy's).
-        self._plain = (core_draws_match_numpy() and self._chan_names is None and self._colour is None
+        self._plain = (core_draws_match_numpy() and self._track.drawn_in_core()
+                       and self._chan_names is None and self._colour is None
                        and self._scale_pool is None
                        and self._first_luma is None and p.scale_steps == 0 and p.scale_negatives == 0
                        and p.motion == "none" and p.recovery_radius == 0 and self._anchor_weight == 0
