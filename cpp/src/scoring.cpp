@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -46,18 +47,6 @@ void grid_values_scalar(const IntegralImage::Entry* table, const std::vector<Gri
 }  // namespace
 
 #ifdef WMILTRACK_GRID_SIMD
-namespace {
-// The sum of rectangles c[0..n) at `b`, weighted and added in order from 0.0 (as
-// CompiledFeatures::value does).
-inline double corners_value(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
-                            int n) {
-  double v = 0.0;
-  for (int r = 0; r < n; ++r) {
-    v += c[r].weight * static_cast<double>((b[c[r].br] - b[c[r].tr]) - (b[c[r].bl] - b[c[r].tl]));
-  }
-  return v;
-}
-}  // namespace
 
 namespace detail {
 // values[run.first + t] = the feature with rectangles c[0..n) at candidate t of each run, the
@@ -69,7 +58,7 @@ void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridR
     const IntegralImage::Entry* b0 = table + run.base;
     double* o = values + run.first;
     if (run.count < 4) {
-      for (int t = 0; t < run.count; ++t) o[t] = corners_value(b0 + t, c, n);
+      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
       continue;
     }
     for (int t = 0;; t += 4) {
@@ -103,7 +92,7 @@ __attribute__((target("avx2"))) void grid_values_avx2(const IntegralImage::Entry
     const IntegralImage::Entry* b0 = table + run.base;
     double* o = values + run.first;
     if (run.count < 8) {
-      for (int t = 0; t < run.count; ++t) o[t] = corners_value(b0 + t, c, n);
+      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
       continue;
     }
     for (int t = 0;; t += 8) {
@@ -429,14 +418,13 @@ std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
                                int frame_height, const BoxMeanCue* cue) {
   std::vector<GridResult> out;
   out.reserve(stages.size());
-  if (stages.empty()) return out;
-  // The features are compiled once for every stage (after the first stage's checks, in
+  // The features are compiled once, for every stage (after the first stage's checks, in
   // score_grid's order).
-  check_grid(ii, n_selected, weak, box, stages.front().radius, stages.front().step);
-  const CompiledFeatures compiled(bank, selected, n_selected, ii);
+  std::optional<CompiledFeatures> compiled;
   for (const SearchStage& stage : stages) {
     check_grid(ii, n_selected, weak, box, stage.radius, stage.step);
-    const GridResult r = grid_stage(ii, bank.extent(), compiled, weak, box, stage.radius,
+    if (!compiled) compiled.emplace(bank, selected, n_selected, ii);
+    const GridResult r = grid_stage(ii, bank.extent(), *compiled, weak, box, stage.radius,
                                     stage.step, frame_width, frame_height, nullptr, cue);
     if (r.candidates > 0) {
       box.x += r.dx;

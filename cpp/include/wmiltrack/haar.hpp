@@ -61,23 +61,29 @@ class CompiledFeatures {
   // Value of feature k for the box whose top-left table entry is `base`: the weighted sum of
   // its rectangles' exact sums, added in order from 0.0.
   double value(const IntegralImage::Entry* base, int k) const {
-    double v = 0.0;
-    for (int r = starts_[k]; r < starts_[k + 1]; ++r) v += corners_[r].weight * rect_sum(base, r);
-    return v;
+    return value_of(base, corners_.data() + starts_[k], starts_[k + 1] - starts_[k]);
   }
 
   // Rectangle r's sum at the box whose top-left table entry is `base` (modular, then exact:
   // FeatureBank keeps every rectangle within kMaxExactRectArea).
-  double rect_sum(const IntegralImage::Entry* base, int r) const {
-    const Corners& c = corners_[r];
-    return static_cast<double>((base[c.br] - base[c.tr]) - (base[c.bl] - base[c.tl]));
-  }
+  double rect_sum(const IntegralImage::Entry* base, int r) const { return sum_of(base, corners_[r]); }
 
   // Table offsets of one rectangle's four corners, relative to the box's top-left entry.
   struct Corners {
     std::ptrdiff_t tl, tr, bl, br;
     double weight;
   };
+  // The same for any corners laid out like these (the search's phase-split copy of the table
+  // has its own offsets): rectangles c[0..n) weighted and added in order from 0.0.
+  static double value_of(const IntegralImage::Entry* base, const Corners* c, int n) {
+    double v = 0.0;
+    for (int r = 0; r < n; ++r) v += c[r].weight * sum_of(base, c[r]);
+    return v;
+  }
+  static double sum_of(const IntegralImage::Entry* base, const Corners& c) {
+    return static_cast<double>((base[c.br] - base[c.tr]) - (base[c.bl] - base[c.tl]));
+  }
+
   int first_rect(int k) const { return starts_[k]; }
   int num_rects() const { return static_cast<int>(corners_.size()); }
   // The largest rectangle's area in pixels (0 for no rectangle).

@@ -394,10 +394,13 @@ class Tracker:
                       pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,
                       self._box, stages, wh, img if direct else None,
                       roi if direct else None, cue)
-            if fuse and direct and self._plain:
-                return (yield from self._fused_step(search, stages, previous))
-            results = yield _Search(search)
-            raw = self._apply_search(stages, results)
+            # A paper preset's search, bags and learning in one core call (then nothing below
+            # learns: such a preset always passes the gates).
+            fused = fuse and direct and self._plain
+            if fused:
+                raw = yield from self._fused_step(search, stages)
+            else:
+                raw = self._apply_search(stages, (yield _Search(search)))
             self._scale_boxes = []
             if p.scale_steps > 0 and math.isfinite(raw):
                 self._cue_table = None if cue is None else cue[:3]
@@ -411,7 +414,9 @@ class Tracker:
             signal = report if p.lost_signal == "score" else score
             tracked = signal >= p.lost_threshold
             k = max(len(self._selected), 1)
-            if signal >= p.gate_threshold and self._level_ok(raw / k):
+            if fused:
+                pass
+            elif signal >= p.gate_threshold and self._level_ok(raw / k):
                 slow = not tracked and p.gate_learning_rate is not None
                 yield from self._learn_steps(self._track, p.gate_learning_rate if slow else None)
             else:
@@ -810,27 +815,20 @@ class Tracker:
             self._selected = milboost_select(h[:, :n_pos], h[:, n_pos:], p.num_selected,
                                              guard=p.guard)
 
-    def _fused_step(self, search: tuple[Any, ...], stages: list[tuple[int, int]],
-                    previous: IntBox) -> Steps:
-        """The rest of :meth:`update` for a paper preset (:attr:`_plain`) as one core request:
-        the core searches, samples the bags where the search landed (drawing the negatives
-        from this tracker's generator exactly as :class:`BagSampler` would) and learns. The
-        same draws and state changes as the unfused step, in one call."""
+    def _fused_step(self, search: tuple[Any, ...], stages: list[tuple[int, int]]) -> Steps:
+        """The search, the bags and the learning of a paper preset (:attr:`_plain`) as one core
+        request: the core samples the bags where the search landed (drawing the negatives from
+        this tracker's generator exactly as :class:`BagSampler` would) and learns. The same
+        draws and state changes as the separate requests; returns the search's raw score."""
         p = self._params
         select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
         weights = p.instance_weights if select == "wmil" else "none"
         bags = (self._rng, *self._track.core_spec(weights))
         request = self._learn_request(_NO_CORNERS, 0, select, None, None, None)
         results, learnt, (xs, ys, n_pos) = yield _Step((search, request, bags))
-        raw = self._apply_search(stages, results)
-        self._scale_boxes = []
-        score = confidence(raw, len(self._selected), p.confidence_offset)
         self._bags = (xs, ys, n_pos)  # split by samples() when asked
         self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos)
-        self._score = score
-        self._follow(previous, score >= p.lost_threshold)
-        x, y, w, h = self._box
-        return TrackResult((float(x), float(y), float(w), float(h)), score, score >= p.lost_threshold)
+        return self._apply_search(stages, results)
 
 
 def update_many(trackers: list[Tracker], frame: np.ndarray, *,
