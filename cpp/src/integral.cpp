@@ -27,6 +27,23 @@ namespace wmiltrack {
 
 namespace {
 
+// Asks for the cache line holding p to be brought into L2 (a hint: never faults). An asm
+// statement on x86-64, because GCC 12 deleted a loop of plain __builtin_prefetch calls in
+// build_channels as dead code: the module had no prefetch instruction left.
+inline void prefetch_l2(const void* p) {
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
+  asm volatile("prefetcht1 %0" : : "m"(*static_cast<const char*>(p)));
+#elif defined(__GNUC__) || defined(__clang__)
+  __builtin_prefetch(p, 0, 2);
+#else
+  (void)p;
+#endif
+}
+
+}  // namespace
+
+namespace {
+
 // The ROI clipped to the frame; throws for an empty frame, a bad channel count or an ROI
 // that misses the frame.
 Rect clip_roi(const ImageView& image, const Rect& roi) {
@@ -431,19 +448,16 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   const std::uint8_t* log_lut = log_luma_table().data();
 
   // The ROI's bytes of the frame row kAhead rows below the current one are asked for ahead of
-  // use: a new video frame is not in cache, and the hardware prefetcher starts afresh on every
-  // row, so without this the scan waits on memory at the start of each row.
+  // use, into L2: a new video frame is not in cache, and the hardware prefetcher starts afresh
+  // on every row, so without this the scan waits on memory at the start of each row (a 240 x 240
+  // region of a cold 640 x 480 frame: 71 us without, 30 us with, 28 us when already in cache).
   constexpr int kAhead = 6;
   const std::ptrdiff_t row_bytes = static_cast<std::ptrdiff_t>(w + 2) * image.col_stride;
   const auto prefetch_row = [&](int y) {
-#if defined(__GNUC__) || defined(__clang__)
     if (y > last_row) return;
     const std::uint8_t* p = image.data + y * image.row_stride +
                             std::max(x0_ - 1, 0) * image.col_stride;
-    for (std::ptrdiff_t b = 0; b < row_bytes; b += 64) __builtin_prefetch(p + b);
-#else
-    (void)y;
-#endif
+    for (std::ptrdiff_t b = 0; b < row_bytes; b += 64) prefetch_l2(p + b);
   };
   for (int r = 0; r < kAhead; ++r) prefetch_row(y0_ + 1 + r);
 
