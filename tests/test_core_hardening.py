@@ -7,6 +7,7 @@ the whole test session.
 """
 from __future__ import annotations
 
+import platform
 import re
 import shutil
 import subprocess
@@ -15,6 +16,7 @@ import textwrap
 import threading
 import tracemalloc
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -325,15 +327,20 @@ def test_tracker_refuses_concurrent_use() -> None:
 
 
 # ---------------------------------------------------------------- 7. portable build
-def test_default_build_is_portable() -> None:
-    assert _core.BUILD_NATIVE is False, "built with WMILTRACK_NATIVE=ON: not a portable build"
+def _disassembly(mod: Any) -> str:
+    """The compiled module's machine code as objdump prints it (skips without binutils)."""
     objdump = shutil.which("objdump")
     if objdump is None:
         pytest.skip("objdump (binutils) not installed")
+    return subprocess.run([objdump, "-d", "--no-show-raw-insn", str(Path(mod.__file__ or ""))],
+                          capture_output=True, text=True, check=True).stdout
+
+
+def test_default_build_is_portable() -> None:
+    assert _core.BUILD_NATIVE is False, "built with WMILTRACK_NATIVE=ON: not a portable build"
     for mod in (_core, wmiltrack._learn):
         path = Path(mod.__file__ or "")
-        asm = subprocess.run([objdump, "-d", "--no-show-raw-insn", str(path)], capture_output=True,
-                             text=True, check=True).stdout
+        asm = _disassembly(mod)
         # AVX/AVX-512 register operands (instructions an x86-64 baseline CPU lacks) are allowed
         # only inside the vmath kernels compiled for AVX2 (named *_avx2), which run only on a
         # CPU that has AVX2 (chosen at run time; the C++ tests check they give the same bits
@@ -351,6 +358,13 @@ def test_default_build_is_portable() -> None:
         assert not wide, f"{path.name}: {len(wide)} AVX instructions, e.g. {wide[:3]}"
         if mod is _core:
             assert dispatched > 0, "no AVX2 vmath kernels found: were they renamed?"
+
+
+@pytest.mark.skipif(platform.machine() not in ("x86_64", "AMD64"), reason="x86-64 instruction")
+def test_frame_rows_are_prefetched() -> None:
+    # The integral image asks for the frame rows ahead of its scan (a cold frame's region costs
+    # about twice as much without). A compiler once deleted that loop as dead code, silently.
+    assert "prefetcht1" in _disassembly(_core), "the integral image's row prefetch was compiled out"
 
 
 def test_simd_copies_give_the_same_boxes_and_scores() -> None:
