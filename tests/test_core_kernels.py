@@ -343,14 +343,52 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     for a, b in zip(learnt, expected):
         assert (a is None and b is None) or np.array_equal(a, b)
     bags = (rng, *sampler.core_spec("exp"))
-    with pytest.raises(ValueError, match="must compute its integral image"):
-        _core.frame_step(job(t, ii)[:11] + (None, None, None), learn(ii, empty, 0, None), bags)
+    # Without a frame the step reads the integral image as it is (one shared by several
+    # targets): computed, it gives the same search; never computed, it is refused.
+    no_frame = job(t, ii)[:11] + (None, None, None)
+    assert _core.frame_step(no_frame, learn(ii, empty, 0, None), bags)[0] == found
+    never = _core.IntegralImage()
+    with pytest.raises(ValueError, match="not been computed"):
+        _core.frame_step(job(t, never)[:11] + (None, None, None), learn(never, empty, 0, None),
+                         bags)
     with pytest.raises(ValueError, match="the search's IntegralImage"):
         _core.frame_step(job(t, ii), learn(alone, empty, 0, None), bags)
     with pytest.raises(ValueError, match="bags must be"):
         _core.frame_step(job(t, ii), learn(ii, empty, 0, None), bags[:3])
     fresh = _core.IntegralImage()  # never computed before: the search computes it first
     assert _core.frame_step(job(t, fresh), learn(fresh, empty, 0, None), bags)[0] == found
+
+    # frame_step_many: each job as frame_step alone gives it, its generator left in the same
+    # state, whatever the number of threads.
+    def steps(seed: int) -> tuple[list[tuple[object, ...]], list[np.random.Generator]]:
+        rngs = [np.random.default_rng(seed + i) for i in range(len(trackers))]
+        jobs = []
+        for tr, r in zip(trackers, rngs):
+            own = _core.IntegralImage()
+            jobs.append((job(tr, own), learn(own, empty, 0, None), (r, *sampler.core_spec("exp"))))
+        return jobs, rngs
+
+    alone_jobs, alone_rngs = steps(10)
+    single_steps = [_core.frame_step(*j) for j in alone_jobs]
+    for threads in (1, 2, 3):
+        jobs, rngs = steps(10)
+        many_steps = _core.frame_step_many(jobs, threads)
+        assert len(many_steps) == len(single_steps)
+        for got, want in zip(many_steps, single_steps):
+            assert got[0] == want[0]
+            assert all((a is None and b is None) or np.array_equal(a, b) for a, b in zip(got[1], want[1]))
+            assert all(np.array_equal(a, b) for a, b in zip(got[2], want[2]))
+        assert [r.bit_generator.state for r in rngs] == [r.bit_generator.state for r in alone_rngs]
+    jobs, _ = steps(20)
+    one_rng = (jobs[0][0], jobs[0][1], (jobs[1][2][0], *jobs[0][2][1:]))  # job 1's generator
+    with pytest.raises(ValueError, match="same generator"):
+        _core.frame_step_many([one_rng, jobs[1]], 2)
+    both = (job(trackers[1], jobs[0][0][0]), learn(jobs[0][0][0], empty, 0, None), jobs[1][2])
+    with pytest.raises(ValueError, match="share an IntegralImage"):
+        _core.frame_step_many([jobs[0], both], 2)
+    with pytest.raises(ValueError, match="threads"):
+        _core.frame_step_many(jobs, 0)
+    assert _core.frame_step_many([], 2) == []
 
 
 @pytest.mark.parametrize("seed", range(40))

@@ -209,30 +209,54 @@ def test_one_integral_image_when_it_covers_fewer_pixels() -> None:
 def test_fused_frame_step_gives_the_two_call_results(variant: str, size: tuple[int, int],
                                                      monkeypatch) -> None:
     """Tracker.update makes one core call per frame for a paper preset (search, bags drawn
-    in the core from the tracker's numpy generator, learning); a MultiTracker makes the search
-    and learning calls separately and samples in Python. Same results every frame, in a large
-    frame and in a small one where the bags are cut by the frame's edges."""
+    in the core from the tracker's numpy generator, learning), and MultiTracker.update one for
+    all its targets (on their own integral images, or on one shared table). With the bags
+    sampled in Python instead (two core calls per target and frame) the results are the same
+    every frame, in a large frame and in a small one where the bags are cut by the frame's
+    edges."""
+    from wmiltrack.engine import tracker
+
     seq = make_sequence(40, size=size, target_size=(40, 36), seed=3, occlusion=False)
     frames = seq.load()
     box = tuple(seq.groundtruth[0])
-    fused_calls = 0
-    frame_step = wmiltrack._core.frame_step
+    h, w = size
+    near = (min(box[0] + 30, w - 30), min(box[1] + 20, h - 30), 24, 24)  # shares the table
 
-    def counting(*args):
-        nonlocal fused_calls
-        fused_calls += 1
-        return frame_step(*args)
+    def run(n_targets: int) -> list[list[wmiltrack.TrackResult]]:
+        with MultiTracker(variant, seed=7, share="always") as mt:
+            for b in (box, near)[:n_targets]:
+                mt.add(frames[0], b)
+            out = []
+            for f in frames[1:]:
+                found = mt.update(f)
+                assert mt.last_shared == (n_targets > 1)
+                out.append([found[i] for i in range(n_targets)])
+        return out
 
-    monkeypatch.setattr(wmiltrack._core, "frame_step", counting)
-    t = wmiltrack.Tracker(variant, seed=7)
-    t.init(frames[0], box)
-    fused = [t.update(f) for f in frames[1:]]
-    assert fused_calls == len(frames) - 1
-    with MultiTracker(variant, seed=7) as mt:
-        mt.add(frames[0], box)
-        separate = [mt.update(f)[0] for f in frames[1:]]
-    assert fused_calls == len(frames) - 1  # MultiTracker never fuses
-    assert fused == separate
+    def alone() -> list[wmiltrack.TrackResult]:
+        t = wmiltrack.Tracker(variant, seed=7)
+        t.init(frames[0], box)
+        return [t.update(f) for f in frames[1:]]
+
+    with monkeypatch.context() as m:  # the two-call step: draws in Python
+        m.setattr(tracker, "core_draws_match_numpy", lambda: False)
+        m.setattr(wmiltrack._core, "frame_step", None)  # must not be called
+        m.setattr(wmiltrack._core, "frame_step_many", None)
+        separate, separate_two = alone(), run(2)
+    calls = {"frame_step": 0, "frame_step_many": 0}
+    for name in calls:
+        original = getattr(wmiltrack._core, name)
+
+        def counting(*args, _name=name, _original=original):  # noqa: ANN001, ANN202
+            calls[_name] += 1
+            return _original(*args)
+
+        monkeypatch.setattr(wmiltrack._core, name, counting)
+    assert alone() == separate
+    assert calls["frame_step"] == len(frames) - 1
+    assert [r[0] for r in run(1)] == separate
+    assert run(2) == separate_two
+    assert calls["frame_step_many"] == 2 * (len(frames) - 1)
 
 
 def test_a_numpy_whose_draws_differ_keeps_the_two_call_step(monkeypatch) -> None:

@@ -385,6 +385,95 @@ py::list run_all(std::vector<Job>& jobs, int threads, Result result) {
   return out;
 }
 
+// ---- whole frame steps ---------------------------------------------------------------------
+
+using FrameStepArgs = std::tuple<SearchArgs, LearnArgs, py::tuple>;
+
+// frame_step() for several targets: each target's search and bag draws, then (the learning
+// jobs built from the bags, with the GIL) each target's learning, on up to `threads` threads
+// with the GIL released for both phases. Every job owns its integral image or reads a
+// computed one; every job draws from its own generator (their locks are held meanwhile).
+py::list run_frame_steps(std::vector<FrameStepArgs>& args, int threads) {
+  require_threads(threads);
+  const std::size_t n = args.size();
+  std::vector<SearchJob> searches;
+  std::vector<BagJob> bag_jobs;
+  searches.reserve(n);
+  bag_jobs.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const SearchArgs& search_args = std::get<0>(args[i]);
+    require(std::get<0>(std::get<1>(args[i])) == std::get<0>(search_args),
+            "frame_step: the learning step must read the search's IntegralImage");
+    searches.push_back(make_search(search_args));
+    bag_jobs.push_back(make_bags(std::get<2>(args[i])));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      require(searches[i].ii != searches[j].ii || (!searches[i].frame && !searches[j].frame),
+              "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
+                  " share an IntegralImage that one of them computes");
+      // (Two Generators may wrap one bit generator: it is its lock that each job takes.)
+      require(!py::getattr(bag_jobs[i].rng, "bit_generator", bag_jobs[i].rng)
+                   .is(py::getattr(bag_jobs[j].rng, "bit_generator", bag_jobs[j].rng)),
+              "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
+                  " draw from the same generator");
+    }
+  }
+  std::vector<std::unique_ptr<NumpyBits>> rngs;
+  rngs.reserve(n);
+  for (BagJob& job : bag_jobs) rngs.push_back(std::make_unique<NumpyBits>(job.rng));
+  std::vector<Bags> bags(n);
+  {
+    py::gil_scoped_release release;
+    parallel_for(static_cast<int>(n), threads, [&](int k) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      SearchJob& search = searches[i];
+      search.run();
+      Rect box = search.box;  // where the search lands
+      for (const GridResult& r : search.out) {
+        if (r.candidates > 0) {
+          box.x += r.dx;
+          box.y += r.dy;
+        }
+      }
+      bags[i] = sample_bags(bag_jobs[i].spec, box, search.fw, search.fh, rngs[i]->bits());
+    });
+  }
+  rngs.clear();  // the generators' locks released (with the GIL)
+  // Each learning step's boxes and weights are the ones drawn here.
+  std::vector<LearnJob> learns;
+  std::vector<py::tuple> drawn;
+  learns.reserve(n);
+  drawn.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Bags& b = bags[i];
+    LearnArgs& learn_args = std::get<1>(args[i]);
+    py::array_t<std::int32_t> xs(static_cast<py::ssize_t>(b.xs.size()), b.xs.data());
+    py::array_t<std::int32_t> ys(static_cast<py::ssize_t>(b.ys.size()), b.ys.data());
+    std::get<2>(learn_args) = xs;
+    std::get<3>(learn_args) = ys;
+    std::get<4>(learn_args) = b.n_pos;
+    if (b.n_pos == 0) std::get<16>(learn_args) = "none";
+    std::get<17>(learn_args) = py::none();
+    if (std::get<16>(learn_args) == "wmil") {
+      std::get<17>(learn_args) =
+          py::array_t<double>(static_cast<py::ssize_t>(b.w_pos.size()), b.w_pos.data());
+    }
+    learns.push_back(make_learn(learn_args));  // on the table the search read
+    drawn.push_back(py::make_tuple(xs, ys, b.n_pos));
+  }
+  {
+    py::gil_scoped_release release;
+    parallel_for(static_cast<int>(n), threads,
+                 [&learns](int k) { learns[static_cast<std::size_t>(k)].run(); });
+  }
+  py::list out;
+  for (std::size_t i = 0; i < n; ++i) {
+    out.append(py::make_tuple(search_result(searches[i]), learn_result(learns[i]), drawn[i]));
+  }
+  return out;
+}
+
 }  // namespace
 
 void bind_frame(py::module_& m) {
@@ -481,56 +570,30 @@ void bind_frame(py::module_& m) {
 
   m.def(
       "frame_step",
-      [](const SearchArgs& search_args, LearnArgs learn_args, const py::tuple& bags_args) {
-        SearchJob search = make_search(search_args);
-        require(search.frame.has_value(), "frame_step: the search must compute its integral image "
-                                          "(frame and roi given)");
-        require(std::get<0>(learn_args) == std::get<0>(search_args),
-                "frame_step: the learning step must read the search's IntegralImage");
-        BagJob bag_job = make_bags(bags_args);
-        Rect box = search.box;  // where the search lands
-        Bags bags;
-        {
-          NumpyBits rng(bag_job.rng);
-          py::gil_scoped_release release;
-          search.run();
-          for (const GridResult& r : search.out) {
-            if (r.candidates > 0) {
-              box.x += r.dx;
-              box.y += r.dy;
-            }
-          }
-          bags = sample_bags(bag_job.spec, box, search.fw, search.fh, rng.bits());
-        }
-        // The learning step's boxes and weights are the ones drawn here.
-        py::array_t<std::int32_t> xs(static_cast<py::ssize_t>(bags.xs.size()), bags.xs.data());
-        py::array_t<std::int32_t> ys(static_cast<py::ssize_t>(bags.ys.size()), bags.ys.data());
-        std::get<2>(learn_args) = xs;
-        std::get<3>(learn_args) = ys;
-        std::get<4>(learn_args) = bags.n_pos;
-        if (bags.n_pos == 0) std::get<16>(learn_args) = "none";
-        std::get<17>(learn_args) = py::none();
-        if (std::get<16>(learn_args) == "wmil") {
-          std::get<17>(learn_args) =
-              py::array_t<double>(static_cast<py::ssize_t>(bags.w_pos.size()), bags.w_pos.data());
-        }
-        LearnJob learn = make_learn(learn_args);  // on the table the search computed
-        {
-          py::gil_scoped_release release;
-          learn.run();
-        }
-        return py::make_tuple(search_result(search), learn_result(learn),
-                              py::make_tuple(xs, ys, bags.n_pos));
+      [](const SearchArgs& search, const LearnArgs& learn, const py::tuple& bags) {
+        std::vector<FrameStepArgs> one{FrameStepArgs{search, learn, bags}};
+        return py::tuple(run_frame_steps(one, 1)[0]);
       },
       py::arg("search"), py::arg("learn"), py::arg("bags"),
-      "A tracker's whole frame step in one call: search() with the arguments `search` (which\n"
-      "must compute the integral image: frame and roi given); then the bags around the box\n"
-      "where it landed, sampled as BagSampler does from bags = (rng, pos_offsets, pos_terms,\n"
-      "weights, neg_offsets, exact, neg_count, keep_prob), the negatives drawn from the numpy\n"
-      "Generator `rng` (continuing its stream as numpy's choice / random would); then learn()\n"
-      "with the arguments `learn` on the search's integral image, its xs, ys, n_pos and w_pos\n"
-      "replaced by the bags (and select='none' when no positive fits in the frame). Returns\n"
-      "(search's result, learn's result, (xs, ys, n_pos) of the bags).");
+      "A tracker's whole frame step in one call: search() with the arguments `search`; then the\n"
+      "bags around the box where it landed, sampled as BagSampler does from bags = (rng,\n"
+      "pos_offsets, pos_terms, weights, neg_offsets, exact, neg_count, keep_prob), the negatives\n"
+      "drawn from the numpy Generator `rng` (continuing its stream as numpy's choice / random\n"
+      "would); then learn() with the arguments `learn` on the integral image the search read\n"
+      "(the same object: computed by the search when it is given a frame and roi, else already\n"
+      "computed), its xs, ys, n_pos and w_pos replaced by the bags (and select='none' when no\n"
+      "positive fits in the frame). Returns (search's result, learn's result, (xs, ys, n_pos) of\n"
+      "the bags).");
+
+  m.def(
+      "frame_step_many",
+      [](std::vector<FrameStepArgs> jobs, int threads) { return run_frame_steps(jobs, threads); },
+      py::arg("jobs"), py::arg("threads"),
+      "frame_step() for several targets in one call, on up to `threads` threads with the GIL\n"
+      "released: each job is the tuple (search, learn, bags) of frame_step()'s arguments. The\n"
+      "searches and draws of all jobs run first, then their learning steps. Jobs must not share\n"
+      "a generator, nor an IntegralImage that one of them computes (ValueError). Returns the\n"
+      "results in order; the first error is raised after all jobs ran.");
 
   m.def(
       "numpy_choice_sorted",

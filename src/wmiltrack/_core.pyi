@@ -182,14 +182,19 @@ def learn(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
     mu2, sigma2); extra_neg adds negatives as feature values, second is a second target model
     (mu, sigma, lam, first) updated from the positives alone."""
 
+_FrameStep = tuple[tuple[tuple[int, int, float, int], ...],
+                   tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
+                         _F64 | None, _F64 | None],
+                   tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], int]]
+
 def frame_step(search: tuple[object, ...], learn: tuple[object, ...], bags: tuple[object, ...]
-               ) -> tuple[tuple[tuple[int, int, float, int], ...],
-                          tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
-                                _F64 | None, _F64 | None],
-                          tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], int]]:
-    """search() (which must compute its integral image), the bags sampled where it landed
-    (bags = (rng, pos_offsets, pos_terms, weights, neg_offsets, exact, neg_count, keep_prob),
-    numpy's draws from rng), then learn() on them: (search's result, learn's, (xs, ys, n_pos))."""
+               ) -> _FrameStep:
+    """search(), the bags sampled where it landed (bags = (rng, pos_offsets, pos_terms, weights,
+    neg_offsets, exact, neg_count, keep_prob), numpy's draws from rng), then learn() on them, on
+    the integral image the search read: (search's result, learn's, (xs, ys, n_pos))."""
+
+def frame_step_many(jobs: Sequence[tuple[object, ...]], threads: int) -> list[_FrameStep]:
+    """frame_step() for several targets in one call, on up to `threads` threads."""
 
 def numpy_choice_sorted(rng: np.random.Generator, n: int, k: int) -> list[int]:
     """sorted(rng.choice(n, k, replace=False)), drawn as numpy draws it."""

@@ -6,10 +6,11 @@ the same frame with the same box. What the targets share is the per-frame work t
 depend on the target: the frame is checked and converted once; one integral image is built over
 the union of the targets' search regions when that covers fewer pixels than their separate
 regions (many or close targets: up to the whole frame), and every target reads it, with the
-same result as its own table; and the targets' calls into the compiled core are made together,
-one call per step of the frame for all targets, which spreads them over ``threads`` threads with
-the GIL released once (:func:`wmiltrack.engine.tracker.update_many`): the Python part of each
-target's step runs in the calling thread, the core's part in parallel.
+same result as its own table; and the targets' calls into the compiled core are made together
+(for a paper preset one call a frame for all targets, else one per step of the frame), which
+spreads them over ``threads`` threads with the GIL released
+(:func:`wmiltrack.engine.tracker.update_many`): the Python part of each target's step runs in
+the calling thread, the core's part in parallel.
 """
 
 from __future__ import annotations

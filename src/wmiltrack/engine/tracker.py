@@ -60,9 +60,9 @@ _LEARN_KEYS = ("lam", "first_pos", "first_neg", "direct_first", "mil", "sigma_fl
 
 Steps = Generator[tuple[Any, ...], Any, Any]
 """A frame step written as a generator: it yields requests for the core (:class:`_Search`,
-:class:`_Learn`, or for one tracker alone a fused :class:`_Step`) and receives their results,
-so that one tracker runs them one by one (:func:`_drive`) and :func:`update_many` runs those
-of many trackers in parallel."""
+:class:`_Learn`, or a fused :class:`_Step`) and receives their results, so that one tracker
+runs them one by one (:func:`_drive`) and :func:`update_many` runs those of many trackers in
+parallel."""
 
 
 def _run(request: tuple[Any, ...]) -> Any:
@@ -395,8 +395,9 @@ class Tracker:
                       self._box, stages, wh, img if direct else None,
                       roi if direct else None, cue)
             # A paper preset's search, bags and learning in one core call (then nothing below
-            # learns: such a preset always passes the gates).
-            fused = fuse and direct and self._plain
+            # learns: such a preset always passes the gates), on its own integral image or on
+            # the shared one.
+            fused = fuse and self._plain and (direct or shared)
             if fused:
                 raw = yield from self._fused_step(search, stages)
             else:
@@ -837,9 +838,10 @@ def update_many(trackers: list[Tracker], frame: np.ndarray, *,
     """:meth:`Tracker.update` of several trackers on one frame, their core work in parallel.
 
     Every tracker runs its own frame step, unchanged (the same boxes as ``update``), but the
-    requests they make to the core at the same point of the step (integral image and search,
-    then the learning step) go to the core together and run on up to ``threads`` threads with
-    the GIL released once, instead of once per tracker and call. ``integral``: as for
+    requests they make to the core at the same point of the step (a paper preset's whole step;
+    for the others the integral image and search, then the learning step) go to the core
+    together and run on up to ``threads`` threads with the GIL released, instead of once per
+    tracker and call. ``integral``: as for
     :meth:`Tracker.update`, a luma table of this frame the trackers may borrow. Returns, in
     order, each tracker's :class:`TrackResult` or the ``ValueError``/``TypeError`` its update
     raised (the others are not affected); a tracker in use by another thread gets a
@@ -872,19 +874,16 @@ def update_many(trackers: list[Tracker], frame: np.ndarray, *,
             except NotInitializedError as exc:
                 out[i] = exc
                 continue
-            advance(i, t._update_steps(img, integral), None, first=True)
+            advance(i, t._update_steps(img, integral, fuse=True), None, first=True)
         while active:
             order = list(active)
-            searches = [i for i in order if isinstance(active[i][1], _Search)]
-            learns = [i for i in order if isinstance(active[i][1], _Learn)]
             results: dict[int, Any] = {}
-            if searches:
-                found = _core.search_many([active[i][1] for i in searches], threads)
-                results.update(zip(searches, found))
-            if learns:
-                jobs = [tuple(active[i][1]) for i in learns]
-                learnt = _core.learn_many(jobs, threads)
-                results.update(zip(learns, learnt))
+            for kind, run_many in ((_Step, _core.frame_step_many), (_Search, _core.search_many),
+                                   (_Learn, _core.learn_many)):
+                batch = [i for i in order if isinstance(active[i][1], kind)]
+                if batch:
+                    results.update(zip(batch, run_many([tuple(active[i][1]) for i in batch],
+                                                       threads)))
             for i in order:
                 advance(i, active[i][0], results[i])
     finally:
