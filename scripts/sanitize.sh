@@ -123,7 +123,7 @@ sys.path.insert(1, os.environ["WMILTRACK_TESTS"])
 import wmiltrack._core
 assert wmiltrack._core.__file__.startswith(os.environ["WMILTRACK_SANITIZED_SITE"])
 import test_core_hardening as h
-for name in ("SHARED_SCRIPT", "MUTATE_SCRIPT"):
+for name in ("SHARED_SCRIPT", "MUTATE_SCRIPT", "MULTI_SCRIPT"):
     try:
         exec(compile(getattr(h, name), name, "exec"), {"__name__": "__main__"})
     except SystemExit as e:

@@ -292,6 +292,39 @@ def test_project_reads_each_coordinate_once() -> None:
     assert "wrong 0" in r.stdout
 
 
+# ---------------------------------------------------------------- many targets on two threads
+# Run by scripts/sanitize.sh under ThreadSanitizer too: the targets' frame steps (search, draws
+# from each target's generator, learning) run on two threads in one core call.
+MULTI_SCRIPT = """
+import sys
+import numpy as np
+import wmiltrack
+rng = np.random.default_rng(1)
+frames = [rng.integers(0, 256, (240, 320, 3), dtype=np.uint8) for _ in range(6)]
+boxes = [(20, 20, 30, 30), (150, 100, 30, 30), (260, 180, 30, 30), (100, 150, 24, 40)]
+singles = []
+for i, b in enumerate(boxes):
+    t = wmiltrack.Tracker("rcwmil", seed=3 + i)
+    t.init(frames[0], b)
+    singles.append([t.update(f) for f in frames[1:]])
+for share in ("never", "always"):
+    mt = wmiltrack.MultiTracker("rcwmil", seed=3, threads=2, share=share)
+    for b in boxes:
+        mt.add(frames[0], b)
+    for k, f in enumerate(frames[1:]):
+        found = mt.update(f)
+        if [found[i] for i in range(len(boxes))] != [s[k] for s in singles]:
+            sys.exit(f"share={share}: frame {k + 1} differs from the single trackers")
+print("multi: same boxes")
+"""
+
+
+def test_multi_tracker_on_two_threads_matches_single_trackers() -> None:
+    r = run_script(MULTI_SCRIPT)
+    assert r.returncode == 0, f"rc={r.returncode}\n{r.stdout}\n{r.stderr[-2000:]}"
+    assert "same boxes" in r.stdout
+
+
 # ---------------------------------------------------------------- Tracker across threads
 def test_tracker_refuses_concurrent_use() -> None:
     seq = make_preset("easy", seed=0, n_frames=3)
