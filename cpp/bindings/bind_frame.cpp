@@ -153,6 +153,38 @@ struct LearnJob {
   py::object selected = py::none(), h = py::none();
   std::int32_t* sel_ptr = nullptr;
   double* h_ptr = nullptr;
+  // A frame step's learning job takes its boxes from the bags drawn in the same call, without
+  // the GIL (take_bags): their weights, and the log ratios when asked, live here meanwhile.
+  std::vector<double> bag_w_pos;
+  std::unique_ptr<std::vector<double>> bag_h;
+
+  // The bags drawn where the search landed on `ii` (computed by then): the boxes, the
+  // positives' weights, and WMIL dropped when no positive fits in the frame.
+  void take_bags(const Bags& bags, const SharedIntegralImage& ii) {
+    xs.values = bags.xs;
+    ys.values = bags.ys;
+    xs.shape = ys.shape = {static_cast<py::ssize_t>(bags.xs.size())};
+    step.n_pos = bags.n_pos;
+    step.n_neg = static_cast<int>(bags.xs.size()) - bags.n_pos;
+    if (bags.n_pos == 0) {  // nothing to select from (nor ratios to return)
+      step.select = LearnSelect::kNone;
+      sel_ptr = nullptr;
+    } else if (step.select == LearnSelect::kWmil) {
+      bag_w_pos = bags.w_pos;
+      step.w_pos = bag_w_pos.data();
+    } else if (step.select == LearnSelect::kRatios) {
+      bag_h = std::make_unique<std::vector<double>>(
+          static_cast<std::size_t>(bank->size()) *
+          static_cast<std::size_t>(static_cast<int>(bags.xs.size()) + step.n_extra));
+      h_ptr = bag_h->data();
+    }
+    table = ii.snapshot();
+    if (!table) throw std::invalid_argument("the integral image has not been computed");
+    if (bank->planes_needed() > table->num_channels()) {
+      throw std::invalid_argument("the feature bank sums over more planes than the integral image has");
+    }
+  }
+
   void run() {
     step.xs = xs.data();
     step.ys = ys.data();
@@ -173,14 +205,19 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
                     bool first_pos, bool first_neg, bool direct_first, bool mil,
                     double sigma_floor, double guard, const std::string& select,
                     const py::object& w_pos_obj, int k, bool code_gradient,
-                    const py::object& extra_neg, const py::object& second) {
+                    const py::object& extra_neg, const py::object& second,
+                    bool bags_later = false) {
   LearnJob job;
-  job.xs = int32_array(xs_obj, "xs");
-  job.ys = int32_array(ys_obj, "ys");
+  if (bags_later) {
+    job.xs.shape = job.ys.shape = {0};
+  } else {
+    job.xs = int32_array(xs_obj, "xs");
+    job.ys = int32_array(ys_obj, "ys");
+  }
   require(job.xs.ndim() == 1 && job.ys.ndim() == 1 && job.xs.size() == job.ys.size(),
           "xs and ys must be 1-D of one length");
   const int B = static_cast<int>(job.xs.size());
-  require(n_pos >= 0 && n_pos <= B, "n_pos must be in 0..len(xs)");
+  require(bags_later || (n_pos >= 0 && n_pos <= B), "n_pos must be in 0..len(xs)");
   const py::ssize_t M = bank.size();
   for (const auto* a : {&mu1, &sigma1, &mu0, &sigma0}) {
     require(a->ndim() == 1 && a->shape(0) == M,
@@ -200,11 +237,13 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
     step.select = LearnSelect::kNone;
   } else if (select == "wmil") {
     step.select = LearnSelect::kWmil;
-    job.w_pos = CArray<double>::ensure(w_pos_obj);
-    require(job.w_pos && job.w_pos.ndim() == 1 && job.w_pos.shape(0) == n_pos && n_pos > 0,
-            "w_pos must hold one weight per positive");
+    if (!bags_later) {
+      job.w_pos = CArray<double>::ensure(w_pos_obj);
+      require(job.w_pos && job.w_pos.ndim() == 1 && job.w_pos.shape(0) == n_pos && n_pos > 0,
+              "w_pos must hold one weight per positive");
+      step.w_pos = job.w_pos.data();
+    }
     require(k >= 1 && k <= M, "k must be in 1.." + std::to_string(M));
-    step.w_pos = job.w_pos.data();
     step.k = k;
     step.code_gradient = code_gradient;
   } else if (select == "ratios") {
@@ -232,8 +271,10 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
     step.second_rule.lam = lam2;
     step.second_rule.first = first2;
   }
-  job.table = computed_table(shared);
-  require_planes(*job.table, bank);
+  if (!bags_later) {  // else take_bags reads it once the search has computed it
+    job.table = computed_table(shared);
+    require_planes(*job.table, bank);
+  }
   job.bank = &bank;
   // The model out: copies of the model in, updated in place by the core.
   const CArray<double>* in[4] = {&mu1, &sigma1, &mu0, &sigma0};
@@ -245,7 +286,7 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
     py::array_t<std::int32_t> s(k);
     job.sel_ptr = s.mutable_data();
     job.selected = s;
-  } else if (step.select == LearnSelect::kRatios) {
+  } else if (step.select == LearnSelect::kRatios && !bags_later) {
     CArray<double> hh({M, static_cast<py::ssize_t>(B + step.n_extra)});
     job.h_ptr = hh.mutable_data();
     job.h = hh;
@@ -253,14 +294,22 @@ LearnJob make_learn(const SharedIntegralImage& shared, const FeatureBank& bank,
   return job;
 }
 
-py::tuple learn_result(const LearnJob& job) {
+py::tuple learn_result(LearnJob& job) {
   py::object mu2 = py::none(), sigma2 = py::none();
   if (job.has_second) {
     mu2 = job.second[0];
     sigma2 = job.second[1];
   }
-  return py::make_tuple(job.model[0], job.model[1], job.model[2], job.model[3], job.selected,
-                        job.h, mu2, sigma2);
+  if (job.bag_h) {  // the log ratios of bags taken in the core: handed over without a copy
+    std::vector<double>* h = job.bag_h.release();
+    const py::capsule owner(h, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+    const py::ssize_t M = job.bank->size();
+    job.h = py::array_t<double>({M, static_cast<py::ssize_t>(h->size()) / std::max<py::ssize_t>(M, 1)},
+                                h->data(), owner);
+  }
+  const py::object selected = job.step.select == LearnSelect::kWmil ? job.selected : py::none();
+  return py::make_tuple(job.model[0], job.model[1], job.model[2], job.model[3], selected, job.h,
+                        mu2, sigma2);
 }
 
 using SearchArgs =
@@ -284,7 +333,8 @@ SearchJob make_search(const SearchArgs& a) {
                      std::get<10>(a), std::get<13>(a));
 }
 
-LearnJob make_learn(const LearnArgs& a) {
+// With bags_later, the boxes (xs, ys, n_pos, w_pos) are ignored: take_bags gives them.
+LearnJob make_learn(const LearnArgs& a, bool bags_later = false) {
   require(std::get<0>(a) != nullptr && std::get<1>(a) != nullptr,
           "every job needs an IntegralImage and a FeatureBank");
   return make_learn(*std::get<0>(a), *std::get<1>(a), std::get<2>(a), std::get<3>(a),
@@ -292,7 +342,7 @@ LearnJob make_learn(const LearnArgs& a) {
                     std::get<8>(a), std::get<9>(a), std::get<10>(a), std::get<11>(a),
                     std::get<12>(a), std::get<13>(a), std::get<14>(a), std::get<15>(a),
                     std::get<16>(a), std::get<17>(a), std::get<18>(a), std::get<19>(a),
-                    std::get<20>(a), std::get<21>(a));
+                    std::get<20>(a), std::get<21>(a), bags_later);
 }
 
 // ---- bag sampling -------------------------------------------------------------------------
@@ -381,7 +431,7 @@ py::list run_all(std::vector<Job>& jobs, int threads, Result result) {
                  [&jobs](int i) { jobs[static_cast<std::size_t>(i)].run(); });
   }
   py::list out;
-  for (const Job& job : jobs) out.append(result(job));
+  for (Job& job : jobs) out.append(result(job));
   return out;
 }
 
@@ -389,10 +439,11 @@ py::list run_all(std::vector<Job>& jobs, int threads, Result result) {
 
 using FrameStepArgs = std::tuple<SearchArgs, LearnArgs, py::tuple>;
 
-// frame_step() for several targets: each target's search and bag draws, then (the learning
-// jobs built from the bags, with the GIL) each target's learning, on up to `threads` threads
-// with the GIL released for both phases. Every job owns its integral image or reads a
-// computed one; every job draws from its own generator (their locks are held meanwhile).
+// frame_step() for several targets: each target's search, bag draws and learning in turn, the
+// targets on up to `threads` threads with the GIL released once (the learning jobs are built
+// before, and take their boxes from the draws in C++). Every job owns its integral image or
+// reads a computed one; every job draws from its own generator (their locks are held
+// meanwhile).
 py::list run_frame_steps(std::vector<FrameStepArgs>& args, int threads) {
   require_threads(threads);
   const std::size_t n = args.size();
@@ -419,6 +470,9 @@ py::list run_frame_steps(std::vector<FrameStepArgs>& args, int threads) {
                   " draw from the same generator");
     }
   }
+  std::vector<LearnJob> learns;  // their boxes come from the draws below
+  learns.reserve(n);
+  for (FrameStepArgs& a : args) learns.push_back(make_learn(std::get<1>(a), true));
   std::vector<std::unique_ptr<NumpyBits>> rngs;
   rngs.reserve(n);
   for (BagJob& job : bag_jobs) rngs.push_back(std::make_unique<NumpyBits>(job.rng));
@@ -437,39 +491,18 @@ py::list run_frame_steps(std::vector<FrameStepArgs>& args, int threads) {
         }
       }
       bags[i] = sample_bags(bag_jobs[i].spec, box, search.fw, search.fh, rngs[i]->bits());
+      learns[i].take_bags(bags[i], *search.ii);  // the table the search read
+      learns[i].run();
     });
   }
   rngs.clear();  // the generators' locks released (with the GIL)
-  // Each learning step's boxes and weights are the ones drawn here.
-  std::vector<LearnJob> learns;
-  std::vector<py::tuple> drawn;
-  learns.reserve(n);
-  drawn.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Bags& b = bags[i];
-    LearnArgs& learn_args = std::get<1>(args[i]);
-    py::array_t<std::int32_t> xs(static_cast<py::ssize_t>(b.xs.size()), b.xs.data());
-    py::array_t<std::int32_t> ys(static_cast<py::ssize_t>(b.ys.size()), b.ys.data());
-    std::get<2>(learn_args) = xs;
-    std::get<3>(learn_args) = ys;
-    std::get<4>(learn_args) = b.n_pos;
-    if (b.n_pos == 0) std::get<16>(learn_args) = "none";
-    std::get<17>(learn_args) = py::none();
-    if (std::get<16>(learn_args) == "wmil") {
-      std::get<17>(learn_args) =
-          py::array_t<double>(static_cast<py::ssize_t>(b.w_pos.size()), b.w_pos.data());
-    }
-    learns.push_back(make_learn(learn_args));  // on the table the search read
-    drawn.push_back(py::make_tuple(xs, ys, b.n_pos));
-  }
-  {
-    py::gil_scoped_release release;
-    parallel_for(static_cast<int>(n), threads,
-                 [&learns](int k) { learns[static_cast<std::size_t>(k)].run(); });
-  }
   py::list out;
   for (std::size_t i = 0; i < n; ++i) {
-    out.append(py::make_tuple(search_result(searches[i]), learn_result(learns[i]), drawn[i]));
+    const Bags& b = bags[i];
+    py::array_t<std::int32_t> xs(static_cast<py::ssize_t>(b.xs.size()), b.xs.data());
+    py::array_t<std::int32_t> ys(static_cast<py::ssize_t>(b.ys.size()), b.ys.data());
+    out.append(py::make_tuple(search_result(searches[i]), learn_result(learns[i]),
+                              py::make_tuple(xs, ys, b.n_pos)));
   }
   return out;
 }
@@ -590,10 +623,10 @@ void bind_frame(py::module_& m) {
       [](std::vector<FrameStepArgs> jobs, int threads) { return run_frame_steps(jobs, threads); },
       py::arg("jobs"), py::arg("threads"),
       "frame_step() for several targets in one call, on up to `threads` threads with the GIL\n"
-      "released: each job is the tuple (search, learn, bags) of frame_step()'s arguments. The\n"
-      "searches and draws of all jobs run first, then their learning steps. Jobs must not share\n"
-      "a generator, nor an IntegralImage that one of them computes (ValueError). Returns the\n"
-      "results in order; the first error is raised after all jobs ran.");
+      "released once: each job is the tuple (search, learn, bags) of frame_step()'s arguments.\n"
+      "Jobs must not share a generator, nor an IntegralImage that one of them computes\n"
+      "(ValueError). Returns the results in order; the first error is raised after all jobs\n"
+      "ran.");
 
   m.def(
       "numpy_choice_sorted",
