@@ -181,7 +181,8 @@ struct LearnJob {
     table = ii.snapshot();
     if (!table) throw std::invalid_argument("the integral image has not been computed");
     if (bank->planes_needed() > table->num_channels()) {
-      throw std::invalid_argument("the feature bank sums over more planes than the integral image has");
+      throw std::invalid_argument(
+          "the feature bank sums over more planes than the integral image has");
     }
   }
 
@@ -301,11 +302,11 @@ py::tuple learn_result(LearnJob& job) {
     sigma2 = job.second[1];
   }
   if (job.bag_h) {  // the log ratios of bags taken in the core: handed over without a copy
-    std::vector<double>* h = job.bag_h.release();
+    std::vector<double>* h = job.bag_h.get();
     const py::capsule owner(h, [](void* p) { delete static_cast<std::vector<double>*>(p); });
-    const py::ssize_t M = job.bank->size();
-    job.h = py::array_t<double>({M, static_cast<py::ssize_t>(h->size()) / std::max<py::ssize_t>(M, 1)},
-                                h->data(), owner);
+    job.bag_h.release();  // the capsule owns it now
+    const py::ssize_t M = std::max<py::ssize_t>(job.bank->size(), 1);
+    job.h = py::array_t<double>({M, static_cast<py::ssize_t>(h->size()) / M}, h->data(), owner);
   }
   const py::object selected = job.step.select == LearnSelect::kWmil ? job.selected : py::none();
   return py::make_tuple(job.model[0], job.model[1], job.model[2], job.model[3], selected, job.h,
