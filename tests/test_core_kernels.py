@@ -389,6 +389,15 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     with pytest.raises(ValueError, match="threads"):
         _core.frame_step_many(jobs, 0)
     assert _core.frame_step_many([], 2) == []
+    # A job that fails inside the parallel part (its region misses the frame) raises after the
+    # others ran, and every generator's lock is released.
+    jobs, rngs = steps(30)
+    jobs[1] = (jobs[1][0][:12] + ((500, 500, 10, 10), None), *jobs[1][1:])
+    with pytest.raises(ValueError, match="does not meet the frame"):
+        _core.frame_step_many(jobs, 2)
+    for r in rngs:
+        assert r.bit_generator.lock.acquire(blocking=False)
+        r.bit_generator.lock.release()
 
 
 @pytest.mark.parametrize("seed", range(40))
