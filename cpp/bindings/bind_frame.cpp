@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "common.hpp"
@@ -159,23 +160,25 @@ struct LearnJob {
   std::unique_ptr<std::vector<double>> bag_h;
 
   // The bags drawn where the search landed on `ii` (computed by then): the boxes, the
-  // positives' weights, and WMIL dropped when no positive fits in the frame.
-  void take_bags(const Bags& bags, const SharedIntegralImage& ii) {
-    xs.values = bags.xs;
-    ys.values = bags.ys;
-    xs.shape = ys.shape = {static_cast<py::ssize_t>(bags.xs.size())};
+  // positives' weights, and WMIL dropped when no positive fits in the frame. The job keeps
+  // them (xs, ys, step.n_pos), and the caller hands them back from there.
+  void take_bags(Bags&& bags, const SharedIntegralImage& ii) {
+    const int n_boxes = static_cast<int>(bags.xs.size());
+    xs.values = std::move(bags.xs);
+    ys.values = std::move(bags.ys);
+    xs.shape = ys.shape = {static_cast<py::ssize_t>(n_boxes)};
     step.n_pos = bags.n_pos;
-    step.n_neg = static_cast<int>(bags.xs.size()) - bags.n_pos;
+    step.n_neg = n_boxes - bags.n_pos;
     if (bags.n_pos == 0) {  // nothing to select from (nor ratios to return)
       step.select = LearnSelect::kNone;
       sel_ptr = nullptr;
     } else if (step.select == LearnSelect::kWmil) {
-      bag_w_pos = bags.w_pos;
+      bag_w_pos = std::move(bags.w_pos);
       step.w_pos = bag_w_pos.data();
     } else if (step.select == LearnSelect::kRatios) {
       bag_h = std::make_unique<std::vector<double>>(
           static_cast<std::size_t>(bank->size()) *
-          static_cast<std::size_t>(static_cast<int>(bags.xs.size()) + step.n_extra));
+          static_cast<std::size_t>(n_boxes + step.n_extra));
       h_ptr = bag_h->data();
     }
     table = ii.snapshot();
@@ -477,7 +480,6 @@ py::list run_frame_steps(std::vector<FrameStepArgs>& args, int threads) {
   std::vector<std::unique_ptr<NumpyBits>> rngs;
   rngs.reserve(n);
   for (BagJob& job : bag_jobs) rngs.push_back(std::make_unique<NumpyBits>(job.rng));
-  std::vector<Bags> bags(n);
   {
     py::gil_scoped_release release;
     parallel_for(static_cast<int>(n), threads, [&](int k) {
@@ -491,19 +493,19 @@ py::list run_frame_steps(std::vector<FrameStepArgs>& args, int threads) {
           box.y += r.dy;
         }
       }
-      bags[i] = sample_bags(bag_jobs[i].spec, box, search.fw, search.fh, rngs[i]->bits());
-      learns[i].take_bags(bags[i], *search.ii);  // the table the search read
+      Bags bags = sample_bags(bag_jobs[i].spec, box, search.fw, search.fh, rngs[i]->bits());
+      learns[i].take_bags(std::move(bags), *search.ii);  // on the table the search read
       learns[i].run();
     });
   }
   rngs.clear();  // the generators' locks released (with the GIL)
   py::list out;
   for (std::size_t i = 0; i < n; ++i) {
-    const Bags& b = bags[i];
-    py::array_t<std::int32_t> xs(static_cast<py::ssize_t>(b.xs.size()), b.xs.data());
-    py::array_t<std::int32_t> ys(static_cast<py::ssize_t>(b.ys.size()), b.ys.data());
+    const LearnJob& learn = learns[i];
+    py::array_t<std::int32_t> xs(learn.xs.size(), learn.xs.data());
+    py::array_t<std::int32_t> ys(learn.ys.size(), learn.ys.data());
     out.append(py::make_tuple(search_result(searches[i]), learn_result(learns[i]),
-                              py::make_tuple(xs, ys, b.n_pos)));
+                              py::make_tuple(xs, ys, learn.step.n_pos)));
   }
   return out;
 }

@@ -343,7 +343,7 @@ class Tracker:
         """
         self._require_init()
         img = as_frame(frame)
-        result: TrackResult = _drive(self._update_steps(img, integral, fuse=True))
+        result: TrackResult = _drive(self._update_steps(img, integral))
         return result
 
     def _check_frame(self, img: np.ndarray) -> None:
@@ -354,13 +354,12 @@ class Tracker:
                 "call init() to restart on frames of the new size"
             )
 
-    def _update_steps(self, img: np.ndarray, integral: _core.IntegralImage | None,
-                      fuse: bool = False) -> Steps:
+    def _update_steps(self, img: np.ndarray, integral: _core.IntegralImage | None) -> Steps:
         """:meth:`update` on a checked frame, as a generator of core requests (see ``Steps``).
 
-        With ``fuse``, a paper preset makes one request for the whole step
-        (:meth:`_fused_step`): the same random draws in the same order, so the same boxes,
-        with one crossing into the core."""
+        A paper preset makes one request for the whole step (:meth:`_fused_step`): the same
+        random draws in the same order as the separate requests, so the same boxes, with one
+        crossing into the core."""
         self._check_frame(img)
         wh = self._frame_wh
         p = self._params
@@ -397,7 +396,7 @@ class Tracker:
             # A paper preset's search, bags and learning in one core call (then nothing below
             # learns: such a preset always passes the gates), on its own integral image or on
             # the shared one.
-            fused = fuse and self._plain and (direct or shared)
+            fused = self._plain and (direct or shared)
             if fused:
                 raw = yield from self._fused_step(search, stages)
             else:
@@ -415,14 +414,13 @@ class Tracker:
             signal = report if p.lost_signal == "score" else score
             tracked = signal >= p.lost_threshold
             k = max(len(self._selected), 1)
-            if fused:
-                pass
-            elif signal >= p.gate_threshold and self._level_ok(raw / k):
-                slow = not tracked and p.gate_learning_rate is not None
-                yield from self._learn_steps(self._track, p.gate_learning_rate if slow else None)
-            else:
-                empty = np.zeros((0, 2), dtype=np.int32)
-                self._bags = (empty, empty)
+            if not fused:  # (the fused step has learnt already)
+                if signal >= p.gate_threshold and self._level_ok(raw / k):
+                    slow = not tracked and p.gate_learning_rate is not None
+                    yield from self._learn_steps(self._track,
+                                                 p.gate_learning_rate if slow else None)
+                else:
+                    self._bags = (_NO_CORNERS, _NO_CORNERS)
             self._score = report
             if self._colour is not None:
                 self._colour.learn(img, self._box)
@@ -841,11 +839,10 @@ def update_many(trackers: list[Tracker], frame: np.ndarray, *,
     requests they make to the core at the same point of the step (a paper preset's whole step;
     for the others the integral image and search, then the learning step) go to the core
     together and run on up to ``threads`` threads with the GIL released, instead of once per
-    tracker and call. ``integral``: as for
-    :meth:`Tracker.update`, a luma table of this frame the trackers may borrow. Returns, in
-    order, each tracker's :class:`TrackResult` or the ``ValueError``/``TypeError`` its update
-    raised (the others are not affected); a tracker in use by another thread gets a
-    ``RuntimeError``.
+    tracker and call. ``integral``: as for :meth:`Tracker.update`, a luma table of this frame
+    the trackers may borrow. Returns, in order, each tracker's :class:`TrackResult` or the
+    ``ValueError``/``TypeError`` its update raised (the others are not affected); a tracker in
+    use by another thread gets a ``RuntimeError``.
     """
     img = as_frame(frame)
     out: list[TrackResult | Exception | None] = [None] * len(trackers)
@@ -874,7 +871,7 @@ def update_many(trackers: list[Tracker], frame: np.ndarray, *,
             except NotInitializedError as exc:
                 out[i] = exc
                 continue
-            advance(i, t._update_steps(img, integral, fuse=True), None, first=True)
+            advance(i, t._update_steps(img, integral), None, first=True)
         while active:
             order = list(active)
             results: dict[int, Any] = {}
