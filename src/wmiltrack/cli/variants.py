@@ -58,10 +58,6 @@ def variant_table() -> str:
                 parts.append(f"score colour {p.score_colour:g}{first}")
             if p.score_luma > 0:
                 parts.append(f"score luma {p.score_luma:g} (first frame)")
-            if p.gate_threshold > 0 or p.gate_drop > 0:
-                parts.append("gated update")
-            if p.recovery_radius:
-                parts.append(f"recovery {p.recovery_radius}/{p.recovery_step}")
             return ", ".join(parts) or "-"
         if key == "search":
             s = f"{p.coarse_radius}/{p.coarse_step}"

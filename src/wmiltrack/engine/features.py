@@ -15,15 +15,11 @@ from .. import _core
 from .params import Params
 
 #: Channel names (``Params.channels``) and their ids in ``_core.IntegralImage.compute_channels``.
-CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "orient0": _core.CH_ORIENT0,
-               "orient1": _core.CH_ORIENT1, "orient2": _core.CH_ORIENT2,
-               "orient3": _core.CH_ORIENT3, "opp_rg": _core.CH_OPP_RG, "opp_yb": _core.CH_OPP_YB,
-               "logluma": _core.CH_LOGLUMA, "grad_x": _core.CH_GRAD_X,
-               "grad_y": _core.CH_GRAD_Y}
+CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "opp_rg": _core.CH_OPP_RG,
+               "opp_yb": _core.CH_OPP_YB}
 #: Gradient channels: their values sit on edges, so a rectangle's sum grows with the edges'
 #: length (see :func:`scale_bank`).
-EDGE_CHANNELS = frozenset({"grad", "orient0", "orient1", "orient2", "orient3", "grad_x",
-                           "grad_y"})
+EDGE_CHANNELS = frozenset({"grad"})
 #: Channels that need a colour (3- or 4-channel) frame.
 COLOUR_CHANNELS = frozenset({"opp_rg", "opp_yb"})
 
@@ -178,8 +174,7 @@ def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int,
     stays a signed sum of mean intensities, so the learnt Gaussians remain valid at every
     scale (and raw-sum features keep their expected value).
 
-    ``edge`` (one bool per rectangle) marks rectangles on gradient channels (``grad``,
-    ``orient0..3``). Their sums count edge pixels: when the target appears ``s`` times
+    ``edge`` (one bool per rectangle) marks rectangles on the gradient channel (``grad``). Their sums count edge pixels: when the target appears ``s`` times
     larger, its edges are ``s`` times longer but no stronger (the gradient summed across
     an edge is its contrast), so a rectangle's sum grows as ``s``, not ``s^2``. Their
     weights are multiplied by ``sqrt(old area / new area)`` instead, which keeps the
@@ -204,51 +199,3 @@ def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int,
         ratio = np.where(edge, np.sqrt(ratio), ratio)
     weights = base.weights * ratio
     return BankArrays(starts=base.starts, rects=rects, weights=weights, subregion=base.subregion)
-
-
-def zero_dc_bank(params: Params, base: BankArrays, w: int, h: int,
-                 which: np.ndarray | None = None) -> BankArrays:
-    """``base`` (drawn for a ``w x h`` box) with every feature made blind to an added constant.
-
-    A feature is ``sum_r weight_r * sum_r``; a constant ``c`` added to every pixel adds
-    ``c * sum_r weight_r * area_r`` to it. Each feature whose ``sum_r weight_r * area_r = S``
-    is not zero gets one more rectangle, over its reference region (``Params.zero_dc``:
-    the whole box, or the feature's grid sub-region), with weight ``-S / area``: the feature
-    becomes its rectangles' means minus ``S`` times the region's mean, and the constant
-    cancels. An area-normalised feature stays a signed sum of mean intensities, so
-    :func:`scale_bank` keeps the balance at every scale (each weight times its area is
-    kept). ``which`` (one bool per feature): only these features (default all).
-    ``zero_dc="none"`` returns ``base``.
-    """
-    if params.zero_dc == "none":
-        return base
-    m = base.size
-    grid = (params.zero_dc == "subregion" and params.feature_kind == "subregion"
-            and params.subregion_mode == "grid")
-    cells: list[tuple[int, int, int, int]] = []
-    if grid:
-        side = math.isqrt(params.num_subregions)
-        xs = [w * i // side for i in range(side + 1)]
-        ys = [h * i // side for i in range(side + 1)]
-        cells = [(xs[i], ys[j], xs[i + 1] - xs[i], ys[j + 1] - ys[j])
-                 for j in range(side) for i in range(side)]
-    areas = base.rects[:, 2].astype(np.float64) * base.rects[:, 3]
-    dc = np.add.reduceat(base.weights * areas, base.starts[:-1]) if base.rects.size else np.zeros(m)
-    rects: list[np.ndarray] = []
-    weights: list[np.ndarray] = []
-    starts = np.zeros(m + 1, dtype=np.int32)
-    for f in range(m):
-        a, b = int(base.starts[f]), int(base.starts[f + 1])
-        rects.append(base.rects[a:b])
-        weights.append(base.weights[a:b])
-        n = b - a
-        scale = max(1.0, float(np.abs(base.weights[a:b] * areas[a:b]).sum()))
-        if (which is None or which[f]) and abs(dc[f]) > 1e-12 * scale:
-            sub = int(base.subregion[f])
-            ref = cells[sub % len(cells)] if grid and sub >= 0 else (0, 0, w, h)
-            rects.append(np.array([ref], dtype=np.int32))
-            weights.append(np.array([-dc[f] / (ref[2] * ref[3])]))
-            n += 1
-        starts[f + 1] = starts[f] + n
-    return BankArrays(starts=starts, rects=np.concatenate(rects).astype(np.int32),
-                      weights=np.concatenate(weights), subregion=base.subregion)

@@ -1,0 +1,262 @@
+"""The appearance model: a Haar feature bank, online Gaussian weak classifiers and the choice of
+the strong classifier's features. This is what the six paper presets differ in.
+
+One frame's work for it: an integral image of the target's neighbourhood (C++), the coarse
+and fine candidate scoring (C++), the positive and negative bags around the new box (Python
+or C++), their feature values, the Gaussian update and the feature selection (C++). A preset
+made of nothing but this model runs all of that in one call to the core
+(:meth:`HaarAppearance.fused_step`).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .. import _core
+from .classifier import GaussianPool
+from .features import (
+    CHANNEL_IDS,
+    EDGE_CHANNELS,
+    BankArrays,
+    available_channels,
+    check_box_size,
+    make_bank,
+    rect_planes,
+    scale_bank,
+)
+from .frames import IntBox
+from .requests import Learn, Search, Step, Steps
+from .sampling import BagSampler, core_draws_match_numpy
+from .selection import milboost_select
+
+if TYPE_CHECKING:
+    from .params import Params
+
+__all__ = ["HaarAppearance", "roi_around"]
+
+_NO_CORNERS = np.zeros((0, 2), dtype=np.int32)  # a learning request whose boxes the core samples
+_NO_CORNERS.setflags(write=False)
+
+
+def roi_around(box: IntBox, margin: int) -> IntBox:
+    """The integral image's region around ``box``: ``margin`` pixels and one more."""
+    x, y, w, h = box
+    m = margin + 1
+    return x - m, y - m, w + 2 * m, h + 2 * m
+
+
+class HaarAppearance:
+    """Haar features, their Gaussian weak classifiers and the selected strong classifier.
+
+    Built by :meth:`start` on a tracker's first frame from its seed: the feature bank (and,
+    with ``Params.channels``, each feature's image channel) is drawn from the tracker's own
+    generator, which then draws every frame's negatives, so the same seed and frames give the
+    same boxes.
+    """
+
+    def __init__(self, params: Params, seed: int) -> None:
+        self.params = params
+        self.seed = seed
+        self.ii = _core.IntegralImage()
+        self.first = BagSampler(params, first_frame=True)
+        self.track = BagSampler(params)
+        self.bags: tuple[Any, ...] = ()
+        self.chan_names: tuple[str, ...] | None = None
+
+    # -- state -----------------------------------------------------------------------------
+    def start(self, img: np.ndarray, box: IntBox) -> None:
+        """Draw the feature bank for ``box`` and start untrained classifiers (the first frame's
+        learning is the tracker's next step)."""
+        p = self.params
+        w, h = box[2], box[3]
+        check_box_size(p, w, h)
+        self.rng = np.random.default_rng(self.seed)
+        self.bank_arrays: BankArrays = make_bank(p, w, h, self.rng)
+        # Channels: each feature on one channel, drawn from its own stream; the integral image
+        # holds one plane per channel and each rectangle reads its feature's.
+        self.chan_names = None
+        self.chan_ids: list[int] = []
+        self.rect_planes: np.ndarray | None = None
+        self.edge_rects: np.ndarray | None = None
+        if p.channels:
+            names = available_channels(p.channels, img)
+            chan_rng = np.random.default_rng([self.seed, 1])
+            self.feature_channel = chan_rng.integers(0, len(names), size=self.bank_arrays.size)
+            self.chan_names = names
+            self.chan_ids = [CHANNEL_IDS[c] for c in names]
+            self.rect_planes = rect_planes(self.bank_arrays, self.feature_channel)
+            edge_plane = np.array([c in EDGE_CHANNELS for c in names], dtype=bool)
+            self.edge_rects = edge_plane[self.rect_planes]
+        self.base_wh = (w, h)
+        self._banks: dict[tuple[int, int], _core.FeatureBank] = {
+            (w, h): self._core_bank(self.bank_arrays)}
+        self.pool = GaussianPool(p)
+        self.selected = np.arange(p.num_selected, dtype=np.int32)
+        self.bags = ()
+
+    @property
+    def k(self) -> int:
+        """How many features the strong classifier sums (at least 1)."""
+        return max(len(self.selected), 1)
+
+    @property
+    def can_fuse(self) -> bool:
+        """Whether a whole frame step can run as one core call (:meth:`fused_step`): luma
+        features only, and negatives the core draws exactly as numpy would."""
+        return (self.chan_names is None and core_draws_match_numpy()
+                and self.track.drawn_in_core())
+
+    @property
+    def reach(self) -> int:
+        """How far from the box the tracking bags reach."""
+        return self.track.reach
+
+    def bank(self, w: int, h: int) -> _core.FeatureBank:
+        """The feature bank stretched to a ``w x h`` box (cached)."""
+        bank = self._banks.get((w, h))
+        if bank is None:
+            arrays = scale_bank(self.bank_arrays, self.base_wh[0], self.base_wh[1], w, h,
+                                self.edge_rects)
+            bank = self._banks[(w, h)] = self._core_bank(arrays)
+        return bank
+
+    def _core_bank(self, arrays: BankArrays) -> _core.FeatureBank:
+        return _core.FeatureBank(arrays.starts, arrays.rects, arrays.weights,
+                                 channels=self.rect_planes)
+
+    # -- the integral image ------------------------------------------------------------------
+    def compute_integral(self, img: np.ndarray, box: IntBox, margin: int) -> None:
+        """The integral image of ``box`` and ``margin`` pixels around it (every channel)."""
+        roi = roi_around(box, margin)
+        if self.chan_names is not None:
+            if img.ndim == 2 or img.shape[2] == 1:
+                if available_channels(self.chan_names, img) != self.chan_names:
+                    raise ValueError("this tracker was started on a colour frame and uses colour "
+                                     "channels; call init() to restart on gray frames")
+            self.ii.compute_channels(img, roi, self.chan_ids)
+        else:
+            self.ii.compute(img, roi)
+
+    def covered_by(self, ii: _core.IntegralImage, roi: IntBox, frame_wh: tuple[int, int]) -> bool:
+        """Whether this model can read the luma integral image ``ii`` for ``roi`` clipped to
+        a ``frame_wh`` frame (it uses no other channel and ``ii`` holds the region)."""
+        if self.chan_names is not None:
+            return False
+        x, y, w, h = roi
+        x0, y0 = max(x, 0), max(y, 0)
+        x1, y1 = min(x + w, frame_wh[0]), min(y + h, frame_wh[1])
+        return (ii.num_channels == 1 and ii.channels == (_core.CH_LUMA,) and ii.x0 <= x0
+                and ii.y0 <= y0 and ii.x0 + ii.width >= x1 and ii.y0 + ii.height >= y1)
+
+    # -- search ------------------------------------------------------------------------------
+    def search_request(self, box: IntBox, stages: list[tuple[int, int]], frame_wh: tuple[int, int],
+                       img: np.ndarray | None, roi: IntBox | None, cue: tuple[Any, ...] | None
+                       ) -> Search:
+        """The core's coarse-to-fine search from ``box``; with ``img`` and ``roi`` the core
+        computes the luma integral image of ``roi`` first; ``cue`` is merged into each stage."""
+        pool = self.pool
+        return Search((self.ii, self.bank(box[2], box[3]), self.selected, pool.mu1, pool.sigma1,
+                       pool.mu0, pool.sigma0, self.params.guard, box, stages, frame_wh, img, roi,
+                       cue))
+
+    def grid(self, box: IntBox, radius: int, frame_wh: tuple[int, int]) -> tuple[int, int, float, int]:
+        """Best offset, its raw score and the candidate count of the step-1 grid of
+        ``radius`` around ``box`` (one search stage, at ``box``'s size)."""
+        pool = self.pool
+        ((dx, dy, score, n),) = _core.search(self.ii, self.bank(box[2], box[3]), self.selected,
+                                              pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
+                                              self.params.guard, box, [(radius, 1)], frame_wh)
+        return dx, dy, score, n
+
+    def project(self, w: int, h: int, corners: np.ndarray) -> np.ndarray:
+        """Feature values ``(M, n)`` of the ``w x h`` boxes with these top-left corners."""
+        values: np.ndarray = _core.project(self.ii, self.bank(w, h), corners[:, 0], corners[:, 1])
+        return values
+
+    def template_fit(self, box: IntBox, mu: np.ndarray, sigma: np.ndarray) -> float:
+        """Minus the mean log(1 + z^2) of all M features of ``box`` under ``N(mu, sigma)``."""
+        return float(_core.template_fit(self.ii, self.bank(box[2], box[3]), box[0], box[1], mu,
+                                        sigma))
+
+    # -- learning ----------------------------------------------------------------------------
+    def learn_steps(self, box: IntBox, frame_wh: tuple[int, int], sampler: BagSampler,
+                    extra: np.ndarray | None = None, n_extra: int = 0,
+                    second: tuple[Any, ...] | None = None) -> Steps:
+        """Sample the bags around ``box``, update the Gaussians and reselect the features, as
+        one core request (see :data:`~wmiltrack.engine.requests.Steps`). ``extra``: feature
+        values of ``n_extra`` more negatives; ``second``: another target model the core
+        updates from the same positives (``(mu, sigma, rate, first)``). Returns that model's
+        ``(mu, sigma)`` (None without one)."""
+        fw, fh = frame_wh
+        pos, dist = sampler.positives(box, fw, fh)
+        neg = sampler.negatives(box, fw, fh, self.rng)
+        self.bags = (pos, neg)
+        select = self._select_kind(pos.shape[0])
+        w = sampler.weights(dist, self.params.instance_weights) if select == "wmil" else None
+        request = self._learn_request(box, np.concatenate((pos, neg)), pos.shape[0], select, w,
+                                      extra, second)
+        learnt = yield request
+        self._take_learnt(learnt, pos.shape[0], neg.shape[0] + n_extra)
+        return learnt[6], learnt[7]
+
+    def skip_learning(self) -> None:
+        """Record that this frame was not learnt from (no bags)."""
+        self.bags = (_NO_CORNERS, _NO_CORNERS)
+
+    def fused_step(self, search: Search, frame_box: IntBox) -> Steps:
+        """The search, the bags and the learning as one core request: the core samples the
+        bags where the search lands (drawing the negatives from this model's generator
+        exactly as :class:`~wmiltrack.engine.sampling.BagSampler` would) and learns. The same
+        draws and state changes as a search then :meth:`learn_steps`; returns the search's
+        per-stage results."""
+        p = self.params
+        select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
+        weights = p.instance_weights if select == "wmil" else "none"
+        bags = (self.rng, *self.track.core_spec(weights))
+        request = self._learn_request(frame_box, _NO_CORNERS, 0, select, None, None, None)
+        results, learnt, (xs, ys, n_pos) = yield Step((search, request, bags))
+        self.bags = (xs, ys, n_pos)  # split by corners() when asked
+        self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos)
+        return results
+
+    def corners(self) -> tuple[np.ndarray, np.ndarray]:
+        """Top-left corners of the last positive and negative bags learnt from."""
+        if len(self.bags) == 3:  # (xs, ys, n_pos) from the core's frame step
+            xs, ys, n_pos = self.bags
+            corners = np.stack((xs, ys), axis=1)
+            self.bags = (corners[:n_pos], corners[n_pos:])
+        pos, neg = self.bags
+        return pos, neg
+
+    def _select_kind(self, n_pos: int) -> str:
+        """The learning step's ``select``: WMIL in the core, the log ratios for a MILBoost
+        selection here, or none (no selection, or no positive this frame)."""
+        p = self.params
+        if p.selection == "none" or n_pos == 0:
+            return "none"
+        return "wmil" if p.selection == "wmil" else "ratios"
+
+    def _learn_request(self, box: IntBox, corners: np.ndarray, n_pos: int, select: str,
+                       w: np.ndarray | None, extra: np.ndarray | None,
+                       second: tuple[Any, ...] | None) -> Learn:
+        """``_core.learn``'s arguments for the bags with these top-left ``corners`` (the
+        ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives) of ``box``'s size."""
+        p = self.params
+        pool = self.pool
+        return Learn((self.ii, self.bank(box[2], box[3]), corners[:, 0], corners[:, 1], n_pos,
+                      pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.learning_rate,
+                      pool.first(1), pool.first(0), p.first_update == "direct",
+                      p.classifier == "mil", p.sigma_floor, p.guard, select, w, p.num_selected,
+                      p.gradient == "code", extra, second))
+
+    def _take_learnt(self, learnt: tuple[Any, ...], n_pos: int, n_neg: int) -> None:
+        """Keep the model and the selection that a learning request returned."""
+        mu1, sigma1, mu0, sigma0, selected, h, _, _ = learnt
+        self.pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg > 0)
+        if selected is not None:
+            self.selected = selected
+        elif h is not None:
+            self.selected = milboost_select(h[:, :n_pos], h[:, n_pos:], self.params.num_selected,
+                                            guard=self.params.guard)

@@ -1,0 +1,84 @@
+"""Cues: other evidence about where the target is, merged into the translation search.
+
+A cue values every candidate box of a frame by the mean of a per-pixel map over the box (read
+from an integral image of the map in four loads, in the core's search). The search picks the
+candidate with the largest ``(1 - sum of weights) * classifier confidence + sum of weight *
+box mean``. After each frame the tracker tells every cue where the target was, so the cue can
+learn. A new cue is one class with the three members of :class:`Cue`; pass it to
+:class:`~wmiltrack.Tracker` as ``cues=[...]``.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import numpy.typing as npt
+
+from .colour import ColourModel, box_contrast
+from .frames import IntBox
+from .settings import ColourSettings
+
+__all__ = ["ColourCue", "Cue", "CueTable"]
+
+FloatArray = npt.NDArray[np.float64]
+
+CueTable = tuple[FloatArray, int, int]
+"""An integral image of a cue's per-pixel map over a frame region: ``(table, x0, y0)``, the table
+``(rows + 1) x (cols + 1)`` float64 with a zero first row and column, its pixel ``(0, 0)`` at
+frame position ``(x0, y0)``."""
+
+
+@runtime_checkable
+class Cue(Protocol):
+    """What the tracker asks of a cue."""
+
+    #: The cue's weight in the merged score, in [0, 1] (the weights of a tracker's cues add
+    #: up to at most 1).
+    weight: float
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """Learn from the first frame, where the target is ``box``."""
+
+    def table(self, frame: np.ndarray, region: tuple[int, int, int, int]) -> CueTable:
+        """The map's integral image over ``region = (x0, y0, x1, y1)`` clipped to the frame; every
+        candidate box of the search lies inside the clipped region."""
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        """Learn from a frame after the tracker placed the target at ``box``."""
+
+
+class ColourCue:
+    """``P(target | colour)`` from foreground and background colour histograms (Staple-style;
+    :class:`~wmiltrack.engine.colour.ColourModel`), or from luma histograms on a gray video with
+    ``gray_colour``."""
+
+    def __init__(self, settings: ColourSettings, *, intensity: bool) -> None:
+        self.weight = settings.colour_weight
+        self.model = ColourModel(learning_rate=settings.colour_learning_rate, intensity=intensity,
+                                 sample=settings.colour_sample)
+        self._table: CueTable | None = None
+
+    @staticmethod
+    def wanted(settings: ColourSettings, frame: np.ndarray) -> bool:
+        """Whether a tracker with these settings, started on ``frame``, has a colour cue."""
+        return settings.colour_weight > 0 and (settings.gray_colour or ColourModel.usable(frame))
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        self.model.learn(frame, box)
+
+    def table(self, frame: np.ndarray, region: tuple[int, int, int, int]) -> CueTable:
+        self._table = self.model.integral(frame, region)
+        return self._table
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        self._table = None
+        self.model.learn(frame, box)
+
+    def contrast(self, box: IntBox) -> float:
+        """The box's colour contrast (:func:`~wmiltrack.engine.colour.colour_contrast`) read
+        from this frame's search table (the box and its ring clipped to the table's region)."""
+        if self._table is None:
+            raise ValueError("no search table this frame: call table() first")
+        table, x0, y0 = self._table
+        return box_contrast(table, x0, y0, box)

@@ -1,0 +1,47 @@
+"""The motion model: where the next frame's search is centred. Without one, the search is centred
+on the last box (the paper)."""
+
+from __future__ import annotations
+
+import math
+
+from .frames import IntBox
+from .scale import centred
+from .settings import MotionSettings
+
+__all__ = ["VelocityMotion"]
+
+
+class VelocityMotion:
+    """A constant-velocity prediction of the box centre, smoothed exponentially and clipped to
+    ``motion_max`` pixels a frame; it resets to standing still whenever a frame is not
+    confidently tracked (a lost target's last moves say nothing about where it is)."""
+
+    def __init__(self, settings: MotionSettings) -> None:
+        self.settings = settings
+        self.velocity = (0.0, 0.0)
+        self._lost = False
+
+    def origin(self, box: IntBox) -> IntBox:
+        """Where to centre the search for a target last seen at ``box``."""
+        if self._lost:
+            return box
+        vx, vy = self.velocity
+        return centred(box, box[2], box[3], vx, vy)
+
+    def follow(self, previous: IntBox, box: IntBox, tracked: bool) -> None:
+        """Learn from a frame that moved the target from ``previous`` to ``box``."""
+        s = self.settings
+        self._lost = not tracked
+        if not tracked:
+            self.velocity = (0.0, 0.0)
+            return
+        mx = box[0] + box[2] / 2.0 - (previous[0] + previous[2] / 2.0)
+        my = box[1] + box[3] / 2.0 - (previous[1] + previous[3] / 2.0)
+        a = s.motion_smoothing
+        vx = a * self.velocity[0] + (1.0 - a) * mx
+        vy = a * self.velocity[1] + (1.0 - a) * my
+        speed = math.hypot(vx, vy)
+        if speed > s.motion_max:
+            vx, vy = vx * s.motion_max / speed, vy * s.motion_max / speed
+        self.velocity = (vx, vy)

@@ -1,0 +1,185 @@
+"""The scale estimator: after the translation search, the box at neighbouring scales competes with
+it. The Haar rectangles are stretched to each tried size (their weights rescaled by the areas),
+so no image pyramid is built and a scale costs what a translation candidate costs.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Callable
+
+import numpy as np
+
+from .classifier import GaussianPool
+from .features import box_area_ok, min_box_size
+from .frames import IntBox
+
+if TYPE_CHECKING:
+    from .appearance import HaarAppearance
+    from .params import Params
+
+__all__ = ["HaarScale", "centred"]
+
+
+def centred(box: IntBox, w: int, h: int, dx: float = 0.0, dy: float = 0.0) -> IntBox:
+    """A ``w x h`` box with the centre of ``box`` moved by ``(dx, dy)``."""
+    cx = box[0] + box[2] / 2.0 + dx
+    cy = box[1] + box[3] / 2.0 + dy
+    return int(math.floor(cx - w / 2.0 + 0.5)), int(math.floor(cy - h / 2.0 + 0.5)), w, h
+
+
+class HaarScale:
+    """Scale by the appearance model's own features (``Params.scale_*``).
+
+    The box is always the first box scaled by ``scale_factor ** index``. Scales are compared
+    by the strong classifier's mean log ratio, by a slow generative model of all M features
+    (its own target Gaussians, learnt with the appearance model's positives), or both; with a
+    colour cue, also by the box's colour contrast. Boxes at wrong scales can be learnt as
+    negatives.
+    """
+
+    def __init__(self, params: Params, base_wh: tuple[int, int], frame_wh: tuple[int, int]) -> None:
+        self.settings = params
+        self.base_wh = base_wh
+        self.frame_wh = frame_wh
+        self.index = 0
+        self.tried: list[IntBox] = []  # the boxes tried at other scales in the last frame
+        self.pool = (GaussianPool(params.replace(learning_rate=params.scale_learning_rate))
+                     if params.scale_model != "ratio" else None)
+
+    @property
+    def scale(self) -> float:
+        """The box size relative to the first box."""
+        return float(self.settings.scale_factor ** self.index)
+
+    def box_size(self, index: int) -> tuple[int, int]:
+        s = self.settings.scale_factor ** index
+        return max(1, round(self.base_wh[0] * s)), max(1, round(self.base_wh[1] * s))
+
+    def margin(self, box: IntBox) -> int:
+        """Extra integral-image margin for the largest box tried or learnt around ``box``."""
+        p = self.settings
+        w, h = self.box_size(self.index + max(p.scale_steps, p.scale_negatives) + p.scale_steps)
+        return (max(w - box[2], h - box[3]) + 1) // 2 + 1
+
+    def allowed(self, index: int) -> bool:
+        p = self.settings
+        s = p.scale_factor ** index
+        if not (p.scale_min - 1e-9 <= s <= p.scale_max + 1e-9):
+            return False
+        w, h = self.box_size(index)
+        mw, mh = min_box_size(p)
+        return mw <= w <= self.frame_wh[0] and mh <= h <= self.frame_wh[1] and box_area_ok(w, h)
+
+    # -- estimating ----------------------------------------------------------------------------
+    def search(self, model: HaarAppearance, box: IntBox, raw: float,
+               contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
+        """The box at the best scale around ``box`` (found with raw score ``raw``) and the
+        raw score to report. ``contrast``: the colour cue's box contrast, if any."""
+        self.tried = []
+        if self.settings.scale_model == "likelihood":
+            return self._by_likelihood(model, box), raw
+        return self._by_ratio(model, box, raw, contrast)
+
+    def _likelihood(self, model: HaarAppearance, box: IntBox) -> float:
+        pool = self.pool
+        assert pool is not None
+        return model.template_fit(box, pool.mu1, pool.sigma1)
+
+    def _by_ratio(self, model: HaarAppearance, box: IntBox, best: float,
+                  contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
+        """Try the other scales with the strong classifier; the chosen box and raw score."""
+        p = self.settings
+        k = model.k
+        mix = p.scale_mix if p.scale_model == "both" else 0.0
+        best_value = best / k
+        if mix:
+            best_value += mix * self._likelihood(model, box)
+        cw = p.scale_contrast if contrast is not None else 0.0
+        if cw:
+            assert contrast is not None
+            best_value += cw * contrast(box)
+        best_index, best_box = self.index, box
+        for j in range(-p.scale_steps, p.scale_steps + 1):
+            index = self.index + j
+            if j == 0 or not self.allowed(index):
+                continue
+            w, h = self.box_size(index)
+            candidate = centred(box, w, h)
+            self.tried.append(candidate)
+            dx, dy, score, n = model.grid(candidate, p.scale_radius, self.frame_wh)
+            if n == 0:
+                continue
+            moved = (candidate[0] + dx, candidate[1] + dy, w, h)
+            value = score / k - p.scale_penalty * abs(j)
+            if mix:
+                value += mix * self._likelihood(model, moved)
+            if cw:
+                assert contrast is not None
+                value += cw * contrast(moved)
+            if value > best_value:
+                best_value = value
+                best = score
+                best_index = index
+                best_box = moved
+        self.index = best_index
+        return best_box, best
+
+    def _by_likelihood(self, model: HaarAppearance, box: IntBox) -> IntBox:
+        """The scale whose box best fits the target model over all M features."""
+        p = self.settings
+        fw, fh = self.frame_wh
+        best_value = -math.inf
+        best_index, best_box = self.index, box
+        for j in range(-p.scale_steps, p.scale_steps + 1):
+            index = self.index + j
+            if j != 0 and not self.allowed(index):
+                continue
+            w, h = self.box_size(index)
+            candidate = box if j == 0 else centred(box, w, h)
+            x, y = candidate[0], candidate[1]
+            if x < 0 or y < 0 or x + w > fw or y + h > fh:
+                continue
+            if j != 0:
+                self.tried.append(candidate)
+            value = self._likelihood(model, candidate) - p.scale_penalty * abs(j)
+            if value > best_value:
+                best_value, best_index, best_box = value, index, candidate
+        self.index = best_index
+        return best_box
+
+    # -- learning --------------------------------------------------------------------------------
+    def learning_extras(self, model: HaarAppearance, box: IntBox
+                        ) -> tuple[np.ndarray | None, int, tuple[Any, ...] | None]:
+        """What this estimator adds to the appearance model's learning step at ``box``: the
+        feature values of the box at wrong scales (more negatives), their count, and its own
+        target model for the core to update from the same positives."""
+        p = self.settings
+        wrong = self._wrong_scale_values(model, box) if p.scale_negatives > 0 else []
+        extra = np.concatenate(wrong, axis=1) if wrong else None
+        pool = self.pool
+        second = None if pool is None else (pool.mu1, pool.sigma1, p.scale_learning_rate,
+                                            pool.first(1))
+        return extra, len(wrong), second
+
+    def take_learnt(self, learnt: tuple[Any, Any], n_pos: int) -> None:
+        """Keep the target model that the learning step updated (see :meth:`learning_extras`)."""
+        pool = self.pool
+        if pool is not None:
+            mu2, sigma2 = learnt
+            pool.assign(mu2, sigma2, pool.mu0, pool.sigma0, n_pos > 0, False)
+
+    def _wrong_scale_values(self, model: HaarAppearance, box: IntBox) -> list[np.ndarray]:
+        """Feature values of the target's box shrunk and grown by ``scale_negatives`` steps."""
+        p = self.settings
+        out = []
+        for j in (-p.scale_negatives, p.scale_negatives):
+            index = self.index + j
+            if not self.allowed(index):
+                continue
+            w, h = self.box_size(index)
+            x, y, _, _ = centred(box, w, h)
+            if x < 0 or y < 0 or x + w > self.frame_wh[0] or y + h > self.frame_wh[1]:
+                continue
+            out.append(model.project(w, h, np.array([[x, y]], dtype=np.int32)))
+        return out
