@@ -55,7 +55,6 @@ COMPONENTS: dict[str, tuple[dict[str, object], dict[str, object]]] = {
     ),
     "motion": ({"motion": _PLUS.motion}, {"motion": "none"}),
     "channels": ({"channels": ("luma", "grad", "opp_rg", "opp_yb")}, {}),
-    "gated update": ({"gate_threshold": 0.3}, {}),
     "scale contrast": ({}, {"scale_contrast": 0.0}),
     "relative merge": ({}, {"colour_relative": None}),
     "slow colour learning": ({}, {"colour_learning_rate": 0.04}),

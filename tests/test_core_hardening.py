@@ -332,14 +332,14 @@ def test_tracker_refuses_concurrent_use() -> None:
     t = wmiltrack.Tracker("ct", seed=0)
     t.init(frames[0], tuple(gt[0]))
     inside, release = threading.Event(), threading.Event()
-    orig = t._apply_search  # the plain path (no colour, no scale) moves the box here
+    orig = t._move  # every search moves the box here
 
     def slow_search(*args: object) -> float:
         inside.set()
         release.wait(10)
         return orig(*args)  # type: ignore[arg-type]
 
-    t._apply_search = slow_search  # type: ignore[method-assign]
+    t._move = slow_search  # type: ignore[method-assign]
     errors: list[BaseException] = []
     th = threading.Thread(target=lambda: t.update(frames[1]))
     th.start()
@@ -355,7 +355,7 @@ def test_tracker_refuses_concurrent_use() -> None:
         release.set()
         th.join()
     assert not errors, errors
-    t._apply_search = orig  # type: ignore[method-assign]
+    t._move = orig  # type: ignore[method-assign]
     t.update(frames[2])  # usable again once the other call returned
 
 

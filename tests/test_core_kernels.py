@@ -224,9 +224,11 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
     frame = rng.integers(0, 256, (120, 160, 3), dtype=np.uint8)
     t = wmiltrack.Tracker(variant, seed=1)
     t.init(frame, (60, 40, 32, 28))
-    p, pool, bank, ii = t.params, t._pool, t._bank, t._ii  # noqa: SLF001 (white-box)
-    pos, dist = t._track.positives(t._box, 160, 120)  # noqa: SLF001
-    neg = t._track.negatives(t._box, 160, 120, np.random.default_rng(0))  # noqa: SLF001
+    model = t.parts.appearance
+    box = tuple(int(v) for v in t.box)
+    p, pool, bank, ii = t.params, model.pool, model.bank(box[2], box[3]), model.ii
+    pos, dist = model.track.positives(box, 160, 120)
+    neg = model.track.negatives(box, 160, 120, np.random.default_rng(0))
     corners = np.concatenate((pos, neg))
     n = pos.shape[0]
     w = instance_weights(dist, p.instance_weights)
@@ -293,9 +295,9 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
         trackers.append(t)
 
     def job(t, ii):  # noqa: ANN001, ANN202
-        p, pool = t.params, t._pool  # noqa: SLF001 (white-box)
+        p, pool = t.params, t.parts.appearance.pool
         roi = (t.box[0] - 40, t.box[1] - 40, t.box[2] + 80, t.box[3] + 80)
-        return (ii, t._bank, t._selected, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,  # noqa: SLF001
+        return (ii, t.parts.appearance.bank(int(t.box[2]), int(t.box[3])), t.parts.appearance.selected, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,  # noqa: SLF001
                 tuple(int(v) for v in t.box), [(25, 4), (10, 1)], (200, 160), frame,
                 tuple(int(v) for v in roi), None)
 
@@ -315,11 +317,11 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     from wmiltrack.engine.sampling import BagSampler
 
     t = trackers[1]
-    pool = t._pool  # noqa: SLF001 (white-box)
+    pool = t.parts.appearance.pool
     sampler = BagSampler(t.params)
 
     def learn(ii, corners, n_pos, w):  # noqa: ANN001, ANN202
-        return (ii, t._bank, corners[:, 0], corners[:, 1], n_pos, pool.mu1, pool.sigma1,  # noqa: SLF001
+        return (ii, t.parts.appearance.bank(int(t.box[2]), int(t.box[3])), corners[:, 0], corners[:, 1], n_pos, pool.mu1, pool.sigma1,  # noqa: SLF001
                 pool.mu0, pool.sigma0, 0.85, False, False, True, False, 1e-3, 1e-30, "wmil", w, 20,
                 False, None, None)
 

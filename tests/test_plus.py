@@ -76,10 +76,8 @@ def test_box_follows_growing_and_shrinking_target(zoom) -> None:
 PAPER = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
 #: Each rcwmil-plus component's field and the value that switches it off.
 OFF = {"scale_steps": 0, "scale_negatives": 0, "channels": (), "motion": "none",
-       "gate_threshold": 0.0, "gate_drop": 0.0, "recovery_radius": 0, "colour_weight": 0.0,
-       "score_colour": 0.0, "score_colour_model": "current", "score_luma": 0.0,
-       "scale_contrast": 0.0, "zero_dc": "none", "zero_dc_channels": (), "anchor_weight": 0.0,
-       "gray_channels": (), "gray_anchor_weight": None, "gray_colour": False}
+       "colour_weight": 0.0, "score_colour": 0.0, "score_colour_model": "current",
+       "score_luma": 0.0, "scale_contrast": 0.0, "gray_colour": False}
 
 
 @pytest.mark.parametrize("variant", PAPER)
@@ -88,6 +86,22 @@ def test_paper_presets_switch_every_plus_component_off(variant: str) -> None:
     for name, off in OFF.items():
         assert getattr(p, name) == off, (variant, name)
     assert p.confidence_offset == 1.4
+
+
+@pytest.mark.parametrize("variant", PAPER)
+def test_paper_presets_are_the_appearance_model_alone(variant: str) -> None:
+    """A paper preset composes no cue, scale estimator or motion model and the paper's policy,
+    so its frame runs as one core call; rcwmil-plus composes all of them."""
+    frame = np.zeros((60, 80, 3), dtype=np.uint8)
+    frame[20:40, 30:50] = (40, 90, 200)
+    t = wmiltrack.Tracker(variant, seed=0)
+    t.init(frame, (30, 20, 20, 20))
+    assert t.parts.appearance_only
+    plus = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    plus.init(frame, (30, 20, 20, 20))
+    parts = plus.parts
+    assert parts.cues and parts.scale is not None and parts.motion is not None
+    assert not parts.policy.plain and not parts.appearance_only
 
 
 @pytest.fixture(scope="module")
@@ -101,12 +115,7 @@ def demo() -> tuple[list[np.ndarray], np.ndarray]:
 @pytest.mark.parametrize("overrides", [
     {"scale_steps": 0, "scale_negatives": 0}, {"scale_model": "ratio"}, {"scale_model": "likelihood"},
     {"scale_negatives": 0}, {"scale_negatives": 4}, {"scale_contrast": 0.0}, {"colour_weight": 0.0}, {"colour_weight": 1.0}, {"channels": ("luma", "grad", "opp_rg", "opp_yb")},
-    {"channels": ("luma", "grad")}, {"motion": "velocity"}, {"gate_threshold": 0.4},
-    {"gate_drop": 1.0, "gate_learning_rate": 0.97}, {"recovery_radius": 40, "recovery_step": 5},
-    {"channels": ("logluma",)}, {"channels": ("logluma", "grad_x", "grad_y")},
-    {"zero_dc": "box"}, {"zero_dc": "subregion"},
-    {"channels": ("luma", "logluma"), "zero_dc": "box", "zero_dc_channels": ("logluma",)},
-    {"anchor_weight": 0.1}, {"anchor_weight": 1.0},
+    {"channels": ("luma", "grad")}, {"motion": "none"}, {"score_colour": 0.0, "score_luma": 0.0},
 ])
 def test_each_component_switches_and_tracks(demo, overrides: dict[str, object]) -> None:
     frames, gt = demo
@@ -127,17 +136,17 @@ def test_colour_channels_drop_out_for_gray_frames(demo) -> None:
     gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
     t = wmiltrack.Tracker("rcwmil-plus", seed=0, channels=("luma", "grad", "opp_rg", "opp_yb"))
     t.init(gray[0], gt[0])
-    assert t._chan_names == ("luma", "grad")
+    assert t.parts.appearance.chan_names == ("luma", "grad")
     for f in gray[1:]:
         t.update(f)
-    assert t._ii.channels == (_core.CH_LUMA, _core.CH_GRAD)
+    assert t.parts.appearance.ii.channels == (_core.CH_LUMA, _core.CH_GRAD)
     c = wmiltrack.Tracker("rcwmil-plus", seed=0, gray_colour=False)
     c.init(gray[0], gt[0])
-    assert c._colour is None  # no colour likelihood on gray frames either
+    assert c.parts.cues == []  # no colour likelihood on gray frames either
     c.init(frames[0], gt[0])
-    assert c._colour is not None
+    assert len(c.parts.cues) == 1
     t.init(frames[0], gt[0])  # colour frames: all four
-    assert t._chan_names == ("luma", "grad", "opp_rg", "opp_yb")
+    assert t.parts.appearance.chan_names == ("luma", "grad", "opp_rg", "opp_yb")
     with pytest.raises(ValueError, match="gray"):
         t.update(gray[1])
 
@@ -147,9 +156,9 @@ def test_gray_colour_reads_luma_histograms_on_gray_frames_only(demo) -> None:
     gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
     on = wmiltrack.Tracker("rcwmil-plus", seed=0)
     on.init(gray[0], gt[0])
-    assert on._colour is not None and on._colour.histograms.intensity
+    assert on.parts.cues[0].model.histograms.intensity  # type: ignore[attr-defined]
     on.init(frames[0], gt[0])
-    assert on._colour is not None and not on._colour.histograms.intensity
+    assert not on.parts.cues[0].model.histograms.intensity  # type: ignore[attr-defined]
     # colour frames: the option changes nothing
     np.testing.assert_array_equal(_run(frames, gt, "rcwmil-plus"),
                                   _run(frames, gt, "rcwmil-plus", gray_colour=False))
@@ -180,7 +189,8 @@ def test_channel_features_are_sums_over_their_own_core_plane(demo, index: int) -
     t = wmiltrack.Tracker("rcwmil", seed=3, channels=names)
     t.init(frames[0], gt[0])
     t.update(frames[1])
-    ii = t._ii
+    model = t.parts.appearance
+    ii = model.ii
     # plane k holds channel names[k], built by the core over the search region
     assert ii.channels == (_core.CH_LUMA, _core.CH_GRAD, _core.CH_OPP_RG, _core.CH_OPP_YB)
     fresh = _core.IntegralImage()
@@ -188,15 +198,21 @@ def test_channel_features_are_sums_over_their_own_core_plane(demo, index: int) -
     tables = [fresh.table(k) for k in range(4)]
     for a, b in zip(tables, tables[1:]):
         assert not np.array_equal(a, b)  # the planes differ, so a wrong plane would show
-    chan = t._feature_channel
+    from wmiltrack.engine.features import scale_bank
+
+    chan = model.feature_channel
     assert set(chan.tolist()) == {0, 1, 2, 3}
-    bank, arrays = t._bank_at(index)
+    scale = wmiltrack.Tracker("rcwmil-plus", seed=3, channels=names)
+    scale.init(frames[0], gt[0])
+    assert scale.parts.scale is not None
+    bw, bh = scale.parts.scale.box_size(index)
+    bank = model.bank(bw, bh)
+    arrays = scale_bank(model.bank_arrays, *model.base_wh, bw, bh, model.edge_rects)
     np.testing.assert_array_equal(bank.channels, np.repeat(chan, np.diff(arrays.starts)))
-    bw, bh = t._box_size(index)
     rng = np.random.default_rng(0)
     xs = rng.integers(ii.x0, ii.x0 + ii.width - bw + 1, size=7).astype(np.int32)
     ys = rng.integers(ii.y0, ii.y0 + ii.height - bh + 1, size=7).astype(np.int32)
-    got = t._project(index, np.stack([xs, ys], axis=1))
+    got = model.project(bw, bh, np.stack([xs, ys], axis=1))
     want = np.zeros((arrays.size, xs.size))
     for f in range(arrays.size):
         for r in range(arrays.starts[f], arrays.starts[f + 1]):
@@ -251,20 +267,17 @@ def test_samples_report_the_scales_searched(demo) -> None:
     assert plain.samples()["scales"] == []
 
 
-def test_lost_target_gives_ok_false_and_recovery_searches_wider() -> None:
-    """A target that vanishes (the scene is replaced by noise) is reported lost, not learnt."""
+def test_lost_target_gives_ok_false() -> None:
+    """A target that vanishes (the scene is replaced by noise) is reported lost."""
     frames, gt = zoom_sequence(60, seed=1)
     rng = np.random.default_rng(5)
     blank = [rng.integers(0, 256, frames[0].shape, dtype=np.uint8) for _ in range(10)]
-    t = wmiltrack.Tracker("rcwmil-plus", seed=0, gate_threshold=0.3, recovery_radius=40,
-                          recovery_step=5)
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0)
     t.init(frames[0], gt[0])
     for f in frames[1:30]:
         t.update(f)
     results = [t.update(f) for f in blank]
     assert not any(r.ok for r in results[2:])
-    assert t.samples()["search"][0][1] == 40
-    assert t.samples()["positive"].shape[0] == 0  # gated: nothing learnt from the noise
 
 
 def test_inspect_drawing_shows_the_scales(demo) -> None:
@@ -430,7 +443,9 @@ def test_first_frame_scores_change_the_report_only(demo) -> None:
     # the first frame's histograms stay as they were learnt
     t = wmiltrack.Tracker("rcwmil-plus", seed=0)
     t.init(frames[0], gt[0])
-    firsts = [t._first_colour, t._first_luma]
+    report = t.parts.policy.report
+    assert report is not None
+    firsts = [report.colour, report.luma]
     assert all(m is not None for m in firsts)
     before = [m.histograms.likelihood for m in firsts]  # type: ignore[union-attr]
     for f in frames[1:10]:
@@ -478,20 +493,7 @@ def test_scaled_bank_keeps_edge_features() -> None:
         assert not np.isclose(value(scale_bank(base, 30, 40, w, h), w, h), ref)
 
 
-def test_orientation_channels(demo) -> None:
-    """``orient0..3`` are valid channels; a tracker with them reads those planes and runs with scale."""
-    from wmiltrack import _core
-
-    frames, gt = demo
-    names = ("luma", "orient0", "orient1", "orient2", "orient3")
-    t = wmiltrack.Tracker("rcwmil-plus", seed=0, channels=names)
-    t.init(frames[0], gt[0])
-    for f in frames[1:6]:
-        t.update(f)
-    assert t._ii.channels == (_core.CH_LUMA, _core.CH_ORIENT0, _core.CH_ORIENT1, _core.CH_ORIENT2,
-                              _core.CH_ORIENT3)
-    assert t._edge_rects is not None and t._rect_planes is not None
-    np.testing.assert_array_equal(t._edge_rects, t._rect_planes > 0)
+def test_a_colour_only_channel_list_is_refused() -> None:
     with pytest.raises(ValueError, match="gray channel"):
         wmiltrack.Params(channels=("opp_rg",))
 
@@ -505,24 +507,24 @@ def test_scale_contrast_is_validated(value: object) -> None:
 def test_scale_contrast_reads_the_search_table(demo, monkeypatch) -> None:
     """Each tried scale's contrast is colour_contrast of its box on the search's likelihood
     table, the same as the colour model's own contrast of that box on the frame."""
-    from wmiltrack.engine.tracker import Tracker
+    from wmiltrack.engine.cues import ColourCue
 
     frames, gt = demo
     seen: list[tuple[float, float]] = []
-    original = Tracker._colour_contrast
+    original = ColourCue.contrast
+    now: list[np.ndarray] = []
 
-    def checked(self: Tracker, box: tuple[int, int, int, int]) -> float:
+    def checked(self: ColourCue, box: tuple[int, int, int, int]) -> float:
         value = original(self, box)
-        assert self._colour is not None
-        seen.append((value, self._colour.contrast(self._frame_now, box)))
+        seen.append((value, self.model.contrast(now[-1], box)))
         return value
 
-    monkeypatch.setattr(Tracker, "_colour_contrast", checked)
+    monkeypatch.setattr(ColourCue, "contrast", checked)
     t = wmiltrack.Tracker("rcwmil-plus", seed=0)
     assert t.params.scale_contrast > 0
     t.init(frames[0], gt[0])
     for f in frames[1:6]:
-        t._frame_now = f  # type: ignore[attr-defined]
+        now.append(f)
         t.update(f)
     # the current scale and the two others, every frame
     assert len(seen) == 5 * 3
@@ -533,16 +535,16 @@ def test_scale_contrast_reads_the_search_table(demo, monkeypatch) -> None:
 def test_scale_contrast_moves_the_scale(demo, monkeypatch) -> None:
     """The contrast term enters each scale's value: a contrast that grows with the box makes
     the box grow every frame; with scale_contrast=0 it is never read."""
-    from wmiltrack.engine.tracker import Tracker
+    from wmiltrack.engine.cues import ColourCue
 
     frames, gt = demo
     calls = []
 
-    def bigger_is_better(self: Tracker, box: tuple[int, int, int, int]) -> float:
+    def bigger_is_better(self: ColourCue, box: tuple[int, int, int, int]) -> float:
         calls.append(box)
         return float(box[2] * box[3])
 
-    monkeypatch.setattr(Tracker, "_colour_contrast", bigger_is_better)
+    monkeypatch.setattr(ColourCue, "contrast", bigger_is_better)
     t = wmiltrack.Tracker("rcwmil-plus", seed=0)
     t.init(frames[0], gt[0])
     for f in frames[1:5]:
@@ -557,11 +559,11 @@ def test_scale_contrast_moves_the_scale(demo, monkeypatch) -> None:
 
 
 def test_scale_contrast_is_off_without_colour(demo, monkeypatch) -> None:
-    from wmiltrack.engine.tracker import Tracker
+    from wmiltrack.engine.cues import ColourCue
 
     frames, gt = demo
     gray = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames[:5]]
-    monkeypatch.setattr(Tracker, "_colour_contrast", lambda self, box: pytest.fail("read"))
+    monkeypatch.setattr(ColourCue, "contrast", lambda self, box: pytest.fail("read"))
     t = wmiltrack.Tracker("rcwmil-plus", seed=0, gray_colour=False)
     t.init(gray[0], gt[0])
     for f in gray[1:]:
@@ -585,32 +587,6 @@ def test_colour_relative_in_the_preset_only() -> None:
     assert wmiltrack.Params.for_variant("rcwmil-plus", colour_relative=None).colour_relative is None
 
 
-def test_lost_signal_score_makes_the_lost_state_the_reported_one() -> None:
-    """``lost_signal="score"``: the lost state that motion and recovery read is the reported
-    ``ok``; with the classifier's confidence (the default) the two differ on some frames of an
-    occlusion, where the classifier learns the occluder and the first frame's histograms do not."""
-    frames, gt = zoom_sequence(70, seed=1)
-    rng = np.random.default_rng(7)
-    for i in range(40, 60):
-        x, y, w, h = gt[i].astype(int)
-        frames[i] = frames[i].copy()
-        frames[i][max(y - h // 4, 0):y + h + h // 4, max(x - w // 4, 0):x + w + w // 4] = _occluder(
-            rng, y + h + h // 4 - max(y - h // 4, 0), x + w + w // 4 - max(x - w // 4, 0))
-    differ = {}
-    for signal in ("classifier", "score"):
-        t = wmiltrack.Tracker("rcwmil-plus", seed=0, lost_signal=signal)
-        t.init(frames[0], gt[0])
-        states = []
-        for f in frames[1:]:
-            r = t.update(f)
-            states.append((t._lost, not r.ok))  # noqa: SLF001 (white-box)
-        differ[signal] = sum(a != b for a, b in states)
-        assert any(b for _, b in states)  # the occlusion is reported
-    assert differ["score"] == 0 and differ["classifier"] > 0
-    with pytest.raises(ValueError, match="lost_signal"):
-        wmiltrack.Params.for_variant("rcwmil-plus", lost_signal="iou")
-
-
 @pytest.mark.parametrize("value", [0.0, -0.1, 1.5, math.nan, True])
 def test_colour_learning_rate_is_validated(value: object) -> None:
     with pytest.raises(ValueError, match="colour_learning_rate"):
@@ -625,8 +601,11 @@ def test_colour_learning_rate_reaches_the_colour_model() -> None:
         extra = {} if rate is None else {"colour_learning_rate": rate}
         t = wmiltrack.Tracker("rcwmil-plus", seed=0, **extra)
         t.init(frames[0], gt[0])
-        first = t._first_colour.histograms.likelihood  # noqa: SLF001 (white-box)
+        report = t.parts.policy.report
+        assert report is not None and report.colour is not None
+        first = report.colour.histograms.likelihood
         t.update(frames[1])
-        assert t._colour.histograms.rate == (0.02 if rate is None else rate)  # noqa: SLF001
-        assert np.array_equal(t._first_colour.histograms.likelihood, first)  # noqa: SLF001
+        cue = t.parts.cues[0]
+        assert cue.model.histograms.rate == (0.02 if rate is None else rate)  # type: ignore[attr-defined]
+        assert np.array_equal(report.colour.histograms.likelihood, first)
     assert wmiltrack.Params().colour_learning_rate == 0.04

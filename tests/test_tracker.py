@@ -48,7 +48,7 @@ def test_same_seed_same_boxes_different_seed_different_features(demo_sequence) -
     a, c = wmiltrack.Tracker(seed=3), wmiltrack.Tracker(seed=4)
     a.init(frames[0], gt[0])
     c.init(frames[0], gt[0])
-    assert not np.array_equal(a._bank_arrays.rects, c._bank_arrays.rects)
+    assert not np.array_equal(a.parts.appearance.bank_arrays.rects, c.parts.appearance.bank_arrays.rects)
 
 
 def test_reinit_restarts_identically(demo_sequence) -> None:

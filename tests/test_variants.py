@@ -9,7 +9,7 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data import synthetic
-from wmiltrack.engine import tracker as tracker_mod
+from wmiltrack.engine import appearance as tracker_mod  # the appearance model calls the core and selects
 from wmiltrack.engine.params import Params
 from wmiltrack.eval.metrics import ope_metrics
 
@@ -20,7 +20,7 @@ BOX = (180, 130, 40, 48)
 def bank(variant: str, seed: int = 0):
     t = wmiltrack.Tracker(variant, seed=seed)
     t.init(FRAME, BOX)
-    return t, t._bank_arrays
+    return t, t.parts.appearance.bank_arrays
 
 
 def rect_counts(b) -> np.ndarray:
@@ -148,7 +148,7 @@ def test_bag_model_and_selection(variant: str, expected, monkeypatch: pytest.Mon
     t.update(FRAME)
     kind, weights, k = expected
     if kind is None:
-        assert seen == [] and len(t._selected) == k == t.params.num_features
+        assert seen == [] and len(t.parts.appearance.selected) == k == t.params.num_features
         return
     assert {s[0] for s in seen} == {kind} and all(s[2] == k for s in seen)
     if weights == "exp":
@@ -185,7 +185,7 @@ def test_reference_compat_flags_change_what_they_name(monkeypatch: pytest.Monkey
     blend = wmiltrack.Tracker(params=p, seed=0)
     blend.init(FRAME, BOX)
     lam = p.learning_rate
-    np.testing.assert_allclose(blend._pool.mu1, (1 - lam) * direct._pool.mu1, rtol=1e-9)
+    np.testing.assert_allclose(blend.parts.appearance.pool.mu1, (1 - lam) * direct.parts.appearance.pool.mu1, rtol=1e-9)
 
     # instance_weights and gradient reach the selection, and change its inputs / result
     seen: list[tuple[np.ndarray, bool, np.ndarray, np.ndarray]] = []

@@ -28,7 +28,7 @@ from .features import (
 )
 from .frames import IntBox
 from .requests import Learn, Search, Step, Steps
-from .sampling import BagSampler, core_draws_match_numpy
+from .sampling import BagSampler
 from .selection import milboost_select
 
 if TYPE_CHECKING:
@@ -104,9 +104,10 @@ class HaarAppearance:
     @property
     def can_fuse(self) -> bool:
         """Whether a whole frame step can run as one core call (:meth:`fused_step`): luma
-        features only, and negatives the core draws exactly as numpy would."""
-        return (self.chan_names is None and core_draws_match_numpy()
-                and self.track.drawn_in_core())
+        features only, and negatives the core can draw exactly as numpy would (where the
+        core's copies of numpy's draws match the installed numpy:
+        :func:`~wmiltrack.engine.sampling.core_draws_match_numpy`)."""
+        return self.chan_names is None and self.track.drawn_in_core()
 
     @property
     def reach(self) -> int:

@@ -30,6 +30,7 @@ from .params import Params
 from .policy import ContrastScore, UpdatePolicy, confidence
 from .requests import Steps, drive, run_batches
 from .result import TrackResult
+from .sampling import core_draws_match_numpy
 from .scale import HaarScale
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "compose", "confidence", "update_many"]
@@ -230,7 +231,7 @@ class Tracker:
         drive(self._learn_steps(model.first))
         self._search_log = []
         self._score = 1.0
-        self._fused = parts.appearance_only and model.can_fuse
+        self._fused = parts.appearance_only and model.can_fuse and core_draws_match_numpy()
         self._initialized = True
 
     reinit = init

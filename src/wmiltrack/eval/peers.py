@@ -327,7 +327,7 @@ class OpenCVTracker:
 
 def split_specs(text: str | None) -> list[str]:
     """Split a comma-separated list of tracker specs, keeping commas inside brackets and quotes
-    (``"rcwmil,rcwmil-plus:gray_channels=('logluma','grad')"`` is two specs), so that a
+    (``"rcwmil,rcwmil-plus:channels=('luma','grad')"`` is two specs), so that a
     tuple-valued override can be given on the command line. Empty items are dropped."""
     out: list[str] = []
     part: list[str] = []
