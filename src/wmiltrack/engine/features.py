@@ -174,8 +174,8 @@ def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int,
     stays a signed sum of mean intensities, so the learnt Gaussians remain valid at every
     scale (and raw-sum features keep their expected value).
 
-    ``edge`` (one bool per rectangle) marks rectangles on the gradient channel (``grad``). Their sums count edge pixels: when the target appears ``s`` times
-    larger, its edges are ``s`` times longer but no stronger (the gradient summed across
+    ``edge`` (one bool per rectangle) marks rectangles on the gradient channel (``grad``).
+    Their sums count edge pixels: when the target appears ``s`` times larger, its edges are ``s`` times longer but no stronger (the gradient summed across
     an edge is its contrast), so a rectangle's sum grows as ``s``, not ``s^2``. Their
     weights are multiplied by ``sqrt(old area / new area)`` instead, which keeps the
     feature's expected value at every scale (with the area ratio, the mean gradient of a
