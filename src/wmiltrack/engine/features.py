@@ -175,11 +175,12 @@ def scale_bank(base: BankArrays, base_w: int, base_h: int, w: int, h: int,
     scale (and raw-sum features keep their expected value).
 
     ``edge`` (one bool per rectangle) marks rectangles on the gradient channel (``grad``).
-    Their sums count edge pixels: when the target appears ``s`` times larger, its edges are ``s`` times longer but no stronger (the gradient summed across
-    an edge is its contrast), so a rectangle's sum grows as ``s``, not ``s^2``. Their
-    weights are multiplied by ``sqrt(old area / new area)`` instead, which keeps the
-    feature's expected value at every scale (with the area ratio, the mean gradient of a
-    smaller box would be higher and the scale search would favour shrinking).
+    Their sums count edge pixels: when the target appears ``s`` times larger, its edges are
+    ``s`` times longer but no stronger (the gradient summed across an edge is its contrast),
+    so a rectangle's sum grows as ``s``, not ``s^2``. Their weights are multiplied by
+    ``sqrt(old area / new area)`` instead, which keeps the feature's expected value at every
+    scale (with the area ratio, the mean gradient of a smaller box would be higher and the
+    scale search would favour shrinking).
     """
     if (w, h) == (base_w, base_h):
         return base
