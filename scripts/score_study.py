@@ -85,26 +85,33 @@ def fit_logistic(x: np.ndarray, y: np.ndarray, iters: int = 200) -> tuple[float,
 class Probe(wmiltrack.Tracker):
     """A tracker that also records the grid statistics of each update (for this study)."""
 
-    def _coarse_grid_mean(self, coarse: tuple[int, int]) -> None:
-        """Mean raw score of the coarse grid around the search's origin (``self._box``)."""
-        p = self._params
-        sel = self._selected
-        pool = self._pool
+    def init(self, frame: np.ndarray, box: Any) -> None:
+        super().init(frame, box)
+        scale = self.parts.scale
+        if scale is not None:  # the chosen scale's raw score, if it moved
+            search = scale.search
+
+            def probed(*args: Any) -> tuple[tuple[int, int, int, int], float]:
+                moved, self.raw_best = search(*args)
+                return moved, self.raw_best
+
+            scale.search = probed  # type: ignore[method-assign]
+
+    def _coarse_grid_mean(self, origin: tuple[int, int, int, int], coarse: tuple[int, int]) -> None:
+        """Mean raw score of the coarse grid around the search's origin."""
+        model = self.parts.appearance
+        sel, pool = model.selected, model.pool
         weak = (pool.mu1[sel], pool.sigma1[sel], pool.mu0[sel], pool.sigma0[sel])
-        bank = self._bank_at(self._scale_index)[0]
-        _, _, _, n, grid = _core.score_grid(self._ii, bank, sel, *weak, p.guard, self._box,
-                                            coarse[0], coarse[1], self._frame_wh, True)
+        _, _, _, n, grid = _core.score_grid(model.ii, model.bank(origin[2], origin[3]), sel, *weak,
+                                            self.params.guard, origin, coarse[0], coarse[1],
+                                            self._frame_wh, True)
         g = grid[np.isfinite(grid)]
         self.grid_mean = float(g.mean()) if g.size else math.nan
 
-    def _apply_search(self, stages: list[tuple[int, int]],
-                      results: tuple[tuple[int, int, float, int], ...]) -> float:
-        self._coarse_grid_mean(stages[0])
-        self.raw_best = super()._apply_search(stages, results)
-        return self.raw_best
-
-    def _scale_search(self, raw: float) -> float:  # the chosen scale's raw score, if it moved
-        self.raw_best = super()._scale_search(raw)
+    def _move(self, origin: tuple[int, int, int, int], stages: list[tuple[int, int]],
+              results: Any) -> float:
+        self._coarse_grid_mean(origin, stages[0])
+        self.raw_best = super()._move(origin, stages, results)
         return self.raw_best
 
 
@@ -113,7 +120,7 @@ def run(frames: list[np.ndarray], gt: np.ndarray, visible: np.ndarray, variant: 
     name, overrides = parse_spec(variant)
     t = Probe(name, seed=seed, **overrides)
     t.init(frames[0], gt[0])
-    k = len(t._selected)
+    k = t.parts.appearance.k
     rows: dict[str, list[float]] = {"logistic": [], "margin": [], "rel": [], "ref_ratio": [],
                                     "ref_diff": [], "mean_k": [], "score": [], "iou": []}
     first: list[float] = []
@@ -173,9 +180,12 @@ def summarise(report: dict[str, Any], key: str, variant: str, tag: str,
     """Print and store (``report[key/group]``) the figures of one variant's frames."""
     for group in ("otb", "synthetic", "all"):
         if group == "all":
-            cat = {k: np.concatenate(acc["otb"][k] + acc["synthetic"][k]) for k in acc["otb"]}
+            keys = set(acc["otb"]) | set(acc["synthetic"])
+            cat = {k: np.concatenate(acc["otb"].get(k, []) + acc["synthetic"].get(k, [])) for k in keys}
         else:
             cat = {k: np.concatenate(v) for k, v in acc[group].items()}
+        if not cat:  # no sequence of this group (e.g. --synthetic-seeds 0)
+            continue
         tracked = cat["iou"] > 0
         good = cat["iou"] > 0.5
         lost = ~tracked

@@ -233,12 +233,12 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
     n = pos.shape[0]
     w = instance_weights(dist, p.instance_weights)
     for select in ("none", "ratios", "wmil"):
-        got = _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1,
+        got = _core.learn(_core.LearnRequest(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1,
                           pool.mu0, pool.sigma0, lam=p.learning_rate, first_pos=False,
                           first_neg=False, direct_first=p.first_update == "direct",
                           mil=p.classifier == "mil", sigma_floor=p.sigma_floor, guard=p.guard,
                           select=select, w_pos=w if select == "wmil" else None,
-                          k=p.num_selected)
+                          k=p.num_selected))
         values = _core.project(ii, bank, corners[:, 0], corners[:, 1])
         args = (p.learning_rate, False, p.first_update == "direct", p.classifier == "mil", p.sigma_floor)
         mu1, s1 = _learn.gaussian_update(values[:, :n], pool.mu1, pool.sigma1, *args)
@@ -257,12 +257,12 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
     # a second target model updated from the positives with its own lambda.
     extra = rng.normal(100, 30, (values.shape[0], 2))
     mu2, s2 = rng.normal(100, 30, values.shape[0]), rng.uniform(5, 20, values.shape[0])
-    got = _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1,
+    got = _core.learn(_core.LearnRequest(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1,
                       pool.mu0, pool.sigma0, lam=p.learning_rate, first_pos=False,
                       first_neg=False, direct_first=p.first_update == "direct",
                       mil=p.classifier == "mil", sigma_floor=p.sigma_floor, guard=p.guard,
                       select="wmil", w_pos=w, k=p.num_selected, extra_neg=extra,
-                      second=(mu2, s2, 0.975, False))
+                      second=(mu2, s2, 0.975, False)))
     values = np.concatenate((_core.project(ii, bank, corners[:, 0], corners[:, 1]), extra), axis=1)
     mu1, s1 = _learn.gaussian_update(values[:, :n], pool.mu1, pool.sigma1, *args)
     mu0, s0 = _learn.gaussian_update(values[:, n:], pool.mu0, pool.sigma0, *args)
@@ -272,13 +272,13 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
                           None, want_mu2, want_s2)):
         np.testing.assert_array_equal(a, b)
     with pytest.raises(ValueError, match="extra_neg"):
-        _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
+        _core.learn(_core.LearnRequest(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
                     pool.sigma0, lam=0.85, first_pos=False, first_neg=False, direct_first=True,
-                    mil=False, sigma_floor=1e-6, guard=1e-30, select="none", extra_neg=extra[1:])
+                    mil=False, sigma_floor=1e-6, guard=1e-30, select="none", extra_neg=extra[1:]))
     with pytest.raises(ValueError, match="select"):
-        _core.learn(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
+        _core.learn(_core.LearnRequest(ii, bank, corners[:, 0], corners[:, 1], n, pool.mu1, pool.sigma1, pool.mu0,
                     pool.sigma0, lam=0.85, first_pos=False, first_neg=False, direct_first=True,
-                    mil=False, sigma_floor=1e-6, guard=1e-30, select="milboost")
+                    mil=False, sigma_floor=1e-6, guard=1e-30, select="milboost"))
 
 
 def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table() -> None:
@@ -294,14 +294,18 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
         t.init(frame, box)
         trackers.append(t)
 
-    def job(t, ii):  # noqa: ANN001, ANN202
-        p, pool = t.params, t.parts.appearance.pool
+    def job_args(t, ii):  # noqa: ANN001, ANN202
+        p, model = t.params, t.parts.appearance
+        pool = model.pool
         roi = (t.box[0] - 40, t.box[1] - 40, t.box[2] + 80, t.box[3] + 80)
-        return (ii, t.parts.appearance.bank(int(t.box[2]), int(t.box[3])), t.parts.appearance.selected, pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.guard,  # noqa: SLF001
-                tuple(int(v) for v in t.box), [(25, 4), (10, 1)], (200, 160), frame,
-                tuple(int(v) for v in roi), None)
+        return (ii, model.bank(int(t.box[2]), int(t.box[3])), model.selected, pool.mu1, pool.sigma1,
+                pool.mu0, pool.sigma0, p.guard, tuple(int(v) for v in t.box), [(25, 4), (10, 1)],
+                (200, 160), frame, tuple(int(v) for v in roi), None)
 
-    single = [_core.search(*job(t, _core.IntegralImage())) for t in trackers]
+    def job(t, ii):  # noqa: ANN001, ANN202
+        return _core.SearchRequest(*job_args(t, ii))
+
+    single = [_core.search(job(t, _core.IntegralImage())) for t in trackers]
     for threads in (1, 2, 3):
         many = _core.search_many([job(t, _core.IntegralImage()) for t in trackers], threads)
         assert list(many) == single
@@ -321,53 +325,59 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     sampler = BagSampler(t.params)
 
     def learn(ii, corners, n_pos, w):  # noqa: ANN001, ANN202
-        return (ii, t.parts.appearance.bank(int(t.box[2]), int(t.box[3])), corners[:, 0], corners[:, 1], n_pos, pool.mu1, pool.sigma1,  # noqa: SLF001
-                pool.mu0, pool.sigma0, 0.85, False, False, True, False, 1e-3, 1e-30, "wmil", w, 20,
-                False, None, None)
+        return _core.LearnRequest(ii, t.parts.appearance.bank(int(t.box[2]), int(t.box[3])),
+                                  corners[:, 0], corners[:, 1], n_pos, pool.mu1, pool.sigma1,
+                                  pool.mu0, pool.sigma0, lam=0.85, first_pos=False,
+                                  first_neg=False, direct_first=True, mil=False, sigma_floor=1e-3,
+                                  guard=1e-30, select="wmil", w_pos=w, k=20)
 
     empty = np.zeros((0, 2), np.int32)
     ii, rng = _core.IntegralImage(), np.random.default_rng(3)
     found, learnt, (xs, ys, n_pos) = _core.frame_step(job(t, ii), learn(ii, empty, 0, None),
-                                                      (rng, *sampler.core_spec("exp")))
+                                                      _core.BagRequest(rng, *sampler.core_spec("exp")))
     assert found == single[1]
     landed = tuple(int(v) for v in t.box)
     landed = (landed[0] + sum(r[0] for r in found), landed[1] + sum(r[1] for r in found), *landed[2:])
     alone, rng_alone = _core.IntegralImage(), np.random.default_rng(3)
-    _core.search(*job(t, alone))
+    _core.search(job(t, alone))
     pos, dist = sampler.positives(landed, 200, 160)
     neg = sampler.negatives(landed, 200, 160, rng_alone)
     assert n_pos == len(pos) and np.array_equal(np.stack((xs, ys), 1), np.concatenate((pos, neg)))
     assert rng.bit_generator.state == rng_alone.bit_generator.state
-    args = learn(alone, np.concatenate((pos, neg)), len(pos), sampler.weights(dist, "exp"))
-    expected = _core.learn(*args[:9], **dict(zip(("lam", "first_pos", "first_neg", "direct_first", "mil",
-                                                  "sigma_floor", "guard", "select", "w_pos", "k",
-                                                  "code_gradient", "extra_neg", "second"), args[9:])))
+    expected = _core.learn(learn(alone, np.concatenate((pos, neg)), len(pos), sampler.weights(dist, "exp")))
     for a, b in zip(learnt, expected):
         assert (a is None and b is None) or np.array_equal(a, b)
-    bags = (rng, *sampler.core_spec("exp"))
+    bags = _core.BagRequest(rng, *sampler.core_spec("exp"))
     # Without a frame the step reads the integral image as it is (one shared by several
     # targets): computed, it gives the same search; never computed, it is refused.
-    no_frame = job(t, ii)[:11] + (None, None, None)
+    no_frame = _core.SearchRequest(*job_args(t, ii)[:11])
     assert _core.frame_step(no_frame, learn(ii, empty, 0, None), bags)[0] == found
     never = _core.IntegralImage()
     with pytest.raises(ValueError, match="not been computed"):
-        _core.frame_step(job(t, never)[:11] + (None, None, None), learn(never, empty, 0, None),
+        _core.frame_step(_core.SearchRequest(*job_args(t, never)[:11]), learn(never, empty, 0, None),
                          bags)
     with pytest.raises(ValueError, match="the search's IntegralImage"):
         _core.frame_step(job(t, ii), learn(alone, empty, 0, None), bags)
-    with pytest.raises(ValueError, match="bags must be"):
-        _core.frame_step(job(t, ii), learn(ii, empty, 0, None), bags[:3])
+    with pytest.raises(TypeError, match="BagRequest"):
+        _core.frame_step(job(t, ii), learn(ii, empty, 0, None), (rng, *sampler.core_spec("exp")))
+    with pytest.raises(TypeError, match="not a SearchRequest"):
+        _core.search_many([learn(ii, empty, 0, None)], 1)
     fresh = _core.IntegralImage()  # never computed before: the search computes it first
     assert _core.frame_step(job(t, fresh), learn(fresh, empty, 0, None), bags)[0] == found
 
     # frame_step_many: each job as frame_step alone gives it, its generator left in the same
     # state, whatever the number of threads.
+    tables: list[_core.IntegralImage] = []
+
     def steps(seed: int) -> tuple[list[tuple[object, ...]], list[np.random.Generator]]:
         rngs = [np.random.default_rng(seed + i) for i in range(len(trackers))]
         jobs = []
+        tables.clear()
         for tr, r in zip(trackers, rngs):
             own = _core.IntegralImage()
-            jobs.append((job(tr, own), learn(own, empty, 0, None), (r, *sampler.core_spec("exp"))))
+            tables.append(own)
+            jobs.append((job(tr, own), learn(own, empty, 0, None),
+                         _core.BagRequest(r, *sampler.core_spec("exp"))))
         return jobs, rngs
 
     alone_jobs, alone_rngs = steps(10)
@@ -381,11 +391,11 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
             assert all((a is None and b is None) or np.array_equal(a, b) for a, b in zip(got[1], want[1]))
             assert all(np.array_equal(a, b) for a, b in zip(got[2], want[2]))
         assert [r.bit_generator.state for r in rngs] == [r.bit_generator.state for r in alone_rngs]
-    jobs, _ = steps(20)
-    one_rng = (jobs[0][0], jobs[0][1], (jobs[1][2][0], *jobs[0][2][1:]))  # job 1's generator
+    jobs, rngs_20 = steps(20)  # (job 1's generator below)
+    one_rng = (jobs[0][0], jobs[0][1], _core.BagRequest(rngs_20[1], *sampler.core_spec("exp")))
     with pytest.raises(ValueError, match="same generator"):
         _core.frame_step_many([one_rng, jobs[1]], 2)
-    both = (job(trackers[1], jobs[0][0][0]), learn(jobs[0][0][0], empty, 0, None), jobs[1][2])
+    both = (job(trackers[1], tables[0]), learn(tables[0], empty, 0, None), jobs[1][2])
     with pytest.raises(ValueError, match="share an IntegralImage"):
         _core.frame_step_many([jobs[0], both], 2)
     with pytest.raises(ValueError, match="threads"):
@@ -394,7 +404,10 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     # A job that fails inside the parallel part (its region misses the frame) raises after the
     # others ran, and every generator's lock is released.
     jobs, rngs = steps(30)
-    jobs[1] = (jobs[1][0][:12] + ((500, 500, 10, 10), None), *jobs[1][1:])
+    far = _core.IntegralImage()
+    args = job_args(trackers[1], far)
+    jobs[1] = (_core.SearchRequest(*args[:12], (500, 500, 10, 10), None), learn(far, empty, 0, None),
+               jobs[1][2])
     with pytest.raises(ValueError, match="does not meet the frame"):
         _core.frame_step_many(jobs, 2)
     for r in rngs:
@@ -423,52 +436,67 @@ def test_the_cores_draws_continue_numpys_stream(seed: int) -> None:
         _core.numpy_choice_sorted(np.random.SeedSequence(0), 5, 2)
 
 
-@pytest.mark.parametrize("relative", [None, False, True])
-def test_search_with_a_colour_cue_takes_the_merged_first_maximum(relative: bool | None) -> None:
-    """search(colour=...) picks, stage by stage, the first maximum in row-major order of
-    (1 - w) logistic((raw - ref) / K - offset) + w * (box mean of the cue), ref = 0 or (relative)
-    the stage's best raw score, reports that candidate's raw score, and refuses a candidate
-    outside the cue's table."""
+def _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, cues=None):  # noqa: ANN001, ANN202
+    return _core.search(_core.SearchRequest(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages,
+                                            (150, 120), cues=cues))
+
+
+def _box_means(table: np.ndarray, xs: np.ndarray, ys: np.ndarray, side: int) -> np.ndarray:
+    return (table[ys + side, xs + side] - table[ys, xs + side] - table[ys + side, xs]
+            + table[ys, xs]) / float(side * side)
+
+
+@pytest.mark.parametrize("relative", [False, True])
+@pytest.mark.parametrize("n_cues", [1, 2])
+def test_search_with_cues_takes_the_merged_first_maximum(relative: bool, n_cues: int) -> None:
+    """search(cues=...) picks, stage by stage, the first maximum in row-major order of
+    (1 - W) logistic((raw - ref) / K - offset) + sum of w * (box mean of each cue), W the sum
+    of the weights and ref = 0 or (relative) the stage's best raw score; it reports that
+    candidate's raw score, and refuses a candidate outside a cue's table."""
     rng, _, _, bank, ii = grid_scene(11)
     sel = np.array([4, 1, 2], dtype=np.int32)
     mu1, mu0 = rng.normal(0, 300, 6), rng.normal(0, 300, 6)
     s1, s0 = rng.uniform(100, 400, 6), rng.uniform(100, 400, 6)
-    cue_map = rng.random((100, 130))
-    table = cv2.integral(cue_map, sdepth=cv2.CV_64F)  # region starts at frame pixel (10, 5)
-    x0, y0, weight, offset = 10, 5, 0.7, 0.3
+    # the cues' regions start at frame pixels (10, 5) and (4, 2)
+    cues = [(cv2.integral(rng.random((100, 130)), sdepth=cv2.CV_64F), 10, 5, 0.5),
+            (cv2.integral(rng.random((110, 140)), sdepth=cv2.CV_64F), 4, 2, 0.3)][:n_cues]
+    offset = 0.3
     box, stages = (60, 50, 20, 20), [(25, 4), (10, 1)]
-    extra = () if relative is None else (relative,)
-    got = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                       colour=(table, x0, y0, weight, offset, *extra))
+    got = _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, (cues, offset, relative))
+    total = sum(w for *_, w in cues)
     at = box
     for (radius, step), (dx, dy, raw, n) in zip(stages, got):
         _, _, _, _, grid = _core.score_grid(ii, bank, sel, mu1[sel], s1[sel], mu0[sel], s0[sel],
                                             1e-30, at, radius, step, (150, 120), True)
         half = (grid.shape[0] - 1) // 2
         rows, cols = np.nonzero(np.isfinite(grid))
-        xs, ys = at[0] + (cols - half) * step - x0, at[1] + (rows - half) * step - y0
-        mean = (table[ys + 20, xs + 20] - table[ys, xs + 20] - table[ys + 20, xs] + table[ys, xs]) / 400.0
+        xs, ys = at[0] + (cols - half) * step, at[1] + (rows - half) * step
         ref = grid[rows, cols].max() if relative else 0.0
         conf = 0.5 * (1.0 + np.tanh(0.5 * ((grid[rows, cols] - ref) / 3 - offset)))
-        best = int(np.argmax((1.0 - weight) * conf + weight * mean))
+        value = (1.0 - total) * conf
+        for table, x0, y0, w in cues:
+            value = value + w * _box_means(table, xs - x0, ys - y0, 20)
+        best = int(np.argmax(value))
         assert (dx, dy) == ((cols[best] - half) * step, (rows[best] - half) * step)
         assert raw == grid[rows[best], cols[best]] and n == rows.size
         at = (at[0] + dx, at[1] + dy, 20, 20)
-    # the plain search may choose otherwise; a weight of 0 is the plain choice
-    plain = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120))
-    zero = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                        colour=(table, x0, y0, 0.0, offset))
+    # a weight of 0 is the plain choice
+    plain = _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages)
+    zero = _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages,
+                   ([(t, x, y, 0.0) for t, x, y, _ in cues], offset, relative))
     assert [r[:2] for r in zero] == [r[:2] for r in plain]
+    table, x0, y0, w = cues[0]
     small = np.ascontiguousarray(table[:60, :60])  # candidates reach beyond it
     with pytest.raises(IndexError, match="cue"):
-        _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                     colour=(small, x0, y0, weight, offset))
+        _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, ([*cues[1:], (small, x0, y0, w)], offset, relative))
     with pytest.raises(ValueError, match="weight"):
-        _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                     colour=(table, x0, y0, 1.5, offset))
-    with pytest.raises(ValueError, match="relative"):
-        _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                     colour=(table, x0, y0, weight, offset, True, 1))
+        _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, ([(table, x0, y0, 1.5)], offset, relative))
+    with pytest.raises(ValueError, match="add up"):
+        _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, ([(table, x0, y0, 0.6)] * 2, offset, relative))
+    with pytest.raises(ValueError, match="cues must be"):
+        _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, (cues, offset))
+    with pytest.raises(ValueError, match="at least one"):
+        _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, ([], offset, relative))
 
 
 def test_relative_colour_merge_keeps_the_classifier_when_its_confidence_collapsed() -> None:
@@ -480,16 +508,14 @@ def test_relative_colour_merge_keeps_the_classifier_when_its_confidence_collapse
     mu1, mu0 = rng.normal(0, 300, 6), rng.normal(0, 300, 6)
     s1, s0 = np.full(6, 1.0), np.full(6, 1e4)  # a narrow target model: raw << 0 on the grid
     box, stages = (60, 50, 20, 20), [(25, 4)]
-    plain = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120))
+    plain = _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages)
     assert plain[0][2] / 3 < -40  # the absolute confidence has collapsed
     # a cue that is highest far from the classifier's choice
     cue_map = np.zeros((100, 130))
     cue_map[:30, :30] = 1.0
     table = cv2.integral(cue_map, sdepth=cv2.CV_64F)
-    absolute = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                            colour=(table, 10, 5, 0.05, 1.4))
-    relative = _core.search(ii, bank, sel, mu1, s1, mu0, s0, 1e-30, box, stages, (150, 120),
-                            colour=(table, 10, 5, 0.05, 0.0, True))
+    absolute = _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, ([(table, 10, 5, 0.05)], 1.4, False))
+    relative = _search(ii, bank, sel, mu1, s1, mu0, s0, box, stages, ([(table, 10, 5, 0.05)], 0.0, True))
     assert absolute[0][:2] != plain[0][:2]
     assert relative[0][:2] == plain[0][:2]
 

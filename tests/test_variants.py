@@ -103,14 +103,14 @@ def test_search_grids(variant: str, monkeypatch: pytest.MonkeyPatch) -> None:
         calls.append((args[9], args[10], out[3], len(args[2])))
         return out
 
-    def spy_search(*args, **kw):  # the whole coarse-to-fine search in one call
-        out = real_search(*args, **kw)
-        calls.extend((r, s, stage[3], len(args[2])) for (r, s), stage in zip(args[9], out))
+    def spy_search(request):  # the whole coarse-to-fine search in one call
+        out = real_search(request)
+        calls.extend((r, s, stage[3], len(request.selected)) for (r, s), stage in zip(request.stages, out))
         return out
 
     def spy_step(search, learn, bags):  # the whole frame step in one call
         out = real_step(search, learn, bags)
-        calls.extend((r, s, stage[3], len(search[2])) for (r, s), stage in zip(search[9], out[0]))
+        calls.extend((r, s, stage[3], len(search.selected)) for (r, s), stage in zip(search.stages, out[0]))
         return out
 
     t, _ = bank(variant)
@@ -137,10 +137,10 @@ def test_bag_model_and_selection(variant: str, expected, monkeypatch: pytest.Mon
 
     real_learn = tracker_mod._core.learn
 
-    def spy_learn(*args, **kw):  # the core's one-call learning step selects WMIL itself
-        if kw["select"] == "wmil":
-            seen.append(("wmil", kw["w_pos"], kw["k"]))
-        return real_learn(*args, **kw)
+    def spy_learn(request):  # the core's one-call learning step selects WMIL itself
+        if request.select == "wmil":
+            seen.append(("wmil", request.w_pos, request.k))
+        return real_learn(request)
 
     monkeypatch.setattr(tracker_mod, "milboost_select", spy_m)
     monkeypatch.setattr(tracker_mod._core, "learn", spy_learn)
@@ -193,14 +193,19 @@ def test_reference_compat_flags_change_what_they_name(monkeypatch: pytest.Monkey
 
     real_learn = tracker_mod._core.learn
 
-    def spy(*args, **kw):  # the core's one-call learning step runs the WMIL selection
-        out = real_learn(*args, **kw)
-        if kw["select"] == "wmil":  # the same step again, for the log ratios it selected on
-            h = real_learn(*args, **{**kw, "select": "ratios"})[5]
-            n_pos = args[4]
-            seen.append((kw["w_pos"], kw["code_gradient"], h[:, :n_pos], h[:, n_pos:]))
-            assert np.array_equal(out[4], real(h[:, :n_pos], h[:, n_pos:], kw["w_pos"], kw["k"],
-                                               code_gradient=kw["code_gradient"]))
+    def spy(r):  # the core's one-call learning step runs the WMIL selection
+        out = real_learn(r)
+        if r.select == "wmil":  # the same step again, for the log ratios it selected on
+            again = tracker_mod._core.LearnRequest(
+                r.ii, r.bank, r.xs, r.ys, r.n_pos, r.mu1, r.sigma1, r.mu0, r.sigma0, lam=r.lam,
+                first_pos=r.first_pos, first_neg=r.first_neg, direct_first=r.direct_first,
+                mil=r.mil, sigma_floor=r.sigma_floor, guard=r.guard, select="ratios",
+                extra_neg=r.extra_neg, second=r.second)
+            h = real_learn(again)[5]
+            n_pos = r.n_pos
+            seen.append((r.w_pos, r.code_gradient, h[:, :n_pos], h[:, n_pos:]))
+            assert np.array_equal(out[4], real(h[:, :n_pos], h[:, n_pos:], r.w_pos, r.k,
+                                               code_gradient=r.code_gradient))
         return out
 
     monkeypatch.setattr(tracker_mod._core, "learn", spy)

@@ -48,7 +48,10 @@ void bind_integral(py::module_& m);
 void bind_haar(py::module_& m);
 void bind_scoring(py::module_& m);
 void bind_colour(py::module_& m);
-void bind_frame(py::module_& m);
+void bind_search(py::module_& m);
+void bind_learn(py::module_& m);
+void bind_draws(py::module_& m);
+void bind_batch(py::module_& m);
 
 inline void require(bool ok, const std::string& message) {
   if (!ok) throw py::value_error(message);

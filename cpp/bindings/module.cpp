@@ -17,5 +17,8 @@ PYBIND11_MODULE(_core, m) {
   wmiltrack::bindings::bind_haar(m);
   wmiltrack::bindings::bind_scoring(m);
   wmiltrack::bindings::bind_colour(m);
-  wmiltrack::bindings::bind_frame(m);
+  wmiltrack::bindings::bind_search(m);
+  wmiltrack::bindings::bind_learn(m);
+  wmiltrack::bindings::bind_draws(m);
+  wmiltrack::bindings::bind_batch(m);
 }

@@ -225,15 +225,16 @@ void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool a
 
 namespace {
 
-// The candidate chosen by the merged score of BoxMeanCue (-1 when no raw score is finite);
+// The candidate chosen by the merged score of CueMerge (-1 when no raw score is finite);
 // `finite` receives the number of candidates with a finite raw score.
-int merged_best(const BoxMeanCue& cue, const Rect& box, const std::vector<int>& dx,
+int merged_best(const CueMerge& merge, const Rect& box, const std::vector<int>& dx,
                 const std::vector<int>& dy, const std::vector<double>& raw, int& finite) {
-  const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(cue.cols) + 1;
   const double area = static_cast<double>(box.w) * static_cast<double>(box.h);
-  const double k = static_cast<double>(std::max(cue.k, 1));
+  const double k = static_cast<double>(std::max(merge.k, 1));
+  double total = 0.0;  // the cues' weights
+  for (const BoxMeanTable& cue : merge.cues) total += cue.weight;
   double reference = 0.0;  // raw scores are read from here: 0, or the grid's best (relative)
-  if (cue.relative) {
+  if (merge.relative) {
     reference = -std::numeric_limits<double>::infinity();
     for (const double r : raw) {
       if (std::isfinite(r) && r > reference) reference = r;
@@ -245,16 +246,20 @@ int merged_best(const BoxMeanCue& cue, const Rect& box, const std::vector<int>& 
   for (std::size_t q = 0; q < raw.size(); ++q) {
     if (!std::isfinite(raw[q])) continue;
     ++finite;
-    const std::int64_t cx = static_cast<std::int64_t>(box.x) + dx[q] - cue.x0;
-    const std::int64_t cy = static_cast<std::int64_t>(box.y) + dy[q] - cue.y0;
-    if (cx < 0 || cy < 0 || cx + box.w > cue.cols || cy + box.h > cue.rows) {
-      throw std::out_of_range("score_grid: a candidate box lies outside the cue's table");
+    const double conf = 0.5 * (1.0 + std::tanh(0.5 * ((raw[q] - reference) / k - merge.offset)));
+    double value = (1.0 - total) * conf;
+    for (const BoxMeanTable& cue : merge.cues) {
+      const std::int64_t cx = static_cast<std::int64_t>(box.x) + dx[q] - cue.x0;
+      const std::int64_t cy = static_cast<std::int64_t>(box.y) + dy[q] - cue.y0;
+      if (cx < 0 || cy < 0 || cx + box.w > cue.cols || cy + box.h > cue.rows) {
+        throw std::out_of_range("score_grid: a candidate box lies outside a cue's table");
+      }
+      const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(cue.cols) + 1;
+      const double* top = cue.table + cy * stride + cx;
+      const double* bottom = top + static_cast<std::ptrdiff_t>(box.h) * stride;
+      const double s = bottom[box.w] - top[box.w] - bottom[0] + top[0];
+      value += cue.weight * (s / area);
     }
-    const double* top = cue.table + cy * stride + cx;
-    const double* bottom = top + static_cast<std::ptrdiff_t>(box.h) * stride;
-    const double s = bottom[box.w] - top[box.w] - bottom[0] + top[0];
-    const double conf = 0.5 * (1.0 + std::tanh(0.5 * ((raw[q] - reference) / k - cue.offset)));
-    const double value = (1.0 - cue.weight) * conf + cue.weight * (s / area);
     if (best < 0 || value > best_value) {
       best = static_cast<int>(q);
       best_value = value;
@@ -284,7 +289,7 @@ void check_grid(const IntegralImage& ii, int n_selected, const WeakGaussians& we
 // bank's extent), so that the stages of a search compile them once.
 GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeatures& compiled,
                       const WeakGaussians& weak, const Rect& box, int radius, int step,
-                      int frame_width, int frame_height, double* scores, const BoxMeanCue* cue) {
+                      int frame_width, int frame_height, double* scores, const CueMerge* cues) {
   const int n = grid_half_size(radius, step);
   const int side = 2 * n + 1;
   const long r2 = static_cast<long>(radius) * radius;
@@ -361,8 +366,8 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
   }
 
   int best = -1;
-  if (cue != nullptr) {
-    best = merged_best(*cue, box, cand_dx, cand_dy, total, result.candidates);
+  if (cues != nullptr) {
+    best = merged_best(*cues, box, cand_dx, cand_dy, total, result.candidates);
     if (best < 0) {
       result.candidates = 0;
       return result;
@@ -390,13 +395,13 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
 GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* selected,
                       int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
                       int step, int frame_width, int frame_height, double* scores,
-                      const BoxMeanCue* cue) {
+                      const CueMerge* cues) {
   check_grid(ii, n_selected, weak, box, radius, step);
   // Compiled first: a feature index outside the bank or a rectangle on a plane the integral
   // image lacks is an error even when no candidate fits in the frame.
   const CompiledFeatures compiled(bank, selected, n_selected, ii);
   return grid_stage(ii, bank.extent(), compiled, weak, box, radius, step, frame_width,
-                    frame_height, scores, cue);
+                    frame_height, scores, cues);
 }
 
 double template_fit(const IntegralImage& ii, const FeatureBank& bank, int x, int y,
@@ -415,7 +420,7 @@ std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
                                const std::int32_t* selected, int n_selected,
                                const WeakGaussians& weak, Rect box,
                                const std::vector<SearchStage>& stages, int frame_width,
-                               int frame_height, const BoxMeanCue* cue) {
+                               int frame_height, const CueMerge* cues) {
   std::vector<GridResult> out;
   out.reserve(stages.size());
   // The features are compiled once, for every stage (after the first stage's checks, in
@@ -425,7 +430,7 @@ std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
     check_grid(ii, n_selected, weak, box, stage.radius, stage.step);
     if (!compiled) compiled.emplace(bank, selected, n_selected, ii);
     const GridResult r = grid_stage(ii, bank.extent(), *compiled, weak, box, stage.radius,
-                                    stage.step, frame_width, frame_height, nullptr, cue);
+                                    stage.step, frame_width, frame_height, nullptr, cues);
     if (r.candidates > 0) {
       box.x += r.dx;
       box.y += r.dy;

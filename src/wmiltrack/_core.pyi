@@ -124,17 +124,36 @@ def template_fit(ii: IntegralImage, bank: FeatureBank, x: int, y: int, mu: npt.A
                  sigma: npt.ArrayLike) -> float:
     """-mean(log1p(z**2)) of the box's features, z = (value - mu) / sigma."""
 
-def search(ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayLike,
-           sigma1: npt.ArrayLike, mu0: npt.ArrayLike, sigma0: npt.ArrayLike, guard: float,
-           box: tuple[int, int, int, int], stages: Sequence[tuple[int, int]],
-           frame_size: tuple[int, int], frame: npt.NDArray[np.uint8] | None = None,
-           roi: tuple[int, int, int, int] | None = None,
-           colour: tuple[_F64, int, int, float, float] | tuple[_F64, int, int, float, float, bool]
-           | None = None,
-           ) -> tuple[tuple[int, int, float, int], ...]:
-    """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage;
-    colour = (table, x0, y0, weight, offset[, relative]) merges a box-mean cue into each stage's
-    choice (relative: scores measured from the stage's best)."""
+_Cues = tuple[Sequence[tuple[_F64, int, int, float]], float, bool]
+_Searched = tuple[tuple[int, int, float, int], ...]
+_Learnt = tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None, _F64 | None,
+                _F64 | None]
+
+class SearchRequest:
+    """A coarse-to-fine search's inputs, by name. cues = (tables, offset, relative), tables a
+    list of (table, x0, y0, weight): box-mean cues merged into each stage's choice."""
+    def __init__(self, ii: IntegralImage, bank: FeatureBank, selected: _I32, mu1: npt.ArrayLike,
+                 sigma1: npt.ArrayLike, mu0: npt.ArrayLike, sigma0: npt.ArrayLike, guard: float,
+                 box: tuple[int, int, int, int], stages: Sequence[tuple[int, int]],
+                 frame_size: tuple[int, int], frame: npt.NDArray[np.uint8] | None = None,
+                 roi: tuple[int, int, int, int] | None = None, cues: _Cues | None = None) -> None: ...
+    ii: IntegralImage
+    bank: FeatureBank
+    selected: _I32
+    mu1: _F64
+    sigma1: _F64
+    mu0: _F64
+    sigma0: _F64
+    guard: float
+    box: tuple[int, int, int, int]
+    stages: list[tuple[int, int]]
+    frame_size: tuple[int, int]
+    frame: npt.NDArray[np.uint8] | None
+    roi: tuple[int, int, int, int] | None
+    cues: _Cues | None
+
+def search(request: SearchRequest) -> _Searched:
+    """A coarse-to-fine search in one call: one (dx, dy, best_score, n_candidates) per stage."""
 
 
 class ColourHistograms:
@@ -171,29 +190,65 @@ class ColourHistograms:
     @property
     def likelihood(self) -> _F64: ...
 
-def learn(ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
-          mu1: _F64, sigma1: _F64, mu0: _F64, sigma0: _F64, *, lam: float, first_pos: bool,
-          first_neg: bool, direct_first: bool, mil: bool, sigma_floor: float, guard: float,
-          select: str, w_pos: _F64 | None = None, k: int = 0, code_gradient: bool = False,
-          extra_neg: _F64 | None = None, second: tuple[_F64, _F64, float, bool] | None = None,
-          ) -> tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
-                     _F64 | None, _F64 | None]:
+class LearnRequest:
+    """A learning step's inputs, by name (see _core.learn)."""
+    def __init__(self, ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
+                 mu1: _F64, sigma1: _F64, mu0: _F64, sigma0: _F64, *, lam: float, first_pos: bool,
+                 first_neg: bool, direct_first: bool, mil: bool, sigma_floor: float, guard: float,
+                 select: str, w_pos: _F64 | None = None, k: int = 0, code_gradient: bool = False,
+                 extra_neg: _F64 | None = None,
+                 second: tuple[_F64, _F64, float, bool] | None = None) -> None: ...
+    ii: IntegralImage
+    bank: FeatureBank
+    xs: _I32
+    ys: _I32
+    n_pos: int
+    mu1: _F64
+    sigma1: _F64
+    mu0: _F64
+    sigma0: _F64
+    lam: float
+    first_pos: bool
+    first_neg: bool
+    direct_first: bool
+    mil: bool
+    sigma_floor: float
+    guard: float
+    select: str
+    w_pos: _F64 | None
+    k: int
+    code_gradient: bool
+    extra_neg: _F64 | None
+    second: tuple[_F64, _F64, float, bool] | None
+
+def learn(request: LearnRequest) -> _Learnt:
     """The learning half of a frame step in one call: (mu1, sigma1, mu0, sigma0, selected, h,
     mu2, sigma2); extra_neg adds negatives as feature values, second is a second target model
     (mu, sigma, lam, first) updated from the positives alone."""
 
-_FrameStep = tuple[tuple[tuple[int, int, float, int], ...],
-                   tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
-                         _F64 | None, _F64 | None],
-                   tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], int]]
+class BagRequest:
+    """A BagSampler's draw, by name: the negatives drawn from rng as numpy would."""
+    def __init__(self, rng: np.random.Generator, pos_offsets: _I32, pos_terms: _F64 | None,
+                 weights: str, neg_offsets: _I32, exact: bool, neg_count: int,
+                 keep_prob: float) -> None: ...
+    rng: np.random.Generator
+    pos_offsets: _I32
+    pos_terms: _F64 | None
+    weights: str
+    neg_offsets: _I32
+    exact: bool
+    neg_count: int
+    keep_prob: float
 
-def frame_step(search: tuple[object, ...], learn: tuple[object, ...], bags: tuple[object, ...]
-               ) -> _FrameStep:
-    """search(), the bags sampled where it landed (bags = (rng, pos_offsets, pos_terms, weights,
-    neg_offsets, exact, neg_count, keep_prob), numpy's draws from rng), then learn() on them, on
-    the integral image the search read: (search's result, learn's, (xs, ys, n_pos))."""
+_FrameStep = tuple[_Searched, _Learnt, tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], int]]
 
-def frame_step_many(jobs: Sequence[tuple[object, ...]], threads: int) -> list[_FrameStep]:
+def frame_step(search: SearchRequest, learn: LearnRequest, bags: BagRequest) -> _FrameStep:
+    """The search, the bags sampled where it landed (numpy's draws from the request's rng),
+    then the learning on them, on the integral image the search read: (search's result,
+    learn's, (xs, ys, n_pos))."""
+
+def frame_step_many(steps: Sequence[tuple[SearchRequest, LearnRequest, BagRequest]],
+                    threads: int) -> list[_FrameStep]:
     """frame_step() for several targets in one call, on up to `threads` threads."""
 
 def numpy_choice_sorted(rng: np.random.Generator, n: int, k: int) -> list[int]:
@@ -202,11 +257,8 @@ def numpy_choice_sorted(rng: np.random.Generator, n: int, k: int) -> list[int]:
 def numpy_bernoulli_first(rng: np.random.Generator, n: int, p: float, limit: int) -> list[int]:
     """The first `limit` indices of rng.random(n) < p, drawn as numpy draws them."""
 
-def search_many(jobs: Sequence[tuple[object, ...]], threads: int
-                ) -> list[tuple[tuple[int, int, float, int], ...]]:
-    """search() for several targets in one call, on up to `threads` threads."""
+def search_many(requests: Sequence[SearchRequest], threads: int) -> list[_Searched]:
+    """search() for several requests in one call, on up to `threads` threads."""
 
-def learn_many(jobs: Sequence[tuple[object, ...]], threads: int
-               ) -> list[tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None,
-                               _F64 | None, _F64 | None]]:
-    """learn() for several targets in one call, on up to `threads` threads."""
+def learn_many(requests: Sequence[LearnRequest], threads: int) -> list[_Learnt]:
+    """learn() for several requests in one call, on up to `threads` threads."""

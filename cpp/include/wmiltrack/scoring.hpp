@@ -48,21 +48,26 @@ struct GridResult {
   int candidates = 0;  // 0: no candidate box fits in the frame; dx = dy = 0 then
 };
 
-// A second cue merged into the choice of a search's best candidate (rcwmil-plus's colour
-// likelihood, after Staple): the candidate with the largest
-//   (1 - weight) * logistic(raw / k - offset) + weight * (mean of the cue over the box)
-// wins (the first such in row-major order), and its raw score is reported; candidates whose
-// raw score is not finite take no part. logistic(z) is computed as 0.5 (1 + tanh(z / 2)).
-// With `relative`, raw is read from the grid's best finite raw score (raw - best for raw): the
-// confidence is then relative to this frame's best candidate, so the classifier's ordering still
-// counts when its absolute confidence has collapsed over the whole grid.
-struct BoxMeanCue {
+// A cue's map over a frame region as an integral image, and its weight in the merge.
+struct BoxMeanTable {
   const double* table = nullptr;  // (rows + 1) x (cols + 1) integral image, row-major, with a
   int rows = 0;                   // zero first row and column, over the frame region
   int cols = 0;                   // [x0, x0 + cols) x [y0, y0 + rows)
   int x0 = 0;
   int y0 = 0;
   double weight = 0.0;
+};
+
+// Cues merged into the choice of a search's best candidate (rcwmil-plus's colour likelihood,
+// after Staple, and any other cue): the candidate with the largest
+//   (1 - sum of weights) * logistic(raw / k - offset) + sum of weight * (mean of its map over the box)
+// wins (the first such in row-major order), and its raw score is reported; candidates whose
+// raw score is not finite take no part. logistic(z) is computed as 0.5 (1 + tanh(z / 2)).
+// With `relative`, raw is read from the grid's best finite raw score (raw - best for raw): the
+// confidence is then relative to this frame's best candidate, so the classifier's ordering still
+// counts when its absolute confidence has collapsed over the whole grid.
+struct CueMerge {
+  std::vector<BoxMeanTable> cues;  // at least one
   double offset = 0.0;
   int k = 1;  // raw scores are divided by k (the number of selected features)
   bool relative = false;  // see above
@@ -71,13 +76,13 @@ struct BoxMeanCue {
 // Scores the boxes `box` + (i*step, j*step) with (i*step)^2 + (j*step)^2 < radius^2 that lie
 // fully inside the frame, as the sum of the selected features' log ratios. Returns the first
 // maximum in row-major order (dy outer, dx inner). When `scores` is not null it receives the
-// (2n+1) x (2n+1) grid, -inf where no candidate was scored. With a `cue` the choice is the
-// merged one (see BoxMeanCue; `candidates` then counts those with a finite raw score), and
-// a candidate box outside the cue's table throws std::out_of_range.
+// (2n+1) x (2n+1) grid, -inf where no candidate was scored. With `cues` the choice is the
+// merged one (see CueMerge; `candidates` then counts those with a finite raw score), and
+// a candidate box outside a cue's table throws std::out_of_range.
 GridResult score_grid(const IntegralImage& ii, const FeatureBank& bank, const std::int32_t* selected,
                       int n_selected, const WeakGaussians& weak, const Rect& box, int radius,
                       int step, int frame_width, int frame_height, double* scores,
-                      const BoxMeanCue* cue = nullptr);
+                      const CueMerge* cues = nullptr);
 
 // How well the box with top-left corner (x, y) fits a target model over all the bank's
 // features: minus the mean of log(1 + z^2), z = (value - mu[k]) / sigma[k] (a heavy-tailed
@@ -94,12 +99,12 @@ struct SearchStage {
 
 // score_grid() for each stage in turn, each centred where the previous one moved the box
 // (a stage without candidates leaves it in place). Returns each stage's result, whose dx/dy
-// are relative to that stage's centre. One call for the whole search of a frame; `cue` (may
-// be null) is merged into every stage's choice.
+// are relative to that stage's centre. One call for the whole search of a frame; `cues` (may
+// be null) are merged into every stage's choice.
 std::vector<GridResult> search(const IntegralImage& ii, const FeatureBank& bank,
                                const std::int32_t* selected, int n_selected,
                                const WeakGaussians& weak, Rect box,
                                const std::vector<SearchStage>& stages, int frame_width,
-                               int frame_height, const BoxMeanCue* cue = nullptr);
+                               int frame_height, const CueMerge* cues = nullptr);
 
 }  // namespace wmiltrack

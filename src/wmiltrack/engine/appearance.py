@@ -158,17 +158,18 @@ class HaarAppearance:
         """The core's coarse-to-fine search from ``box``; with ``img`` and ``roi`` the core
         computes the luma integral image of ``roi`` first; ``cue`` is merged into each stage."""
         pool = self.pool
-        return Search((self.ii, self.bank(box[2], box[3]), self.selected, pool.mu1, pool.sigma1,
-                       pool.mu0, pool.sigma0, self.params.guard, box, stages, frame_wh, img, roi,
-                       cue))
+        return Search(self.ii, self.bank(box[2], box[3]), self.selected, pool.mu1, pool.sigma1,
+                      pool.mu0, pool.sigma0, self.params.guard, box, stages, frame_wh, img, roi,
+                      cue)
 
     def grid(self, box: IntBox, radius: int, frame_wh: tuple[int, int]) -> tuple[int, int, float, int]:
         """Best offset, its raw score and the candidate count of the step-1 grid of
         ``radius`` around ``box`` (one search stage, at ``box``'s size)."""
         pool = self.pool
-        ((dx, dy, score, n),) = _core.search(self.ii, self.bank(box[2], box[3]), self.selected,
-                                              pool.mu1, pool.sigma1, pool.mu0, pool.sigma0,
-                                              self.params.guard, box, [(radius, 1)], frame_wh)
+        ((dx, dy, score, n),) = _core.search(Search(self.ii, self.bank(box[2], box[3]),
+                                                    self.selected, pool.mu1, pool.sigma1, pool.mu0,
+                                                    pool.sigma0, self.params.guard, box,
+                                                    [(radius, 1)], frame_wh))
         return dx, dy, score, n
 
     def project(self, w: int, h: int, corners: np.ndarray) -> np.ndarray:
@@ -215,9 +216,9 @@ class HaarAppearance:
         p = self.params
         select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
         weights = p.instance_weights if select == "wmil" else "none"
-        bags = (self.rng, *self.track.core_spec(weights))
+        bags = _core.BagRequest(self.rng, *self.track.core_spec(weights))
         request = self._learn_request(frame_box, _NO_CORNERS, 0, select, None, None, None)
-        results, learnt, (xs, ys, n_pos) = yield Step((search, request, bags))
+        results, learnt, (xs, ys, n_pos) = yield Step(search, request, bags)
         self.bags = (xs, ys, n_pos)  # split by corners() when asked
         self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos)
         return results
@@ -246,11 +247,13 @@ class HaarAppearance:
         ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives) of ``box``'s size."""
         p = self.params
         pool = self.pool
-        return Learn((self.ii, self.bank(box[2], box[3]), corners[:, 0], corners[:, 1], n_pos,
-                      pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.learning_rate,
-                      pool.first(1), pool.first(0), p.first_update == "direct",
-                      p.classifier == "mil", p.sigma_floor, p.guard, select, w, p.num_selected,
-                      p.gradient == "code", extra, second))
+        return Learn(self.ii, self.bank(box[2], box[3]), corners[:, 0], corners[:, 1], n_pos,
+                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, lam=p.learning_rate,
+                     first_pos=pool.first(1), first_neg=pool.first(0),
+                     direct_first=p.first_update == "direct", mil=p.classifier == "mil",
+                     sigma_floor=p.sigma_floor, guard=p.guard, select=select, w_pos=w,
+                     k=p.num_selected, code_gradient=p.gradient == "code", extra_neg=extra,
+                     second=second)
 
     def _take_learnt(self, learnt: tuple[Any, ...], n_pos: int, n_neg: int) -> None:
         """Keep the model and the selection that a learning request returned."""

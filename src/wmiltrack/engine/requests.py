@@ -10,44 +10,41 @@ step together, on the core's threads with the GIL released
 from __future__ import annotations
 
 from collections.abc import Generator
-from typing import Any
+from typing import Any, NamedTuple
 
 from .. import _core
 
 __all__ = ["Learn", "Search", "Step", "Steps", "drive", "run", "run_batches"]
 
 
-class Search(tuple):  # type: ignore[type-arg]
-    """A request for the core's search (``_core.search``'s arguments, in order)."""
+Search = _core.SearchRequest
+"""A request for the core's coarse-to-fine search (:class:`_core.SearchRequest`)."""
+
+Learn = _core.LearnRequest
+"""A request for the core's learning step (:class:`_core.LearnRequest`)."""
 
 
-class Learn(tuple):  # type: ignore[type-arg]
-    """A request for the core's learning step: ``_core.learn``'s nine leading arguments,
-    then the values of :data:`LEARN_KEYS`."""
+class Step(NamedTuple):
+    """A request for a whole frame step in one core call (``_core.frame_step``): a search, a
+    learning step, and the bag draw that the core makes where the search lands."""
+
+    search: _core.SearchRequest
+    learn: _core.LearnRequest
+    bags: _core.BagRequest
 
 
-class Step(tuple):  # type: ignore[type-arg]
-    """A request for a whole frame step in one core call (``_core.frame_step``'s arguments:
-    a search, a learning step, and the bag sampler whose bags the core draws where the
-    search lands)."""
-
-
-#: ``_core.learn``'s keyword arguments, in the order a :class:`Learn` request holds them.
-LEARN_KEYS = ("lam", "first_pos", "first_neg", "direct_first", "mil", "sigma_floor", "guard",
-              "select", "w_pos", "k", "code_gradient", "extra_neg", "second")
-
-Steps = Generator[tuple[Any, ...], Any, Any]
-"""A frame step: yields :class:`Search`, :class:`Learn` or :class:`Step` requests, receives
+Steps = Generator[Any, Any, Any]
+"""A frame step: yields :data:`Search`, :data:`Learn` or :class:`Step` requests, receives
 their results, and returns the step's value."""
 
 
-def run(request: tuple[Any, ...]) -> Any:
+def run(request: Any) -> Any:
     """The core's answer to one request."""
-    if isinstance(request, Search):
-        return _core.search(*request)
     if isinstance(request, Step):
         return _core.frame_step(*request)
-    return _core.learn(*request[:9], **dict(zip(LEARN_KEYS, request[9:])))
+    if isinstance(request, Search):
+        return _core.search(request)
+    return _core.learn(request)
 
 
 def drive(steps: Steps) -> Any:
@@ -60,7 +57,7 @@ def drive(steps: Steps) -> Any:
         return stop.value
 
 
-def run_batches(requests: dict[int, tuple[Any, ...]], threads: int) -> dict[int, Any]:
+def run_batches(requests: dict[int, Any], threads: int) -> dict[int, Any]:
     """The answers to several trackers' requests (keyed as given), each kind in one core call
     on up to ``threads`` threads."""
     results: dict[int, Any] = {}
@@ -69,5 +66,5 @@ def run_batches(requests: dict[int, tuple[Any, ...]], threads: int) -> dict[int,
                            (Learn, _core.learn_many)):
         batch = [i for i in order if isinstance(requests[i], kind)]
         if batch:
-            results.update(zip(batch, run_many([tuple(requests[i]) for i in batch], threads)))
+            results.update(zip(batch, run_many([requests[i] for i in batch], threads)))
     return results

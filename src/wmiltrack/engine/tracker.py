@@ -23,7 +23,7 @@ import numpy as np
 from .. import _core
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
-from .cues import ColourCue, Cue, CueTable
+from .cues import ColourCue, Cue
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .motion import VelocityMotion
 from .params import Params
@@ -102,22 +102,6 @@ def _start_report(report: ContrastScore, params: Params, frame: np.ndarray, box:
     if params.score_luma > 0:
         report.luma = ColourModel(intensity=True, sample=params.colour_sample)
         report.luma.learn(frame, box)
-
-
-def _merged(tables: list[tuple[CueTable, float]]) -> tuple[CueTable, float]:
-    """Several cues' tables (over the same region) as one: their weighted mean, with the sum of
-    their weights (a box's mean is linear in the map)."""
-    if len(tables) == 1:
-        return tables[0]
-    total = sum(w for _, w in tables)
-    (first, x0, y0), _ = tables[0]
-    out = np.zeros_like(first)
-    for (table, tx, ty), w in tables:
-        if table.shape != first.shape or (tx, ty) != (x0, y0):
-            raise ValueError("cues must return their tables over the region they are asked for")
-        if total > 0:
-            out += (w / total) * table
-    return (out, x0, y0), total
 
 
 class Tracker:
@@ -384,10 +368,10 @@ class Tracker:
         x, y, w, h = origin
         m = self._params.search_reach + 1
         region = (x - m, y - m, x + w + m, y + h + m)
-        (table, x0, y0), weight = _merged([(c.table(img, region), c.weight) for c in cues])
+        tables = [(*c.table(img, region), c.weight) for c in cues]
         rel = self._params.colour_relative
         offset = self._params.confidence_offset if rel is None else -rel
-        return table, x0, y0, weight, offset, rel is not None
+        return tables, offset, rel is not None
 
     def _contrast(self) -> Callable[[IntBox], float] | None:
         """The colour cue's box contrast on this frame's table, for the scale estimator."""

@@ -1,0 +1,187 @@
+// Several requests in one call: the searches, learning steps or whole frame steps of many
+// targets on the core's threads with the GIL released once (MultiTracker, update_many).
+#include <string>
+#include <utility>
+
+#include "jobs.hpp"
+
+namespace wmiltrack::bindings {
+
+namespace {
+
+void require_threads(int threads) {
+  require(threads >= 1, "threads must be >= 1, got " + std::to_string(threads));
+}
+
+// Runs every job on up to `threads` threads with the GIL released once; their results, in
+// order (the first error is raised after all ran).
+template <class Job, class Result>
+py::list run_all(std::vector<Job>& jobs, int threads, Result result) {
+  {
+    py::gil_scoped_release release;
+    parallel_for(static_cast<int>(jobs.size()), threads,
+                 [&jobs](int i) { jobs[static_cast<std::size_t>(i)].run(); });
+  }
+  py::list out;
+  for (Job& job : jobs) out.append(result(job));
+  return out;
+}
+
+// One frame step's requests: (search, learn, bags).
+using FrameStep = std::tuple<py::object, py::object, py::object>;
+
+// Each target's search, bag draws and learning in turn, the targets on up to `threads` threads
+// with the GIL released once (the learning jobs are built before, and take their boxes from the
+// draws in C++). Every job owns its integral image or reads a computed one; every job draws from
+// its own generator (their locks are held meanwhile).
+py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
+  require_threads(threads);
+  const std::size_t n = steps.size();
+  std::vector<SearchJob> searches;
+  std::vector<BagJob> bag_jobs;
+  searches.reserve(n);
+  bag_jobs.reserve(n);
+  for (const auto& [search, learn, bags] : steps) {
+    const auto& search_request = search.cast<const SearchRequest&>();
+    require(learn.cast<const LearnRequest&>().ii.is(search_request.ii),
+            "frame_step: the learning step must read the search's IntegralImage");
+    searches.push_back(make_search(search_request, search));
+    bag_jobs.push_back(make_bags(bags.cast<const BagRequest&>()));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      require(searches[i].ii != searches[j].ii || (!searches[i].frame && !searches[j].frame),
+              "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
+                  " share an IntegralImage that one of them computes");
+      // (Two Generators may wrap one bit generator: it is its lock that each job takes.)
+      require(!py::getattr(bag_jobs[i].rng, "bit_generator", bag_jobs[i].rng)
+                   .is(py::getattr(bag_jobs[j].rng, "bit_generator", bag_jobs[j].rng)),
+              "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
+                  " draw from the same generator");
+    }
+  }
+  std::vector<LearnJob> learns;  // their boxes come from the draws below
+  learns.reserve(n);
+  for (const auto& step : steps) {
+    const py::object& learn = std::get<1>(step);
+    learns.push_back(make_learn(learn.cast<const LearnRequest&>(), learn, true));
+  }
+  std::vector<std::unique_ptr<NumpyBits>> rngs;
+  rngs.reserve(n);
+  for (BagJob& job : bag_jobs) rngs.push_back(std::make_unique<NumpyBits>(job.rng));
+  {
+    py::gil_scoped_release release;
+    parallel_for(static_cast<int>(n), threads, [&](int k) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      SearchJob& search = searches[i];
+      search.run();
+      Rect box = search.box;  // where the search lands
+      for (const GridResult& r : search.out) {
+        if (r.candidates > 0) {
+          box.x += r.dx;
+          box.y += r.dy;
+        }
+      }
+      Bags bags = sample_bags(bag_jobs[i].spec, box, search.fw, search.fh, rngs[i]->bits());
+      learns[i].take_bags(std::move(bags), *search.ii);  // on the table the search read
+      learns[i].run();
+    });
+  }
+  rngs.clear();  // the generators' locks released (with the GIL)
+  py::list out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const LearnJob& learn = learns[i];
+    py::array_t<std::int32_t> xs(learn.xs.size(), learn.xs.data());
+    py::array_t<std::int32_t> ys(learn.ys.size(), learn.ys.data());
+    out.append(py::make_tuple(search_result(searches[i]), learn_result(learns[i]),
+                              py::make_tuple(xs, ys, learn.step.n_pos)));
+  }
+  return out;
+}
+
+// Each object of `requests` must be a T (a TypeError names the position otherwise).
+template <class T>
+void require_all(const std::vector<py::object>& requests, const char* kind) {
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    if (!py::isinstance<T>(requests[i])) {
+      throw py::type_error("request " + std::to_string(i) + " is not a " + kind);
+    }
+  }
+}
+
+}  // namespace
+
+void bind_batch(py::module_& m) {
+  m.def(
+      "search_many",
+      [](const std::vector<py::object>& requests, int threads) {
+        require_threads(threads);
+        require_all<SearchRequest>(requests, "SearchRequest");
+        std::vector<SearchJob> jobs;
+        jobs.reserve(requests.size());
+        for (const py::object& r : requests) jobs.push_back(make_search(r.cast<const SearchRequest&>(), r));
+        for (std::size_t i = 0; i < jobs.size(); ++i) {
+          for (std::size_t j = 0; j < jobs.size(); ++j) {
+            require(i == j || !jobs[i].frame || jobs[i].ii != jobs[j].ii,
+                    "job " + std::to_string(i) + " computes an IntegralImage that job " +
+                        std::to_string(j) + " also uses");
+          }
+        }
+        return run_all(jobs, threads, search_result);
+      },
+      py::arg("requests"), py::arg("threads"),
+      "search() for several SearchRequests in one call, on up to `threads` threads with the\n"
+      "GIL released once. A request that computes its integral image (frame not None) needs one\n"
+      "no other request uses (ValueError). Returns the results in order; the first error is\n"
+      "raised after all ran.");
+
+  m.def(
+      "learn_many",
+      [](const std::vector<py::object>& requests, int threads) {
+        require_threads(threads);
+        require_all<LearnRequest>(requests, "LearnRequest");
+        std::vector<LearnJob> jobs;
+        jobs.reserve(requests.size());
+        for (const py::object& r : requests) jobs.push_back(make_learn(r.cast<const LearnRequest&>(), r));
+        return run_all(jobs, threads, learn_result);
+      },
+      py::arg("requests"), py::arg("threads"),
+      "learn() for several LearnRequests in one call, on up to `threads` threads with the GIL\n"
+      "released once. Returns the results in order; the first error is raised after all ran.");
+
+  m.def(
+      "frame_step",
+      [](const py::object& search, const py::object& learn, const py::object& bags) {
+        require_all<SearchRequest>({search}, "SearchRequest");
+        require_all<LearnRequest>({learn}, "LearnRequest");
+        require_all<BagRequest>({bags}, "BagRequest");
+        return py::tuple(run_frame_steps({FrameStep{search, learn, bags}}, 1)[0]);
+      },
+      py::arg("search"), py::arg("learn"), py::arg("bags"),
+      "A tracker's whole frame step in one call: the SearchRequest `search`; then the bags\n"
+      "around the box where it landed, sampled as BagSampler does from the BagRequest `bags`\n"
+      "(the negatives drawn from its numpy Generator, continuing its stream as numpy's choice /\n"
+      "random would); then the LearnRequest `learn` on the integral image the search read (the\n"
+      "same object: computed by the search when it is given a frame and roi, else already\n"
+      "computed), its xs, ys, n_pos and w_pos replaced by the bags (and select='none' when no\n"
+      "positive fits in the frame). Returns (search's result, learn's result, (xs, ys, n_pos) of\n"
+      "the bags).");
+
+  m.def(
+      "frame_step_many",
+      [](const std::vector<std::tuple<py::object, py::object, py::object>>& steps, int threads) {
+        for (const auto& [search, learn, bags] : steps) {
+          require_all<SearchRequest>({search}, "SearchRequest");
+          require_all<LearnRequest>({learn}, "LearnRequest");
+          require_all<BagRequest>({bags}, "BagRequest");
+        }
+        return run_frame_steps(steps, threads);
+      },
+      py::arg("steps"), py::arg("threads"),
+      "frame_step() for several targets in one call, on up to `threads` threads with the GIL\n"
+      "released once: each step is a (SearchRequest, LearnRequest, BagRequest). Steps must not\n"
+      "share a generator, nor an IntegralImage that one of them computes (ValueError). Returns\n"
+      "the results in order; the first error is raised after all ran.");
+}
+
+}  // namespace wmiltrack::bindings

@@ -1,0 +1,104 @@
+// _core.BagRequest and the core's copies of numpy's draws (the negatives a frame step draws in
+// C++ from the tracker's own numpy Generator, as numpy would).
+#include <string>
+
+#include "jobs.hpp"
+
+namespace wmiltrack::bindings {
+
+NumpyBits::NumpyBits(const py::object& rng) {
+  const py::object bitgen = py::getattr(rng, "bit_generator", py::none());
+  const py::object cap = bitgen.is_none() ? py::none() : py::getattr(bitgen, "capsule", py::none());
+  const char* name = py::isinstance<py::capsule>(cap) ? cap.cast<py::capsule>().name() : nullptr;
+  if (name == nullptr || std::string(name) != "BitGenerator") {
+    throw py::type_error("rng must be a numpy.random.Generator");
+  }
+  bits_ = *cap.cast<py::capsule>().get_pointer<BitSource>();
+  lock_ = bitgen.attr("lock");
+  lock_.attr("acquire")();
+}
+
+NumpyBits::~NumpyBits() { lock_.attr("release")(); }
+
+BagJob make_bags(const BagRequest& r) {
+  BagJob job;
+  job.rng = r.rng;
+  const auto offsets = [](const py::handle& obj, const char* name) {
+    const Int32Array a = int32_array(obj, name);
+    require(a.ndim() == 2 && a.shape[1] == 2, std::string(name) + " must be an (n, 2) array");
+    return a.values;
+  };
+  job.pos = offsets(r.pos_offsets, "pos_offsets");
+  job.neg = offsets(r.neg_offsets, "neg_offsets");
+  const std::string& mode = r.weights;
+  BagSpec& spec = job.spec;
+  spec.weights = mode == "exp"       ? InstanceWeights::kExp
+                 : mode == "exp_sq"  ? InstanceWeights::kExpSq
+                 : mode == "uniform" ? InstanceWeights::kUniform
+                                     : InstanceWeights::kNone;
+  require(spec.weights != InstanceWeights::kNone || mode == "none",
+          "weights must be 'exp', 'exp_sq', 'uniform' or 'none', got '" + mode + "'");
+  spec.n_pos_offsets = static_cast<int>(job.pos.size() / 2);
+  spec.n_neg_offsets = static_cast<int>(job.neg.size() / 2);
+  if (spec.weights == InstanceWeights::kExp || spec.weights == InstanceWeights::kExpSq) {
+    const auto terms = r.pos_terms.cast<CArray<double>>();
+    require(terms.ndim() == 1 && terms.shape(0) == spec.n_pos_offsets,
+            "pos_terms must hold one term per positive offset");
+    job.terms.assign(terms.data(), terms.data() + terms.size());
+  }
+  spec.exact = r.exact;
+  spec.neg_count = r.neg_count;
+  spec.keep_prob = r.keep_prob;
+  require(spec.neg_count >= 0, "neg_count must be >= 0");
+  spec.pos = job.pos.data();
+  spec.neg = job.neg.data();
+  spec.pos_terms = job.terms.empty() ? nullptr : job.terms.data();
+  return job;
+}
+
+void bind_draws(py::module_& m) {
+  py::class_<BagRequest>(
+      m, "BagRequest",
+      "A BagSampler's draw, by name: the numpy Generator `rng` the negatives are drawn from;\n"
+      "pos_offsets (n, 2) and their weight terms pos_terms for weights = 'exp', 'exp_sq',\n"
+      "'uniform' or 'none'; neg_offsets (n, 2); exact (neg_count distinct offsets, as numpy's\n"
+      "choice) or a Bernoulli thinning with keep_prob truncated to neg_count. Checked when it\n"
+      "runs.")
+      .def(py::init([](py::object rng, py::object pos_offsets, py::object pos_terms,
+                       std::string weights, py::object neg_offsets, bool exact, int neg_count,
+                       double keep_prob) {
+             return BagRequest{std::move(rng), std::move(pos_offsets), std::move(pos_terms),
+                               std::move(weights), std::move(neg_offsets), exact, neg_count,
+                               keep_prob};
+           }),
+           py::arg("rng"), py::arg("pos_offsets"), py::arg("pos_terms"), py::arg("weights"),
+           py::arg("neg_offsets"), py::arg("exact"), py::arg("neg_count"), py::arg("keep_prob"))
+      .def_readonly("rng", &BagRequest::rng)
+      .def_readonly("pos_offsets", &BagRequest::pos_offsets)
+      .def_readonly("pos_terms", &BagRequest::pos_terms)
+      .def_readonly("weights", &BagRequest::weights)
+      .def_readonly("neg_offsets", &BagRequest::neg_offsets)
+      .def_readonly("exact", &BagRequest::exact)
+      .def_readonly("neg_count", &BagRequest::neg_count)
+      .def_readonly("keep_prob", &BagRequest::keep_prob);
+
+  m.def(
+      "numpy_choice_sorted",
+      [](const py::object& rng, std::int64_t n, std::int64_t k) {
+        NumpyBits bits(rng);
+        return choice_sorted(bits.bits(), n, k);
+      },
+      py::arg("rng"), py::arg("n"), py::arg("k"),
+      "sorted(Generator.choice(n, k, replace=False)), drawn from `rng` as numpy draws it.");
+  m.def(
+      "numpy_bernoulli_first",
+      [](const py::object& rng, std::int64_t n, double p, std::int64_t limit) {
+        NumpyBits bits(rng);
+        return bernoulli_first(bits.bits(), n, p, limit);
+      },
+      py::arg("rng"), py::arg("n"), py::arg("p"), py::arg("limit"),
+      "The first `limit` indices i with Generator.random(n)[i] < p, drawn from `rng` as numpy\n"
+      "draws them.");
+}
+
+}  // namespace wmiltrack::bindings
