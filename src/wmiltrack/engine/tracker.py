@@ -123,6 +123,8 @@ class Tracker:
     **overrides
         Any :class:`~wmiltrack.Params` field, e.g. ``num_selected=30``.
 
+    Notes
+    -----
     Threads: a Tracker holds one target's state, so it may be used by one thread at a time;
     ``init``/``update`` called while another thread is inside one of them raise
     ``RuntimeError`` (nothing is changed). Different trackers may run in different threads
