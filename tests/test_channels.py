@@ -8,10 +8,8 @@ import pytest
 
 from wmiltrack import _core
 
-ALL_CHANNELS = (_core.CH_LUMA, _core.CH_GRAD, _core.CH_OPP_RG, _core.CH_OPP_YB,
-                _core.CH_ORIENT0, _core.CH_ORIENT1, _core.CH_ORIENT2, _core.CH_ORIENT3)
-GRAY_CHANNELS = (_core.CH_LUMA, _core.CH_GRAD, _core.CH_ORIENT0, _core.CH_ORIENT1,
-                 _core.CH_ORIENT2, _core.CH_ORIENT3)
+ALL_CHANNELS = (_core.CH_LUMA, _core.CH_GRAD, _core.CH_OPP_RG, _core.CH_OPP_YB)
+GRAY_CHANNELS = (_core.CH_LUMA, _core.CH_GRAD)
 
 
 def luma(frame: np.ndarray) -> np.ndarray:
@@ -33,14 +31,8 @@ def channel_ref(frame: np.ndarray, ch: int) -> np.ndarray:
     p = np.pad(lum, 1, mode="edge")  # the frame's edge replicated
     gx = p[1:-1, 2:] - p[1:-1, :-2]
     gy = p[2:, 1:-1] - p[:-2, 1:-1]
-    mag = (np.abs(gx) + np.abs(gy)) // 2
-    if ch == _core.CH_GRAD:
-        return mag
-    # Unsigned angle from +x towards +y (rows grow downwards), nearest multiple of 45 deg.
-    angle = np.degrees(np.arctan2(gy, gx)) % 180.0
-    bins = np.floor((angle + 22.5) / 45.0).astype(np.int64) % 4
-    bins[(gx == 0) & (gy == 0)] = 0
-    return np.where(bins == ch - _core.CH_ORIENT0, mag, 0)
+    assert ch == _core.CH_GRAD, ch
+    return (np.abs(gx) + np.abs(gy)) // 2
 
 
 def integral_ref(values: np.ndarray) -> np.ndarray:
@@ -81,7 +73,7 @@ def test_every_channel_matches_numpy(layout: str, roi: tuple[int, int, int, int]
         frame = rng.integers(0, 256, size=(94, 183, 3), dtype=np.uint8)[::2, ::3, :]
     else:
         frame = rng.integers(0, 256, size=(47, 61, 4 if layout == "bgra" else 3), dtype=np.uint8)
-    # Smooth half the frame so that the orientation bins see runs, not only noise.
+    # Smooth half the frame so that the gradients see runs, not only noise.
     frame[:, :30] = cv2.GaussianBlur(np.ascontiguousarray(frame[:, :30]), (7, 7), 2.0)
     channels = list(GRAY_CHANNELS if layout == "gray" else ALL_CHANNELS)
     ii = _core.IntegralImage()
@@ -94,28 +86,6 @@ def test_every_channel_matches_numpy(layout: str, roi: tuple[int, int, int, int]
         assert ref.min() >= 0 and ref.max() <= 255
         np.testing.assert_array_equal(ii.table(k), integral_ref(ref[y0:y0 + h, x0:x0 + w]),
                                       err_msg=f"channel {ch} on plane {k}")
-
-
-def test_reference_orientation_bins_are_exercised() -> None:
-    """The random frames above put pixels in every bin (else the test could not fail)."""
-    rng = np.random.default_rng(0)
-    frame = cv2.GaussianBlur(rng.integers(0, 256, size=(47, 61, 3), dtype=np.uint8), (7, 7), 2.0)
-    sums = [channel_ref(frame, _core.CH_ORIENT0 + b).sum() for b in range(4)]
-    assert all(s > 0 for s in sums), sums
-    assert sum(sums) == channel_ref(frame, _core.CH_GRAD).sum()
-
-
-def test_orientation_bins_of_known_gradients() -> None:
-    # A horizontal ramp: gradient along +x (bin 0); its transpose: along +y (bin 2); the
-    # diagonals x + y (45 deg, bin 1) and x - y (135 deg, bin 3).
-    i, j = np.mgrid[0:20, 0:20]
-    for ramp, ch in ((4 * j, _core.CH_ORIENT0), (4 * i, _core.CH_ORIENT2),
-                     (3 * (i + j), _core.CH_ORIENT1), (3 * (j - i) + 60, _core.CH_ORIENT3)):
-        frame = ramp.astype(np.uint8)
-        ii = _core.IntegralImage()
-        ii.compute_channels(frame, (5, 5, 10, 10), [_core.CH_GRAD, ch])
-        total = ii.rect_sum(5, 5, 10, 10, plane=0)
-        assert total > 0 and ii.rect_sum(5, 5, 10, 10, plane=1) == total
 
 
 def test_a_pixel_does_not_depend_on_the_roi() -> None:
@@ -184,7 +154,7 @@ def random_bank(rng: np.random.Generator, m: int, box: int, n_planes: int,
 def test_project_on_planes_matches_numpy_sums() -> None:
     rng = np.random.default_rng(4)
     frame = rng.integers(0, 256, size=(60, 80, 3), dtype=np.uint8)
-    channels = [_core.CH_OPP_YB, _core.CH_GRAD, _core.CH_LUMA, _core.CH_ORIENT2, _core.CH_OPP_RG]
+    channels = [_core.CH_OPP_YB, _core.CH_GRAD, _core.CH_LUMA, _core.CH_OPP_RG]
     ii = _core.IntegralImage()
     ii.compute_channels(frame, (5, 4, 70, 50), channels)
     refs = [channel_ref(frame, ch) for ch in channels]

@@ -157,8 +157,6 @@ void bench_channels(int reps_cap, double budget, std::mt19937& rng) {
       {"luma+grad+opp", {kLuma, kGrad, kOppRG, kOppYB}},
       {"grad", {kGrad}},
       {"opp_rg+opp_yb", {kOppRG, kOppYB}},
-      {"4 orient", {kOrient0, kOrient1, kOrient2, kOrient3}},
-      {"all 8", {kLuma, kGrad, kOppRG, kOppYB, kOrient0, kOrient1, kOrient2, kOrient3}},
   };
   IntegralImage ii;
   for (const auto& s : sizes) {

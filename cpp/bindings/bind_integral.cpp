@@ -122,13 +122,6 @@ void bind_integral(py::module_& m) {
   m.attr("CH_GRAD") = static_cast<int>(kGrad);
   m.attr("CH_OPP_RG") = static_cast<int>(kOppRG);
   m.attr("CH_OPP_YB") = static_cast<int>(kOppYB);
-  m.attr("CH_ORIENT0") = static_cast<int>(kOrient0);
-  m.attr("CH_ORIENT1") = static_cast<int>(kOrient1);
-  m.attr("CH_ORIENT2") = static_cast<int>(kOrient2);
-  m.attr("CH_ORIENT3") = static_cast<int>(kOrient3);
-  m.attr("CH_LOGLUMA") = static_cast<int>(kLogLuma);
-  m.attr("CH_GRAD_X") = static_cast<int>(kGradX);
-  m.attr("CH_GRAD_Y") = static_cast<int>(kGradY);
   m.attr("NUM_CHANNEL_KINDS") = kNumChannelKinds;
 
   py::class_<SharedIntegralImage>(

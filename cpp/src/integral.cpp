@@ -297,35 +297,8 @@ void accumulate_row(const std::uint8_t* v, int w, const std::uint32_t* prev, std
   }
 }
 
-// The kLogLuma table (computed once, thread-safe static initialisation).
-const std::array<std::uint8_t, 256>& log_luma_table() {
-  static const std::array<std::uint8_t, 256> table = [] {
-    std::array<std::uint8_t, 256> t{};
-    const double scale = 255.0 / std::log(271.0 / 16.0);
-    for (int v = 0; v < 256; ++v) {
-      t[static_cast<std::size_t>(v)] =
-          static_cast<std::uint8_t>(std::lround(scale * std::log((v + 16.0) / 16.0)));
-    }
-    return t;
-  }();
-  return table;
-}
-
-// out[c] = lut[in[c]] for c < n, eight pixels a step into a local buffer, then one copy: the
-// compiler need not reload after every byte store (for it, out may alias in and lut).
-void log_luma_row(const std::uint8_t* in, int n, const std::uint8_t* lut, std::uint8_t* out) {
-  int c = 0;
-  for (; c + 8 <= n; c += 8) {
-    std::uint8_t buf[8];
-    for (int k = 0; k < 8; ++k) buf[k] = lut[in[c + k]];
-    std::memcpy(out + c, buf, sizeof buf);
-  }
-  for (; c < n; ++c) out[c] = lut[in[c]];
-}
-
 }  // namespace
 
-std::uint8_t log_luma(std::uint8_t luma) { return log_luma_table()[luma]; }
 
 // compute() and compute_channels() build a new table in a fresh object and swap it in only
 // when complete: an exception (a bad argument, std::bad_alloc) leaves *this as it was.
@@ -385,17 +358,14 @@ void IntegralImage::swap(IntegralImage& other) noexcept {
 void IntegralImage::build_channels(const ImageView& image, Rect roi,
                                    const std::vector<int>& channels) {
   if (channels.empty()) throw std::invalid_argument("integral image: no channels requested");
-  bool need_luma = false, need_grad = false, need_orient = false, need_colour = false;
-  bool need_gxy = false;
+  bool need_luma = false, need_grad = false, need_colour = false;
   for (int ch : channels) {
     if (ch < 0 || ch >= kNumChannelKinds) {
       throw std::invalid_argument("integral image: unknown channel id " + std::to_string(ch) +
                                   " (valid: 0 .. " + std::to_string(kNumChannelKinds - 1) + ")");
     }
-    need_luma = need_luma || ch == kLuma || ch == kLogLuma;
+    need_luma = need_luma || ch == kLuma;
     need_grad = need_grad || ch == kGrad;
-    need_gxy = need_gxy || ch == kGradX || ch == kGradY;
-    need_orient = need_orient || (ch >= kOrient0 && ch <= kOrient3);
     need_colour = need_colour || ch == kOppRG || ch == kOppYB;
   }
   const Rect r0 = clip_roi(image, roi);
@@ -417,7 +387,6 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   data_.resize(static_cast<std::size_t>(ps) * static_cast<std::size_t>(n_planes));
   for (int k = 0; k < n_planes; ++k) std::fill_n(data_.data() + k * ps, s, Entry{0});
 
-  const bool gradients = need_grad || need_orient || need_gxy;
   const std::size_t ext = static_cast<std::size_t>(w) + 2;
   const std::size_t wz = static_cast<std::size_t>(w);
   // Three luma rows (above, at, below the current row) with one extra column on each side.
@@ -425,27 +394,21 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   std::uint8_t* above = lum.data();
   std::uint8_t* here = above + ext;
   std::uint8_t* below = here + ext;
-  // Rows of channel values: gradient, 4 orientations, 2 opponent colours.
-  std::vector<std::uint8_t> rows(10 * wz);
+  // Rows of channel values: gradient, 2 opponent colours.
+  std::vector<std::uint8_t> rows(3 * wz);
   std::uint8_t* grad = rows.data();
-  std::uint8_t* orient[4] = {grad + wz, grad + 2 * wz, grad + 3 * wz, grad + 4 * wz};
-  std::uint8_t* opp_rg = grad + 5 * wz;
-  std::uint8_t* opp_yb = grad + 6 * wz;
-  std::uint8_t* log_l = grad + 7 * wz;
-  std::uint8_t* grad_x = grad + 8 * wz;
-  std::uint8_t* grad_y = grad + 9 * wz;
+  std::uint8_t* opp_rg = grad + wz;
+  std::uint8_t* opp_yb = grad + 2 * wz;
   const int last_row = image.rows - 1;
-  if (gradients) {
+  if (need_grad) {
     luma_row_ext(image, std::max(y0_ - 1, 0), x0_, w, above);
     luma_row_ext(image, std::min(y0_ + 1, last_row), x0_, w, below);
   }
-  bool want_rg = false, want_yb = false, want_log = false;
+  bool want_rg = false, want_yb = false;
   for (int ch : channels) {
     want_rg = want_rg || ch == kOppRG;
     want_yb = want_yb || ch == kOppYB;
-    want_log = want_log || ch == kLogLuma;
   }
-  const std::uint8_t* log_lut = log_luma_table().data();
 
   // The ROI's bytes of the frame row kAhead rows below the current one are asked for ahead of
   // use, into L2: a new video frame is not in cache, and the hardware prefetcher starts afresh
@@ -464,7 +427,7 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
   for (int r = 0; r < height_; ++r) {
     const int y = y0_ + r;
     prefetch_row(y + 1 + kAhead);
-    if (gradients) {
+    if (need_grad) {
       if (r > 0) {
         std::swap(above, here);  // the old current row is now above
         std::swap(here, below);  // the old lower row is now current
@@ -476,49 +439,14 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
       const std::uint8_t* __restrict l_mid = here;
       const std::uint8_t* __restrict l_down = below + 1;
       std::uint8_t* __restrict g_out = grad;
-      if (need_gxy) {
-        std::uint8_t* __restrict gx_out = grad_x;
-        std::uint8_t* __restrict gy_out = grad_y;
-        for (int c = 0; c < w; ++c) {
-          gx_out[c] = static_cast<std::uint8_t>(std::abs(l_mid[c + 2] - l_mid[c]));
-          gy_out[c] = static_cast<std::uint8_t>(std::abs(l_down[c] - l_up[c]));
-        }
-      }
-      if (need_orient) {
-        // orientation_bin without branches (the same exact tests; int32 is wide enough for
-        // |g| <= 255) so that the loop vectorises. A zero gradient has magnitude 0 in every
-        // bin. b0 and b2 exclude each other: a < (sqrt 2 - 1) x versus a > (sqrt 2 + 1) x.
-        std::uint8_t* __restrict o0 = orient[0];
-        std::uint8_t* __restrict o1 = orient[1];
-        std::uint8_t* __restrict o2 = orient[2];
-        std::uint8_t* __restrict o3 = orient[3];
-        for (int c = 0; c < w; ++c) {
-          const int gx = l_mid[c + 2] - l_mid[c];
-          const int gy = l_down[c] - l_up[c];
-          const int x = std::abs(gx), a = std::abs(gy);
-          const int mag = (x + a) >> 1;
-          const int t = 2 * x * x;
-          const int b0 = static_cast<int>((a + x) * (a + x) < t);
-          const int b2 = static_cast<int>(a > x) & static_cast<int>((a - x) * (a - x) > t);
-          const int diagonal = 1 - b0 - b2;
-          const int same_sign = static_cast<int>(gx * gy > 0);
-          g_out[c] = static_cast<std::uint8_t>(mag);
-          o0[c] = static_cast<std::uint8_t>(mag & -b0);
-          o1[c] = static_cast<std::uint8_t>(mag & -(diagonal & same_sign));
-          o2[c] = static_cast<std::uint8_t>(mag & -b2);
-          o3[c] = static_cast<std::uint8_t>(mag & -(diagonal & (1 - same_sign)));
-        }
-      } else if (need_grad) {
-        for (int c = 0; c < w; ++c) {
-          const int gx = l_mid[c + 2] - l_mid[c];
-          const int gy = l_down[c] - l_up[c];
-          g_out[c] = static_cast<std::uint8_t>((std::abs(gx) + std::abs(gy)) >> 1);
-        }
+      for (int c = 0; c < w; ++c) {
+        const int gx = l_mid[c + 2] - l_mid[c];
+        const int gy = l_down[c] - l_up[c];
+        g_out[c] = static_cast<std::uint8_t>((std::abs(gx) + std::abs(gy)) >> 1);
       }
     } else if (need_luma) {
       luma_row(image, y, x0_, x0_ + w, here + 1);
     }
-    if (want_log) log_luma_row(here + 1, w, log_lut, log_l);
     if (want_rg || want_yb) {
       const std::uint8_t* px = image.data + y * image.row_stride + x0_ * image.col_stride;
       if (want_rg && want_yb) {
@@ -542,11 +470,7 @@ void IntegralImage::build_channels(const ImageView& image, Rect roi,
       const std::uint8_t* v = ch == kLuma    ? here + 1
                               : ch == kGrad  ? grad
                               : ch == kOppRG ? opp_rg
-                              : ch == kOppYB ? opp_yb
-                              : ch == kLogLuma ? log_l
-                              : ch == kGradX ? grad_x
-                              : ch == kGradY ? grad_y
-                                             : orient[ch - kOrient0];
+                                             : opp_yb;
       Entry* plane_k = data_.data() + k * ps;
       accumulate_row(v, w, plane_k + r * s, plane_k + (r + 1) * s);
     }

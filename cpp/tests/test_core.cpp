@@ -261,10 +261,8 @@ void test_overflow_guards(std::mt19937& rng) {
   weak.log_ratio(0, none_out.data(), 0, none_out.data(), true, none_out.data());
 }
 
-constexpr double kDegPerRad = 57.29577951308232;  // 180 / pi
-
 // Channel c of the frame at (r, c0), from the definitions in integral.hpp: luma, gradients
-// with the frame's edge replicated, opponent colours, and the orientation bin from atan2.
+// with the frame's edge replicated, opponent colours.
 int naive_channel(const Frame& f, int ch, int r, int c) {
   if (ch == kOppRG || ch == kOppYB) {
     const std::uint8_t* p = &f.pixels[(static_cast<std::size_t>(r) * f.cols + c) * f.channels];
@@ -276,13 +274,7 @@ int naive_channel(const Frame& f, int ch, int r, int c) {
     return f.gray(std::min(std::max(y, 0), f.rows - 1), std::min(std::max(x, 0), f.cols - 1));
   };
   const int gx = at(r, c + 1) - at(r, c - 1), gy = at(r + 1, c) - at(r - 1, c);
-  const int mag = (std::abs(gx) + std::abs(gy)) / 2;
-  if (ch == kGrad) return mag;
-  if (gx == 0 && gy == 0) return ch == kOrient0 ? mag : 0;
-  double deg = std::atan2(static_cast<double>(gy), static_cast<double>(gx)) * kDegPerRad;
-  if (deg < 0) deg += 180.0;
-  const int bin = static_cast<int>(std::floor((deg + 22.5) / 45.0)) % 4;
-  return bin == ch - kOrient0 ? mag : 0;
+  return (std::abs(gx) + std::abs(gy)) / 2;  // kGrad
 }
 
 long naive_channel_sum(const Frame& f, int ch, int x, int y, int w, int h) {
@@ -292,34 +284,9 @@ long naive_channel_sum(const Frame& f, int ch, int x, int y, int w, int h) {
   return s;
 }
 
-void test_orientation_bin() {
-  // Every integer gradient of the gradient range against atan2 (no bin border is hit).
-  int counts[4] = {0, 0, 0, 0};
-  bool all_match = true;
-  for (int gx = -255; gx <= 255; gx += 3) {
-    for (int gy = -255; gy <= 255; gy += 2) {
-      const int b = orientation_bin(gx, gy);
-      ++counts[b];
-      if (gx == 0 && gy == 0) {
-        all_match = all_match && b == 0;
-        continue;
-      }
-      double deg = std::atan2(static_cast<double>(gy), static_cast<double>(gx)) * kDegPerRad;
-      if (deg < 0) deg += 180.0;
-      all_match = all_match && b == static_cast<int>(std::floor((deg + 22.5) / 45.0)) % 4;
-    }
-  }
-  CHECK(all_match);
-  CHECK(counts[0] > 0 && counts[1] > 0 && counts[2] > 0 && counts[3] > 0);
-  CHECK(orientation_bin(5, 0) == 0 && orientation_bin(-5, 0) == 0);
-  CHECK(orientation_bin(0, 5) == 2 && orientation_bin(0, -5) == 2);
-  CHECK(orientation_bin(5, 5) == 1 && orientation_bin(-5, -5) == 1);
-  CHECK(orientation_bin(5, -5) == 3 && orientation_bin(-5, 5) == 3);
-}
-
 void test_channels(std::mt19937& rng) {
-  const std::vector<int> all{kLuma, kGrad, kOppRG, kOppYB, kOrient0, kOrient1, kOrient2, kOrient3};
-  const std::vector<int> gray_ok{kOrient3, kGrad, kLuma, kOrient0, kOrient1, kOrient2};
+  const std::vector<int> all{kLuma, kGrad, kOppRG, kOppYB};
+  const std::vector<int> gray_ok{kGrad, kLuma};
   const Rect rois[] = {{0, 0, 53, 37}, {7, 5, 30, 20}, {-3, -2, 10, 9}, {45, 30, 20, 20},
                        {0, 10, 53, 1}, {20, 0, 1, 37}, {52, 36, 1, 1}, {4, 4, 2, 2},
                        {5, 3, 32, 16}};  // a width of whole SIMD steps
@@ -834,7 +801,6 @@ int main() {
   test_integral(rng);
   test_projection_and_scoring(rng);
   test_overflow_guards(rng);
-  test_orientation_bin();
   test_channels(rng);
   test_hardening(rng);
   test_learning(rng);

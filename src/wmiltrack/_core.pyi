@@ -29,13 +29,6 @@ CH_LUMA: Final[int]  # 0: OpenCV BGR2GRAY, as compute()
 CH_GRAD: Final[int]  # 1: (|gx| + |gy|) // 2
 CH_OPP_RG: Final[int]  # 2: (R - G + 255) // 2, colour frames only
 CH_OPP_YB: Final[int]  # 3: (R + G - 2B + 510) // 4, colour frames only
-CH_ORIENT0: Final[int]  # 4: CH_GRAD where the unsigned gradient angle is nearest 0 deg, else 0
-CH_ORIENT1: Final[int]  # 5: ... nearest 45 deg (from +x towards +y)
-CH_ORIENT2: Final[int]  # 6: ... nearest 90 deg
-CH_ORIENT3: Final[int]  # 7: ... nearest 135 deg
-CH_LOGLUMA: Final[int]  # 8: luma on a log scale (a 256-entry table; see integral.hpp)
-CH_GRAD_X: Final[int]  # 9: |gx|, the horizontal central difference of luma
-CH_GRAD_Y: Final[int]  # 10: |gy|, the vertical central difference of luma
 NUM_CHANNEL_KINDS: Final[int]  # 8
 
 class IntegralImage:

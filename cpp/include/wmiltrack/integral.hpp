@@ -32,41 +32,8 @@ enum Channel : int {
   kGrad = 1,     // (|gx| + |gy|) / 2, rounded down: L1 gradient magnitude halved into 0..255
   kOppRG = 2,    // (R - G + 255) / 2, rounded down (colour frames only)
   kOppYB = 3,    // (R + G - 2B + 510) / 4, rounded down (colour frames only)
-  kOrient0 = 4,  // kGrad where the gradient's unsigned orientation is nearest 0 deg, else 0
-  kOrient1 = 5,  //   ... nearest 45 deg (gx, gy of equal sign; angle from +x towards +y)
-  kOrient2 = 6,  //   ... nearest 90 deg
-  kOrient3 = 7,  //   ... nearest 135 deg
-  kLogLuma = 8,  // log_luma(L): the luma on a log scale, so a change of brightness by a
-                 // factor (a shadow) is about an added constant (see log_luma below)
-  kGradX = 9,    // |gx|: horizontal intensity change (vertical edges), 0..255
-  kGradY = 10,   // |gy|: vertical intensity change (horizontal edges), 0..255
 };
-constexpr int kNumChannelKinds = 11;
-
-// The kLogLuma value of a luma L: round(255 * ln((L + 16) / 16) / ln(271 / 16)), 0..255.
-// The offset 16 keeps the darkest levels (where the sensor's noise is about as large as the
-// signal) from spreading over much of the range; over L = 40..255 a brightness factor k
-// moves the value by about 90 * ln k (k = 0.66, a shadow: about -37). A 256-entry table.
-std::uint8_t log_luma(std::uint8_t luma);
-
-// Orientation bin (0..3) of the gradient (gx, gy): the unsigned angle atan2(gy, gx) mod 180
-// rounded to the nearest multiple of 45 degrees, decided in exact integer arithmetic (the
-// bin borders at 22.5 + 45k degrees have irrational slopes, so no integer gradient lies on
-// one). A zero gradient is bin 0 (its magnitude is 0 anyway).
-inline int orientation_bin(int gx, int gy) {
-  if (gx < 0 || (gx == 0 && gy < 0)) {
-    gx = -gx;
-    gy = -gy;
-  }
-  // Now gx >= 0 and the angle lies in (-90, 90].
-  const std::int64_t x = gx, a = gy < 0 ? -gy : gy;
-  if (x == 0 && a == 0) return 0;
-  // |angle| < 22.5 deg  <=>  a < (sqrt(2) - 1) x  <=>  (a + x)^2 < 2 x^2
-  if ((a + x) * (a + x) < 2 * x * x) return 0;
-  // |angle| > 67.5 deg  <=>  a > (sqrt(2) + 1) x  <=>  a > x and (a - x)^2 > 2 x^2
-  if (a > x && (a - x) * (a - x) > 2 * x * x) return 2;
-  return gy > 0 ? 1 : 3;
-}
+constexpr int kNumChannelKinds = 4;
 
 // A rectangle in frame pixel coordinates: columns [x, x + w), rows [y, y + h).
 struct Rect {
