@@ -4,15 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from wmiltrack.engine.selection import (
+from reference_kernels import (
     milboost_nll,
-    milboost_select,
     milboost_select_reference,
     wmil_log_likelihood,
-    wmil_select,
     wmil_select_reference,
 )
+
+from wmiltrack.engine.selection import milboost_select, wmil_select
 
 
 def bags(seed: int, m: int = 12, p: int = 9, n: int = 11, scale: float = 2.0):

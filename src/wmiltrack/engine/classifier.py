@@ -58,27 +58,3 @@ class GaussianPool:
             np.asarray(values, dtype=np.float64), mu, sigma, lam, first,
             p.first_update == "direct", p.classifier == "mil", p.sigma_floor)
         return new_mu, new_sigma
-
-
-def reference_update(mu: np.ndarray, sigma: np.ndarray, values: np.ndarray, lam: float,
-                     first: bool, params: Params) -> tuple[np.ndarray, np.ndarray]:
-    """Plain numpy version of one class's update (what the compiled kernel computes, bit
-    for bit; for the tests)."""
-    p = params
-    mean = values.mean(axis=1)
-    if p.classifier == "mil":
-        # MILTrack: stores the variance; the first update is direct; later ones blend the
-        # variance around the *updated* mean.
-        if first:
-            var = values.var(axis=1) + 1e-9
-            new_mu = mean
-        else:
-            new_mu = lam * mu + (1.0 - lam) * mean
-            var = lam * sigma**2 + (1.0 - lam) * ((values - new_mu[:, None]) ** 2).mean(axis=1)
-        return new_mu, np.maximum(np.sqrt(var), p.sigma_floor)
-    std = values.std(axis=1)
-    if first and p.first_update == "direct":
-        return mean, np.maximum(std, p.sigma_floor)
-    new_sigma = np.sqrt(lam * sigma**2 + (1.0 - lam) * std**2 + lam * (1.0 - lam) * (mu - mean) ** 2)
-    new_mu = lam * mu + (1.0 - lam) * mean
-    return new_mu, np.maximum(new_sigma, p.sigma_floor)
