@@ -305,82 +305,34 @@ def make_sequence(
     """
     height, width = (int(v) for v in size)
     tw, th = (int(v) for v in target_size)
-    if n_frames < 1:
-        raise ValueError(f"n_frames must be >= 1, got {n_frames}")
-    if tw < 4 or th < 4:
-        raise ValueError(f"target_size must be at least 4x4, got {target_size}")
-    if width < tw + 8 or height < th + 8:
-        raise ValueError(f"target {tw}x{th} does not fit a {width}x{height} frame with margin")
-    if max_speed < 0 or noise < 0:
-        raise ValueError("max_speed and noise must be >= 0")
-
+    _check_arguments(n_frames, width, height, tw, th, max_speed, noise, target_size)
     streams = dict(
         zip(
             _STREAMS,
             (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(len(_STREAMS))),
         )
     )
-
     background = _background_texture(streams["background"], height, width)
     target = _target_texture(streams["target"], tw, th)
-    target_alpha = np.ones((th, tw), np.float32)
-
     # the pasted patch needs one spare pixel right/below; keep a 1 px margin on the other sides
     lo = np.array([1.0, 1.0])
     hi = np.array([width - tw - 2.0, height - th - 2.0])
     path = _path(streams["path"], n_frames, lo, hi, float(max_speed))
     gt = np.column_stack([path, np.full(n_frames, float(tw)), np.full(n_frames, float(th))])
-
-    # distractors
-    rng_c = streams["clutter"]
-    distractors: list[tuple[F32, F32, F64]] = []
-    dboxes = np.zeros((n_frames, _N_DISTRACTORS if clutter else 0, 4), np.float64)
-    if clutter:
-        for k in range(_N_DISTRACTORS):
-            dw = int(min(width - 8, max(6, round(tw * rng_c.uniform(0.7, 1.2)))))
-            dh = int(min(height - 8, max(6, round(th * rng_c.uniform(0.7, 1.2)))))
-            tex = _target_texture(rng_c, dw, dh)
-            alpha = np.ones((dh, dw), np.float32)
-            speed = max(0.5, float(max_speed) * rng_c.uniform(0.5, 1.0))
-            dpath = _path(
-                rng_c,
-                n_frames,
-                np.array([1.0, 1.0]),
-                np.array([width - dw - 2.0, height - dh - 2.0]),
-                speed,
-            )
-            distractors.append((tex, alpha, dpath))
-            dboxes[:, k, :2] = dpath
-            dboxes[:, k, 2:] = (dw, dh)
-
-    # occlusion
+    distractors, dboxes = _distractors(streams["clutter"], n_frames, width, height, tw, th,
+                                       float(max_speed)) if clutter else ([], np.zeros((n_frames, 0, 4)))
     occ_frac, occ_side = _occlusion_schedule(streams["occlusion"], n_frames)
     occ_tex = _occluder_texture(streams["occlusion"], height, width)
-    covered = np.zeros(n_frames, np.float64)
+    light = _Lighting(streams["illumination"], n_frames, width, illumination)
 
-    # illumination
-    u = np.linspace(0.0, 1.0, n_frames) if n_frames > 1 else np.zeros(1)
-    if illumination:
-        rng_i = streams["illumination"]
-        gain = _smoothstep_curve(u, [0.0, 0.3, 0.7, 1.0], [1.0, 0.6, 1.3, 1.05])
-        offset = 6.0 * np.sin(2 * np.pi * u + rng_i.uniform(0, 2 * np.pi))
-        offset -= offset[0]
-        xs = np.arange(width, dtype=np.float64)
-        band = rng_i.uniform(0.12, 0.2) * width
-        depth = rng_i.uniform(0.3, 0.45)
-        centers = -0.3 * width + u * 1.6 * width
-    else:
-        gain = np.ones(n_frames)
-        offset = np.zeros(n_frames)
-
-    rng_n = streams["noise"]
     frames: list[NDArray[np.uint8]] = []
+    covered = np.zeros(n_frames, np.float64)
     for t in range(n_frames):
         f = background.copy()
         for tex, alpha, dpath in distractors:
             _paste(f, tex, alpha, float(dpath[t, 0]), float(dpath[t, 1]))
         x, y = float(path[t, 0]), float(path[t, 1])
-        _paste(f, target, target_alpha, x, y)
+        _paste(f, target, np.ones((th, tw), np.float32), x, y)
         if occlusion and occ_frac[t] > 0:
             x0, y0, x1, y1 = _occluder_rect(
                 x, y, tw, th, float(occ_frac[t]), occ_side, width, height
@@ -388,20 +340,11 @@ def make_sequence(
             if x1 > x0 and y1 > y0:
                 f[y0:y1, x0:x1] = occ_tex[y0:y1, x0:x1]
                 covered[t] = _overlap_fraction((x0, y0, x1, y1), (x, y, float(tw), float(th)))
-        if illumination:
-            shade = 1.0 - depth * np.exp(-(((xs - centers[t]) / band) ** 2))
-            f *= (gain[t] * shade).astype(np.float32)[None, :, None]
-            f += np.float32(offset[t] + 0.5)
-        else:
-            f += np.float32(0.5)  # round to nearest on the uint8 conversion below
-        if noise > 0:
-            f += rng_n.standard_normal(f.shape, dtype=np.float32) * np.float32(noise)
-        np.clip(f, 0, 255, out=f)
-        frames.append(f.astype(np.uint8))
+        frames.append(_finish(f, light, t, streams["noise"], noise))
 
     meta: dict[str, Any] = {
         "occlusion": covered,
-        "gain": np.asarray(gain, np.float64),
+        "gain": np.asarray(light.gain, np.float64),
         "distractors": dboxes,
         "params": {
             "n_frames": n_frames,
@@ -422,6 +365,75 @@ def make_sequence(
         frames=frames,
         meta=meta,
     )
+
+
+def _check_arguments(n_frames: int, width: int, height: int, tw: int, th: int, max_speed: float,
+                     noise: float, target_size: tuple[int, int]) -> None:
+    if n_frames < 1:
+        raise ValueError(f"n_frames must be >= 1, got {n_frames}")
+    if tw < 4 or th < 4:
+        raise ValueError(f"target_size must be at least 4x4, got {target_size}")
+    if width < tw + 8 or height < th + 8:
+        raise ValueError(f"target {tw}x{th} does not fit a {width}x{height} frame with margin")
+    if max_speed < 0 or noise < 0:
+        raise ValueError("max_speed and noise must be >= 0")
+
+
+def _distractors(rng: np.random.Generator, n_frames: int, width: int, height: int, tw: int, th: int,
+                 max_speed: float) -> tuple[list[tuple[F32, F32, F64]], F64]:
+    """Moving patches of the target's texture family: (texture, alpha, path) each, and their
+    boxes ``(n_frames, k, 4)``."""
+    distractors: list[tuple[F32, F32, F64]] = []
+    dboxes = np.zeros((n_frames, _N_DISTRACTORS, 4), np.float64)
+    for k in range(_N_DISTRACTORS):
+        dw = int(min(width - 8, max(6, round(tw * rng.uniform(0.7, 1.2)))))
+        dh = int(min(height - 8, max(6, round(th * rng.uniform(0.7, 1.2)))))
+        tex = _target_texture(rng, dw, dh)
+        speed = max(0.5, max_speed * rng.uniform(0.5, 1.0))
+        dpath = _path(rng, n_frames, np.array([1.0, 1.0]),
+                      np.array([width - dw - 2.0, height - dh - 2.0]), speed)
+        distractors.append((tex, np.ones((dh, dw), np.float32), dpath))
+        dboxes[:, k, :2] = dpath
+        dboxes[:, k, 2:] = (dw, dh)
+    return distractors, dboxes
+
+
+class _Lighting:
+    """A global gain ramp 1.0 -> 0.6 -> 1.3 -> 1.05 with a small offset, and a soft shadow band
+    sweeping across the frame from left to right (or none)."""
+
+    def __init__(self, rng: np.random.Generator, n_frames: int, width: int, on: bool) -> None:
+        self.on = on
+        u = np.linspace(0.0, 1.0, n_frames) if n_frames > 1 else np.zeros(1)
+        if not on:
+            self.gain = np.ones(n_frames)
+            return
+        self.gain = _smoothstep_curve(u, [0.0, 0.3, 0.7, 1.0], [1.0, 0.6, 1.3, 1.05])
+        offset = 6.0 * np.sin(2 * np.pi * u + rng.uniform(0, 2 * np.pi))
+        self.offset = offset - offset[0]
+        self.xs = np.arange(width, dtype=np.float64)
+        self.band = rng.uniform(0.12, 0.2) * width
+        self.depth = rng.uniform(0.3, 0.45)
+        self.centers = -0.3 * width + u * 1.6 * width
+
+    def apply(self, f: F32, t: int) -> None:
+        """Light frame ``t`` in place (with the 0.5 that rounds the uint8 conversion)."""
+        if not self.on:
+            f += np.float32(0.5)
+            return
+        shade = 1.0 - self.depth * np.exp(-(((self.xs - self.centers[t]) / self.band) ** 2))
+        f *= (self.gain[t] * shade).astype(np.float32)[None, :, None]
+        f += np.float32(self.offset[t] + 0.5)
+
+
+def _finish(f: F32, light: _Lighting, t: int, rng: np.random.Generator, noise: float
+            ) -> NDArray[np.uint8]:
+    """Frame ``t`` lit, with sensor noise, as uint8."""
+    light.apply(f, t)
+    if noise > 0:
+        f += rng.standard_normal(f.shape, dtype=np.float32) * np.float32(noise)
+    np.clip(f, 0, 255, out=f)
+    return f.astype(np.uint8)
 
 
 def make_preset(preset: str, /, seed: int = 0, n_frames: int = 150, **overrides: Any) -> Sequence:
