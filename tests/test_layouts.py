@@ -617,6 +617,64 @@ def test_polygon_area_mode_matches_got10k_toolkit() -> None:
     np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-9)
 
 
+# ---------------------------------------------------------------------- DTB70
+def _dtb_seq(root: Path, name: str, n: int, digits: int = 5, rows=None) -> Path:
+    d = root / name
+    _write_frames(d / "img", list(range(n)), name=lambda k: f"{k + 1:0{digits}d}.jpg")
+    _write_lines(d / "groundtruth_rect.txt", rows if rows is not None else [_box(k) for k in range(n)])
+    return d
+
+
+def test_dtb70_layout_detection_and_loading(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    root = tmp_path / "DTB70"
+    _dtb_seq(root, "Gull2", 4)
+    _dtb_seq(root, "Animal1", 12)  # 00010.jpg after 00009.jpg
+    _dtb_seq(root, "RcCar3", 3, rows=[_box(0), "NaN,NaN,NaN,NaN", _box(2)])
+    assert detect_layout(root) == "dtb70"
+    assert detect_layout(root / "Gull2") == "dtb70"  # one sequence folder, its parent named DTB70
+    assert list_layout(root) == ["Animal1", "Gull2", "RcCar3"]
+
+    def boom(*args: object, **kwargs: object) -> None:
+        raise AssertionError("an image was read while loading")
+
+    monkeypatch.setattr(cv2, "imread", boom)  # unlike the OTB loader, no image is decoded
+    animal, gull, car = load_layout(root)
+    monkeypatch.undo()
+    _assert_aligned(animal, 12)
+    _assert_aligned(gull, 4)
+    assert animal.meta["layout"] == "dtb70" and animal.meta["absent_policy"] == "exclude"
+    assert car.meta["absent"].tolist() == [False, True, False]
+
+    # Folder named otherwise: DTB70 when most sequences bear DTB70's names.
+    other = tmp_path / "drones"
+    _dtb_seq(other, "Animal2", 3)
+    _dtb_seq(other, "Zebra", 3)
+    _dtb_seq(other, "my_clip", 3)
+    assert detect_layout(other) == "dtb70"
+
+
+def test_dtb70_is_told_from_otb(tmp_path: Path) -> None:
+    # OTB names its frames with four digits, also for sequences both benchmarks have.
+    otb = tmp_path / "otb"
+    _dtb_seq(otb, "Basketball", 3, digits=4)
+    _dtb_seq(otb, "Walking", 3, digits=4)
+    assert detect_layout(otb) == "otb"
+    # OTB's Board has five-digit frames but is no DTB70 name, in no DTB70 folder
+    board = tmp_path / "benchmarks" / "Board"
+    _dtb_seq(board.parent, "Board", 3)
+    assert detect_layout(board) == "otb"
+    # named, any OTB-structured folder loads as DTB70
+    (seq,) = load_layout(board, "dtb70")
+    assert seq.meta["layout"] == "dtb70"
+    _assert_aligned(seq, 3)
+
+
+def test_dtb70_refuses_count_mismatch(tmp_path: Path) -> None:
+    _dtb_seq(tmp_path / "DTB70", "Kiting", 5, rows=[_box(k) for k in range(4)])
+    with pytest.raises(LayoutError, match=r"DTB70 sequence Kiting: 5 images in .* but 4 boxes"):
+        load_layout(tmp_path / "DTB70")
+
+
 # ---------------------------------------------------------------------- OTB and detection errors
 def test_otb_layout_through_sequences_module(tmp_path: Path) -> None:
     d = tmp_path / "Dog"
@@ -635,7 +693,7 @@ def test_detection_errors_name_the_layout_and_what_it_expects(tmp_path: Path) ->
         detect_layout(tmp_path / "empty")
     msg = str(exc.value)
     assert "is not a tracking dataset in any known layout" in msg
-    for title in ("LaSOT", "GOT-10k", "UAV123", "TrackingNet", "VOT", "OTB"):
+    for title in ("LaSOT", "GOT-10k", "UAV123", "UAV123_10fps", "UAV20L", "TrackingNet", "VOT", "DTB70", "OTB"):
         assert title in msg
 
     _lasot_seq(tmp_path / "ls", "cat", 1)
@@ -742,6 +800,18 @@ def _build_from(seq: Sequence, root: Path, layout: str) -> Path:
     elif layout == "uav123":
         img_dir, names = root / "data_seq" / "UAV123" / "toy", [f"{k + 1:06d}.jpg" for k in range(n)]
         _write_lines(root / "anno" / "UAV123" / "toy.txt", rows)
+    elif layout == "uav123_10fps":  # the folder holds 2 frames before and 1 after the sequence
+        img_dir = root / "data_seq" / "UAV123_10fps" / "toy"
+        names = [f"{k + 3:06d}.jpg" for k in range(n)]
+        _write_frames(img_dir, [0, 1, n + 2], name=lambda k: f"{k + 1:06d}.jpg")
+        _write_lines(root / "anno" / "UAV123_10fps" / "toy.txt", rows)
+        _config_seqs(root / "configSeqs.m", {"UAV123_10fps": [("toy", "toy", 3, n + 2)]})
+    elif layout == "uav20l":
+        img_dir, names = root / "data_seq" / "UAV123" / "toy", [f"{k + 1:06d}.jpg" for k in range(n)]
+        _write_lines(root / "anno" / "UAV20L" / "toy.txt", rows)
+    elif layout == "dtb70":
+        img_dir, names = root / "Animal1" / "img", [f"{k + 1:05d}.jpg" for k in range(n)]
+        _write_lines(root / "Animal1" / "groundtruth_rect.txt", rows)
     elif layout == "trackingnet":
         img_dir, names = root / "TRAIN_0" / "frames" / "toy", [f"{k}.jpg" for k in range(n)]
         _write_lines(root / "TRAIN_0" / "anno" / "toy.txt", rows)
@@ -756,7 +826,10 @@ def _build_from(seq: Sequence, root: Path, layout: str) -> Path:
     return img_dir
 
 
-@pytest.mark.parametrize("layout", ["lasot", "got10k", "uav123", "trackingnet", "vot"])
+_ALL = ["lasot", "got10k", "uav123", "uav123_10fps", "uav20l", "trackingnet", "vot", "dtb70"]
+
+
+@pytest.mark.parametrize("layout", _ALL)
 def test_every_layout_runs_through_tracker_and_scoring(tmp_path: Path, layout: str) -> None:
     import pickle
 
@@ -780,9 +853,41 @@ def test_every_layout_runs_through_tracker_and_scoring(tmp_path: Path, layout: s
     seq = pickle.loads(pickle.dumps(seq))  # sequences travel to worker processes as they are
     pred = Tracker("rcwmil", seed=0).track(seq, seq.init_box)
     # the same files opened as a plain image folder give the same trajectory (deterministic tracker)
-    ref = Tracker("rcwmil", seed=0).track(open_input(img_dir), seq.init_box)
+    if layout == "uav123_10fps":  # the folder's frames outside configSeqs.m's range are not used
+        assert [p.name for p in seq.paths] == [f"{k + 3:06d}.jpg" for k in range(10)]
+        ref = Tracker("rcwmil", seed=0).track(list(seq), seq.init_box)
+    else:
+        ref = Tracker("rcwmil", seed=0).track(open_input(img_dir), seq.init_box)
     np.testing.assert_array_equal(pred, ref)
     s = benchmark_scores(pred, seq)
     assert s.ope is not None and s.ope.n_scored == 10
     assert s.ope.auc == pytest.approx(ope_metrics(pred, syn.groundtruth).auc, abs=0.01)
     assert (s.got10k is not None) == (layout == "got10k")
+
+
+@pytest.mark.parametrize("layout", ["uav123_10fps", "uav20l", "dtb70"])
+def test_wmiltrack_eval_runs_on_the_new_layouts(tmp_path: Path, layout: str) -> None:
+    """`wmiltrack eval` on each new layout, detected and named: the boxes are the tracker's own on
+    the loader's frames (for UAV123_10fps the configSeqs.m range, not the whole folder)."""
+    import json
+
+    from wmiltrack.cli import main
+    from wmiltrack.data.boxes import read_boxes
+    from wmiltrack.data.synthetic import make_sequence
+    from wmiltrack.engine.tracker import Tracker
+
+    syn = make_sequence(10, size=(96, 128), target_size=(24, 20), seed=5, occlusion=False, clutter=False)
+    data = tmp_path / "data"
+    _build_from(syn, data, layout)
+    (seq,) = load_layout(data, layout)
+    expected = Tracker("rcwmil", seed=0).track(seq, seq.init_box)
+    for named in (False, True):
+        out = tmp_path / f"out{int(named)}"
+        argv = ["eval", str(data), "--trackers", "rcwmil", "--out", str(out), "--no-plots", "--no-progress"]
+        assert main(argv + (["--layout", layout] if named else [])) == 0
+        doc = json.loads((out / "eval_ope.json").read_text())
+        assert doc["layout"] == layout and doc["sequences"] == [seq.name]
+        got = read_boxes(out / "boxes" / "rcwmil" / f"{seq.name}.txt")
+        assert got.shape == (10, 4)
+        np.testing.assert_array_equal(got[1:], expected[1:])
+        np.testing.assert_array_equal(got[0], seq.groundtruth[0])
