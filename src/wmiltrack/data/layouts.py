@@ -616,7 +616,7 @@ _UAV_FAMILY = {
     # UAV20L annotates whole folders of the 30 fps release (configSeqs.m: startFrame 1).
     "uav20l": _UavSubset("uav20l", "UAV20L", "UAV123", {}),
 }
-CONFIG_SEQS = "configSeqs.m"
+_CONFIG_SEQS = "configSeqs.m"
 
 
 def _uav_root(root: Path, subset: _UavSubset) -> Path | None:
@@ -628,6 +628,8 @@ def _uav_root(root: Path, subset: _UavSubset) -> Path | None:
 
 
 def _strip_matlab_comments(text: str) -> str:
+    """``text`` without MATLAB ``%`` comments (a ``%`` inside a quoted string is kept), so that a
+    commented-out struct is not read as a sequence."""
     out = []
     for line in text.splitlines():
         quoted = False
@@ -773,7 +775,7 @@ def _cached_config(path: str, mtime_ns: int, size: int) -> dict[str, dict[str, t
 
 def _uav_config(r: Path, subset: _UavSubset) -> tuple[dict[str, tuple[str, int, int]], Path] | None:
     """This subset's table from the ``configSeqs.m`` beside ``anno/`` (or one folder up)."""
-    for cfg in (r / CONFIG_SEQS, r.parent / CONFIG_SEQS):
+    for cfg in (r / _CONFIG_SEQS, r.parent / _CONFIG_SEQS):
         if cfg.is_file():
             st = cfg.stat()
             for var, table in _cached_config(str(cfg), st.st_mtime_ns, st.st_size).items():
