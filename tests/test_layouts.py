@@ -292,9 +292,190 @@ def test_uav123_refuses_missing_frames_and_count_mismatch(tmp_path: Path, monkey
 def test_uav20l_when_only_that_annotation_folder_exists(tmp_path: Path) -> None:
     _uav_frames(tmp_path, "bird1", [1, 2, 3])  # UAV20L uses whole folders
     _write_lines(tmp_path / "anno" / "UAV20L" / "bird1.txt", [_box(k) for k in range(3)])
+    assert detect_layout(tmp_path) == "uav20l"
     (seq,) = load_layout(tmp_path)
-    assert seq.meta["subset"] == "UAV20L"
+    assert seq.meta["subset"] == "UAV20L" and seq.meta["layout"] == "uav20l"
     _assert_aligned(seq, 3)
+
+
+def _config_seqs(path: Path, tables: dict[str, list[tuple[str, str, int, int]]], style: str = "literal") -> None:
+    """Write a configSeqs.m in the releases' form: one cell array of structs per subset."""
+    out = ["function seqs=configSeqs", "% written by the tests: name, folder, startFrame, endFrame", ""]
+    for var, rows in tables.items():
+        items = []
+        for name, folder, start, end in rows:
+            if style == "literal":
+                where = f"'D:\\data_seq\\{var}\\{folder}\\'"
+            elif style == "fullfile":
+                where = f"fullfile(dataset_path, '{folder}\\')"
+            else:  # concatenation
+                where = f"[dataSet '\\{folder}\\']"
+            items.append(
+                f"struct('name','{name}','path',{where},'startFrame',{start},'endFrame',{end},"
+                "'nz',6,'ext','jpg','init_rect', [0,0,0,0])"
+            )
+        out.append(f"seq{var} = {{" + ",...\n    ".join(items) + "};")
+        out.append("")
+    out.append(f"seqs = seq{next(iter(tables))};")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(out) + "\n")
+
+
+def _uav10_frames(root: Path, folder: str, numbers: list[int]) -> None:
+    d = root / "data_seq" / "UAV123_10fps" / folder
+    _write_frames(d, [f - 1 for f in numbers], name=lambda k: f"{k + 1:06d}.jpg")
+
+
+def test_uav123_10fps_release_configseqs_ranges_and_nan_lines(tmp_path: Path) -> None:
+    outer = tmp_path / "Dataset_UAV123_10fps"
+    root = outer / "UAV123_10fps"
+    _uav10_frames(root, "bike1", list(range(1, 8)))  # 7 images, the sequence is frames 1-5
+    _write_lines(
+        root / "anno" / "UAV123_10fps" / "bike1.txt",
+        [_box(0), "NaN,NaN,NaN,NaN", _box(2), _box(3), "NaN,NaN,NaN,NaN"],
+    )
+    _uav10_frames(root, "bird1", list(range(1, 13)))
+    _write_lines(root / "anno" / "UAV123_10fps" / "bird1_2.txt", [_box(k) for k in range(5, 9)])  # frames 6-9
+    _uav10_frames(root, "uav2", [1, 2, 3])  # not in configSeqs.m: the whole folder
+    _write_lines(root / "anno" / "UAV123_10fps" / "uav2.txt", [_box(k) for k in range(3)])
+    _config_seqs(
+        root / "configSeqs.m",
+        {
+            "UAV123_10fps": [("bike1", "bike1", 1, 5), ("bird1_2", "bird1", 6, 9)],
+            # another subset's table in the same file must not be used for this one
+            "UAV123": [("bike1", "bike1", 1, 7), ("bird1_2", "bird1", 2, 5)],
+        },
+    )
+
+    # The 10 fps release used to be refused ("is not a UAV123 dataset"); now detected.
+    assert detect_layout(outer) == "uav123_10fps"
+    assert detect_layout(root) == "uav123_10fps"
+    assert list_layout(root) == ["bike1", "bird1_2", "uav2"]
+    bike, bird, whole = load_layout(outer, "uav123_10fps")
+    assert [s.name for s in load_layout(root)] == ["bike1", "bird1_2", "uav2"]
+
+    _assert_aligned(bike, 5)  # frames 6 and 7 of the folder are not part of the sequence
+    assert [p.name for p in bike.paths] == [f"{k:06d}.jpg" for k in range(1, 6)]
+    assert bike.meta["absent"].tolist() == [False, True, False, False, True]
+    assert np.isnan(bike.groundtruth[[1, 4]]).all()
+    assert bike.valid.tolist() == [True, False, True, True, False]
+    assert bike.meta["absent_policy"] == "exclude"
+    assert bike.meta["layout"] == "uav123_10fps" and bike.meta["subset"] == "UAV123_10fps"
+    assert bike.meta["frame_range"] == (1, 5)
+    assert bike.meta["frame_range_source"] == str(root / "configSeqs.m")
+
+    assert bird.meta["folder"] == "bird1" and bird.meta["frame_range"] == (6, 9)
+    assert [_frame_id(f) for f in bird] == [5, 6, 7, 8]
+    assert bird.groundtruth.tolist() == [_box(k) for k in range(5, 9)]
+    assert bird.init_box == tuple(_box(5))
+
+    _assert_aligned(whole, 3)
+    assert whole.meta["frame_range"] == (1, 3) and whole.meta["frame_range_source"] == "the image folder"
+
+    # Named as another layout: refused, and the message says what it looks like.
+    with pytest.raises(LayoutError, match=r"is not a UAV123 dataset: .*it looks like a UAV123_10fps dataset"):
+        load_layout(root, "uav123")
+
+
+def test_uav123_10fps_without_configseqs_uses_the_published_table(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setitem(layouts._UAV123_10FPS_SPLITS, "car1_2", ("car1", 4, 7))
+    _uav10_frames(tmp_path, "car1", list(range(1, 10)))
+    _write_lines(tmp_path / "anno" / "UAV123_10fps" / "car1_2.txt", [_box(k) for k in range(3, 7)])
+    (seq,) = load_layout(tmp_path)
+    assert seq.meta["layout"] == "uav123_10fps" and seq.meta["frame_range"] == (4, 7)
+    assert seq.meta["frame_range_source"] == "wmiltrack's copy of the published table"
+    assert [_frame_id(f) for f in seq] == [3, 4, 5, 6]
+
+    # a configSeqs.m, when present, wins over the table
+    _config_seqs(tmp_path / "configSeqs.m", {"UAV123_10fps": [("car1_2", "car1", 2, 5)]}, style="concat")
+    (seq,) = load_layout(tmp_path)
+    assert seq.meta["frame_range"] == (2, 5) and [_frame_id(f) for f in seq] == [1, 2, 3, 4]
+
+
+def test_uav123_10fps_split_table_matches_published_ranges() -> None:
+    # the seqUAV123_10fps cell array of the UAV123_10fps release's configSeqs.m
+    table = layouts._UAV123_10FPS_SPLITS
+    assert len(table) == 51
+    assert set(table) == set(layouts._UAV123_SPLITS)  # the same sequences are split at 30 and 10 fps
+    assert table["bird1_2"] == ("bird1", 259, 493)
+    assert table["car6_5"] == ("car6", 1309, 1621)
+    assert table["uav1_3"] == ("uav1", 825, 1157)
+    assert table["group3_4"] == ("group3", 1457, 1843)
+    for name, (folder, start, end) in table.items():
+        assert name.rsplit("_", 1)[0] == folder and 1 <= start < end
+
+
+def test_uav_configseqs_mismatch_and_missing_frames_are_refused(tmp_path: Path) -> None:
+    _uav10_frames(tmp_path, "boat1", list(range(1, 6)))
+    _write_lines(tmp_path / "anno" / "UAV123_10fps" / "boat1.txt", [_box(k) for k in range(4)])
+    _config_seqs(tmp_path / "configSeqs.m", {"UAV123_10fps": [("boat1", "boat1", 1, 5)]})
+    with pytest.raises(LayoutError, match=r"has 4 boxes but the sequence is frames 1-5 of boat1 \(5 frames, from .*configSeqs.m\)"):
+        load_layout(tmp_path)
+    _config_seqs(tmp_path / "configSeqs.m", {"UAV123_10fps": [("boat1", "boat1", 3, 6)]})
+    with pytest.raises(LayoutError, match=r"frames 3-6 of .* are needed but 1 are missing \(first: 000006\)"):
+        load_layout(tmp_path)
+
+
+def test_parse_config_seqs_reads_the_releases_struct_forms(tmp_path: Path) -> None:
+    from wmiltrack.data.layouts import parse_config_seqs
+
+    cfg = tmp_path / "configSeqs.m"
+    cfg.write_text(
+        "function seqs=configSeqs(dataSet)\n"
+        "% struct('name','commented','startFrame',1,'endFrame',2)\n"
+        "seqUAV123_10fps = {struct('name','bike1','path','D:\\data_seq\\UAV123_10fps\\bike1\\',"
+        "'startFrame',1,'endFrame',1029,'nz',6,'ext','jpg','init_rect',[0,0,0,0]),... % bike\n"
+        "    struct('name','bird1_2','path',[dataSet '\\bird1\\'],'startFrame',259,...\n"
+        "           'endFrame',493,'nz',6,'ext','jpg','init_rect', [0,0,0,0])\n"
+        "    struct('name','uav1_3','path',fullfile(dataSet, 'uav1/'),'startFrame',825,'endFrame',1157)\n"
+        "    struct('name','car1_s','startFrame',1,'endFrame',492)};\n"
+        "seqUAV20L={struct('name','bird1','path','bird1\\','startFrame',1,'endFrame',2437)};\n"
+        "seqs = seqUAV123_10fps;\n"
+    )
+    assert parse_config_seqs(cfg) == {
+        "UAV123_10fps": {
+            "bike1": ("bike1", 1, 1029),
+            "bird1_2": ("bird1", 259, 493),
+            "uav1_3": ("uav1", 825, 1157),
+            "car1_s": ("car1_s", 1, 492),  # no path: the folder is the name
+        },
+        "UAV20L": {"bird1": ("bird1", 1, 2437)},
+    }
+    cfg.write_text("seqUAV123={struct('name','a','startFrame',9,'endFrame',3)};\n")
+    with pytest.raises(LayoutError, match=r"struct 'a' of seqUAV123 has startFrame 9 and endFrame 3"):
+        parse_config_seqs(cfg)
+    cfg.write_text("seqUAV123={struct('name','a','startFrame',1)};\n")
+    with pytest.raises(LayoutError, match=r"struct 'a' of seqUAV123 needs integer 'startFrame' and 'endFrame'"):
+        parse_config_seqs(cfg)
+    cfg.write_text("seqUAV123={struct('name','a','startFrame',1,'endFrame',3),\n")
+    with pytest.raises(LayoutError, match=r"the cell array seqUAV123 is not closed"):
+        parse_config_seqs(cfg)
+
+
+def test_uav20l_in_the_uav123_release(tmp_path: Path) -> None:
+    root = tmp_path / "Dataset_UAV123" / "UAV123"
+    _uav_frames(root, "bird1", list(range(1, 11)))
+    _write_lines(root / "anno" / "UAV123" / "bird1_2.txt", [_box(k) for k in range(4, 8)])
+    _write_lines(
+        root / "anno" / "UAV20L" / "bird1.txt",
+        [_box(k) if k not in (3, 4) else "NaN,NaN,NaN,NaN" for k in range(10)],
+    )
+    _config_seqs(
+        root / "configSeqs.m",
+        {"UAV123": [("bird1_2", "bird1", 5, 8)], "UAV20L": [("bird1", "bird1", 1, 10)]},
+        style="fullfile",
+    )
+    assert detect_layout(root.parent) == "uav123"  # both subsets: UAV123 unless named
+    (b2,) = load_layout(root.parent)
+    assert b2.meta["frame_range"] == (5, 8) and [_frame_id(f) for f in b2] == [4, 5, 6, 7]
+    assert list_layout(root.parent, "uav20l") == ["bird1"]
+    (long,) = load_layout(root.parent, "uav20l")
+    _assert_aligned(long, 10)
+    assert long.meta["layout"] == "uav20l" and long.meta["subset"] == "UAV20L"
+    assert long.meta["absent"].tolist() == [k in (3, 4) for k in range(10)]
+    assert long.meta["frame_range"] == (1, 10)
 
 
 # ---------------------------------------------------------------------- TrackingNet
@@ -436,6 +617,64 @@ def test_polygon_area_mode_matches_got10k_toolkit() -> None:
     np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-9)
 
 
+# ---------------------------------------------------------------------- DTB70
+def _dtb_seq(root: Path, name: str, n: int, digits: int = 5, rows=None) -> Path:
+    d = root / name
+    _write_frames(d / "img", list(range(n)), name=lambda k: f"{k + 1:0{digits}d}.jpg")
+    _write_lines(d / "groundtruth_rect.txt", rows if rows is not None else [_box(k) for k in range(n)])
+    return d
+
+
+def test_dtb70_layout_detection_and_loading(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    root = tmp_path / "DTB70"
+    _dtb_seq(root, "Gull2", 4)
+    _dtb_seq(root, "Animal1", 12)  # 00010.jpg after 00009.jpg
+    _dtb_seq(root, "RcCar3", 3, rows=[_box(0), "NaN,NaN,NaN,NaN", _box(2)])
+    assert detect_layout(root) == "dtb70"
+    assert detect_layout(root / "Gull2") == "dtb70"  # one sequence folder, its parent named DTB70
+    assert list_layout(root) == ["Animal1", "Gull2", "RcCar3"]
+
+    def boom(*args: object, **kwargs: object) -> None:
+        raise AssertionError("an image was read while loading")
+
+    monkeypatch.setattr(cv2, "imread", boom)  # unlike the OTB loader, no image is decoded
+    animal, gull, car = load_layout(root)
+    monkeypatch.undo()
+    _assert_aligned(animal, 12)
+    _assert_aligned(gull, 4)
+    assert animal.meta["layout"] == "dtb70" and animal.meta["absent_policy"] == "exclude"
+    assert car.meta["absent"].tolist() == [False, True, False]
+
+    # Folder named otherwise: DTB70 when most sequences bear DTB70's names.
+    other = tmp_path / "drones"
+    _dtb_seq(other, "Animal2", 3)
+    _dtb_seq(other, "Zebra", 3)
+    _dtb_seq(other, "my_clip", 3)
+    assert detect_layout(other) == "dtb70"
+
+
+def test_dtb70_is_told_from_otb(tmp_path: Path) -> None:
+    # OTB names its frames with four digits, also for sequences both benchmarks have.
+    otb = tmp_path / "otb"
+    _dtb_seq(otb, "Basketball", 3, digits=4)
+    _dtb_seq(otb, "Walking", 3, digits=4)
+    assert detect_layout(otb) == "otb"
+    # OTB's Board has five-digit frames but is no DTB70 name, in no DTB70 folder
+    board = tmp_path / "benchmarks" / "Board"
+    _dtb_seq(board.parent, "Board", 3)
+    assert detect_layout(board) == "otb"
+    # named, any OTB-structured folder loads as DTB70
+    (seq,) = load_layout(board, "dtb70")
+    assert seq.meta["layout"] == "dtb70"
+    _assert_aligned(seq, 3)
+
+
+def test_dtb70_refuses_count_mismatch(tmp_path: Path) -> None:
+    _dtb_seq(tmp_path / "DTB70", "Kiting", 5, rows=[_box(k) for k in range(4)])
+    with pytest.raises(LayoutError, match=r"DTB70 sequence Kiting: 5 images in .* but 4 boxes"):
+        load_layout(tmp_path / "DTB70")
+
+
 # ---------------------------------------------------------------------- OTB and detection errors
 def test_otb_layout_through_sequences_module(tmp_path: Path) -> None:
     d = tmp_path / "Dog"
@@ -454,7 +693,7 @@ def test_detection_errors_name_the_layout_and_what_it_expects(tmp_path: Path) ->
         detect_layout(tmp_path / "empty")
     msg = str(exc.value)
     assert "is not a tracking dataset in any known layout" in msg
-    for title in ("LaSOT", "GOT-10k", "UAV123", "TrackingNet", "VOT", "OTB"):
+    for title in ("LaSOT", "GOT-10k", "UAV123", "UAV123_10fps", "UAV20L", "TrackingNet", "VOT", "DTB70", "OTB"):
         assert title in msg
 
     _lasot_seq(tmp_path / "ls", "cat", 1)
@@ -561,6 +800,18 @@ def _build_from(seq: Sequence, root: Path, layout: str) -> Path:
     elif layout == "uav123":
         img_dir, names = root / "data_seq" / "UAV123" / "toy", [f"{k + 1:06d}.jpg" for k in range(n)]
         _write_lines(root / "anno" / "UAV123" / "toy.txt", rows)
+    elif layout == "uav123_10fps":  # the folder holds 2 frames before and 1 after the sequence
+        img_dir = root / "data_seq" / "UAV123_10fps" / "toy"
+        names = [f"{k + 3:06d}.jpg" for k in range(n)]
+        _write_frames(img_dir, [0, 1, n + 2], name=lambda k: f"{k + 1:06d}.jpg")
+        _write_lines(root / "anno" / "UAV123_10fps" / "toy.txt", rows)
+        _config_seqs(root / "configSeqs.m", {"UAV123_10fps": [("toy", "toy", 3, n + 2)]})
+    elif layout == "uav20l":
+        img_dir, names = root / "data_seq" / "UAV123" / "toy", [f"{k + 1:06d}.jpg" for k in range(n)]
+        _write_lines(root / "anno" / "UAV20L" / "toy.txt", rows)
+    elif layout == "dtb70":
+        img_dir, names = root / "Animal1" / "img", [f"{k + 1:05d}.jpg" for k in range(n)]
+        _write_lines(root / "Animal1" / "groundtruth_rect.txt", rows)
     elif layout == "trackingnet":
         img_dir, names = root / "TRAIN_0" / "frames" / "toy", [f"{k}.jpg" for k in range(n)]
         _write_lines(root / "TRAIN_0" / "anno" / "toy.txt", rows)
@@ -575,7 +826,10 @@ def _build_from(seq: Sequence, root: Path, layout: str) -> Path:
     return img_dir
 
 
-@pytest.mark.parametrize("layout", ["lasot", "got10k", "uav123", "trackingnet", "vot"])
+_ALL = ["lasot", "got10k", "uav123", "uav123_10fps", "uav20l", "trackingnet", "vot", "dtb70"]
+
+
+@pytest.mark.parametrize("layout", _ALL)
 def test_every_layout_runs_through_tracker_and_scoring(tmp_path: Path, layout: str) -> None:
     import pickle
 
@@ -599,9 +853,41 @@ def test_every_layout_runs_through_tracker_and_scoring(tmp_path: Path, layout: s
     seq = pickle.loads(pickle.dumps(seq))  # sequences travel to worker processes as they are
     pred = Tracker("rcwmil", seed=0).track(seq, seq.init_box)
     # the same files opened as a plain image folder give the same trajectory (deterministic tracker)
-    ref = Tracker("rcwmil", seed=0).track(open_input(img_dir), seq.init_box)
+    if layout == "uav123_10fps":  # the folder's frames outside configSeqs.m's range are not used
+        assert [p.name for p in seq.paths] == [f"{k + 3:06d}.jpg" for k in range(10)]
+        ref = Tracker("rcwmil", seed=0).track(list(seq), seq.init_box)
+    else:
+        ref = Tracker("rcwmil", seed=0).track(open_input(img_dir), seq.init_box)
     np.testing.assert_array_equal(pred, ref)
     s = benchmark_scores(pred, seq)
     assert s.ope is not None and s.ope.n_scored == 10
     assert s.ope.auc == pytest.approx(ope_metrics(pred, syn.groundtruth).auc, abs=0.01)
     assert (s.got10k is not None) == (layout == "got10k")
+
+
+@pytest.mark.parametrize("layout", ["uav123_10fps", "uav20l", "dtb70"])
+def test_wmiltrack_eval_runs_on_the_new_layouts(tmp_path: Path, layout: str) -> None:
+    """`wmiltrack eval` on each new layout, detected and named: the boxes are the tracker's own on
+    the loader's frames (for UAV123_10fps the configSeqs.m range, not the whole folder)."""
+    import json
+
+    from wmiltrack.cli import main
+    from wmiltrack.data.boxes import read_boxes
+    from wmiltrack.data.synthetic import make_sequence
+    from wmiltrack.engine.tracker import Tracker
+
+    syn = make_sequence(10, size=(96, 128), target_size=(24, 20), seed=5, occlusion=False, clutter=False)
+    data = tmp_path / "data"
+    _build_from(syn, data, layout)
+    (seq,) = load_layout(data, layout)
+    expected = Tracker("rcwmil", seed=0).track(seq, seq.init_box)
+    for named in (False, True):
+        out = tmp_path / f"out{int(named)}"
+        argv = ["eval", str(data), "--trackers", "rcwmil", "--out", str(out), "--no-plots", "--no-progress"]
+        assert main(argv + (["--layout", layout] if named else [])) == 0
+        doc = json.loads((out / "eval_ope.json").read_text())
+        assert doc["layout"] == layout and doc["sequences"] == [seq.name]
+        got = read_boxes(out / "boxes" / "rcwmil" / f"{seq.name}.txt")
+        assert got.shape == (10, 4)
+        np.testing.assert_array_equal(got[1:], expected[1:])
+        np.testing.assert_array_equal(got[0], seq.groundtruth[0])

@@ -16,6 +16,9 @@ except PackageNotFoundError:  # running from a source tree that was never instal
     __version__ = "0+unknown"
 
 from .engine.result import TrackResult
+from .opencv_check import warn_if_opencv_conflict
+
+warn_if_opencv_conflict()  # two OpenCV wheels share one cv2: say how to fix it
 
 if TYPE_CHECKING:
     from .engine.multi import MultiTracker

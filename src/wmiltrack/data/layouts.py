@@ -1,5 +1,5 @@
-"""Loaders for the big tracking benchmarks' folder layouts: LaSOT, GOT-10k, UAV123, TrackingNet, VOT
-(and OTB, through :mod:`wmiltrack.data.sequences`).
+"""Loaders for the big tracking benchmarks' folder layouts: LaSOT, GOT-10k, UAV123, UAV123_10fps,
+UAV20L, TrackingNet, VOT, DTB70 (and OTB, through :mod:`wmiltrack.data.sequences`).
 
 Every loader returns :class:`wmiltrack.data.sequences.Sequence` objects backed by image paths:
 **no image is opened while listing or loading a dataset** (frames are decoded when iterated), only
@@ -50,13 +50,25 @@ truth that the toolkit evaluates), or the only split there is.  ``meta["resoluti
 ``meta_info.ini`` (the toolkit clips boxes to it before computing overlaps).  Scoring:
 :mod:`wmiltrack.eval.got10k_metrics`.
 
-**UAV123** ``<root>/data_seq/UAV123/<folder>/000001.jpg`` and ``<root>/anno/UAV123/<seq>.txt``
-(``anno/UAV20L`` for UAV20L, used when ``anno/UAV123`` is missing).  51 annotation files cover a
-frame range of a shared folder (``bird1_2`` = ``bird1`` frames 775-1477); that table comes from
-got10k-toolkit ``got10k/datasets/uav123.json`` and agrees with pytracking
-``pytracking/evaluation/uavdataset.py``.  ``NaN`` annotation lines are absent frames;
-got10k-toolkit's ``ExperimentUAV123._calc_metrics`` (``got10k/experiments/uav123.py``) leaves them
-out (``absent_policy = "exclude"``; pytracking's analysis instead counts them as failures).
+**UAV123, UAV123_10fps, UAV20L** ``<root>/data_seq/<frames>/<folder>/000001.jpg`` and
+``<root>/anno/<subset>/<seq>.txt``: UAV123 and UAV20L share the 30 fps frames
+(``data_seq/UAV123``, one release holding ``anno/UAV123`` and ``anno/UAV20L``); UAV123_10fps is
+its own release (``data_seq/UAV123_10fps``, ``anno/UAV123_10fps``).  The root may also be the
+download folder one level up.  An annotation file may cover a frame range of a shared folder
+(UAV123's ``bird1_2`` = ``bird1`` frames 775-1477; UAV123_10fps's ``bird1_2`` = frames 259-493).
+The releases' ``configSeqs.m`` (beside ``anno/``; UAV123_10fps's ``ReadMe.txt`` points to it
+for the start and end frames) lists, per subset in a cell array ``seqUAV123`` / ``seqUAV20L`` /
+``seqUAV123_10fps``, each sequence's folder, ``startFrame`` and ``endFrame``
+(:func:`parse_config_seqs`); when the file is present its ranges are used, else a copy of the
+published split tables (UAV123: got10k-toolkit ``got10k/datasets/uav123.json``, which agrees
+with pytracking ``pytracking/evaluation/uavdataset.py``; UAV123_10fps: its ``configSeqs.m``),
+else the whole folder named like the annotation (UAV20L annotates whole folders).
+``meta["frame_range"]`` and ``meta["frame_range_source"]`` say which frames and why.  ``NaN``
+annotation lines are absent frames (the ReadMe: fully occluded or out of the frame);
+got10k-toolkit's ``ExperimentUAV123._calc_metrics`` (``got10k/experiments/uav123.py``) leaves
+them out (``absent_policy = "exclude"``; pytracking's analysis instead counts them as failures).
+A folder holding both ``anno/UAV123`` and ``anno/UAV20L`` is detected as UAV123: name
+``layout="uav20l"`` for the other.
 
 **TrackingNet** ``<root>/TRAIN_<k>/frames/<seq>/0.jpg ...`` and ``TRAIN_<k>/anno/<seq>.txt``;
 ``TEST/`` holds first-frame-only annotations (got10k-toolkit ``got10k/datasets/trackingnet.py``,
@@ -75,6 +87,13 @@ area-preserving box instead, available as ``polygon_to_box(..., mode="area")``),
 their pixels.  Special codes, ``nan`` values and empty regions (``0,0,0,0``, empty masks) are
 absent frames (``absent_policy = "exclude"``: VOT's own measures are not OPE figures).
 
+**DTB70** ``<root>/<seq>/img/00001.jpg`` and ``<seq>/groundtruth_rect.txt`` (comma-separated
+``x,y,w,h``, one line per image: got10k-toolkit ``got10k/datasets/dtb70.py``).  The structure is
+OTB's, so detection calls a folder DTB70 only when every sequence's first frame is
+``img/00001.jpg`` (five digits; OTB uses four but for ``Board``) and the folder (or its parent)
+is named ``*DTB70*`` or at least half the sequences bear DTB70's names; ``layout="dtb70"``
+loads any such folder.  ``absent_policy = "exclude"``.
+
 **OTB** ``<root>/<Seq>/img/`` + ``groundtruth_rect.txt``: :func:`wmiltrack.data.sequences.load_otb_sequence`.
 
 A dataset whose image count and annotation count differ is refused with both counts in the error.
@@ -88,7 +107,7 @@ import re
 from collections.abc import Callable, Iterable, Iterator
 from collections.abc import Sequence as AbcSequence
 from dataclasses import dataclass
-from functools import partial
+from functools import lru_cache, partial
 from pathlib import Path
 from typing import Any, Literal
 
@@ -112,18 +131,24 @@ __all__ = [
     "iter_layout",
     "list_layout",
     "load_layout",
+    "parse_config_seqs",
     "parse_vot_region",
     "polygon_to_box",
 ]
 
-LAYOUTS = ("otb", "lasot", "got10k", "uav123", "trackingnet", "vot")
+LAYOUTS = ("otb", "lasot", "got10k", "uav123", "uav123_10fps", "uav20l", "trackingnet", "vot", "dtb70")
 """Layout names accepted by :func:`load_layout` (``layout=``) and returned by :func:`detect_layout`."""
 
 _ALIASES = {
     "got-10k": "got10k",
     "got_10k": "got10k",
     "uav": "uav123",
-    "uav20l": "uav123",
+    "uav123-10fps": "uav123_10fps",
+    "uav123_10": "uav123_10fps",
+    "uav10fps": "uav123_10fps",
+    "uav-20l": "uav20l",
+    "dtb": "dtb70",
+    "dtb-70": "dtb70",
     "tracking-net": "trackingnet",
     "otb100": "otb",
     "otb2015": "otb",
@@ -134,8 +159,11 @@ _TITLES = {
     "lasot": "LaSOT",
     "got10k": "GOT-10k",
     "uav123": "UAV123",
+    "uav123_10fps": "UAV123_10fps",
+    "uav20l": "UAV20L",
     "trackingnet": "TrackingNet",
     "vot": "VOT",
+    "dtb70": "DTB70",
 }
 
 _EXPECTED = {
@@ -144,11 +172,17 @@ _EXPECTED = {
     "(or a class folder, or one <class>-<N> folder)",
     "got10k": "train/, val/ or test/ split folders, or a split folder holding list.txt and "
     "sequence folders with images, groundtruth.txt and absence.label/cover.label/meta_info.ini",
-    "uav123": "data_seq/UAV123/<seq>/*.jpg and anno/UAV123/<seq>.txt (or anno/UAV20L/)",
+    "uav123": "data_seq/UAV123/<folder>/000001.jpg and anno/UAV123/<seq>.txt",
+    "uav123_10fps": "data_seq/UAV123_10fps/<folder>/000001.jpg and anno/UAV123_10fps/<seq>.txt "
+    "(configSeqs.m beside them gives each sequence's folder and frames)",
+    "uav20l": "data_seq/UAV123/<seq>/000001.jpg and anno/UAV20L/<seq>.txt",
     "trackingnet": "TRAIN_<k>/ or TEST/ chunk folders holding frames/<seq>/*.jpg and anno/<seq>.txt, "
     "or one such chunk folder",
     "vot": "list.txt and <seq>/color/*.jpg (or <seq>/*.jpg) with a region groundtruth.txt "
     "per sequence, or one such sequence folder",
+    "dtb70": "sequence folders <seq>/img/00001.jpg with <seq>/groundtruth_rect.txt, or one such "
+    "folder (detected as DTB70 rather than OTB when the folder is named DTB70 or most "
+    "sequences bear DTB70's names)",
 }
 
 Boxes = NDArray[np.float64]
@@ -450,10 +484,11 @@ def _index_got10k(root: Path) -> list[_Entry] | None:
     return _got_split_entries(root, split)
 
 
-# ---------------------------------------------------------------------- UAV123
+# ---------------------------------------------------------------------- UAV123, UAV123_10fps, UAV20L
 # Annotation files covering a frame range of a shared image folder:
-# name -> (folder under data_seq/UAV123, first frame, last frame), 1-based and inclusive.
-# Source: got10k-toolkit got10k/datasets/uav123.json (agrees with pytracking's uavdataset.py).
+# name -> (folder under data_seq/<subset>, first frame, last frame), 1-based and inclusive.
+# UAV123 (30 fps): got10k-toolkit got10k/datasets/uav123.json (agrees with pytracking's
+# uavdataset.py and with the seqUAV123 table of the release's configSeqs.m).
 _UAV123_SPLITS: dict[str, tuple[str, int, int]] = {
     "bird1_1": ("bird1", 1, 253),
     "bird1_2": ("bird1", 775, 1477),
@@ -507,36 +542,279 @@ _UAV123_SPLITS: dict[str, tuple[str, int, int]] = {
     "uav1_2": ("uav1", 1555, 2377),
     "uav1_3": ("uav1", 2473, 3469),
 }
-_UAV_SUBSETS = ("UAV123", "UAV20L")
+# UAV123_10fps: the seqUAV123_10fps table of that release's configSeqs.m (used only when the
+# file is not in the dataset folder; the file, when present, wins).
+_UAV123_10FPS_SPLITS: dict[str, tuple[str, int, int]] = {
+    "bird1_1": ("bird1", 1, 85),
+    "bird1_2": ("bird1", 259, 493),
+    "bird1_3": ("bird1", 525, 813),
+    "car1_1": ("car1", 1, 251),
+    "car1_2": ("car1", 251, 543),
+    "car1_3": ("car1", 543, 877),
+    "car6_1": ("car6", 1, 163),
+    "car6_2": ("car6", 163, 603),
+    "car6_3": ("car6", 603, 985),
+    "car6_4": ("car6", 985, 1309),
+    "car6_5": ("car6", 1309, 1621),
+    "car8_1": ("car8", 1, 453),
+    "car8_2": ("car8", 453, 859),
+    "car16_1": ("car16", 1, 139),
+    "car16_2": ("car16", 139, 665),
+    "group1_1": ("group1", 1, 445),
+    "group1_2": ("group1", 445, 839),
+    "group1_3": ("group1", 839, 1309),
+    "group1_4": ("group1", 1309, 1625),
+    "group2_1": ("group2", 1, 303),
+    "group2_2": ("group2", 303, 591),
+    "group2_3": ("group2", 591, 895),
+    "group3_1": ("group3", 1, 523),
+    "group3_2": ("group3", 523, 943),
+    "group3_3": ("group3", 943, 1457),
+    "group3_4": ("group3", 1457, 1843),
+    "person2_1": ("person2", 1, 397),
+    "person2_2": ("person2", 397, 875),
+    "person4_1": ("person4", 1, 501),
+    "person4_2": ("person4", 501, 915),
+    "person5_1": ("person5", 1, 293),
+    "person5_2": ("person5", 293, 701),
+    "person7_1": ("person7", 1, 417),
+    "person7_2": ("person7", 417, 689),
+    "person8_1": ("person8", 1, 359),
+    "person8_2": ("person8", 359, 509),
+    "person12_1": ("person12", 1, 201),
+    "person12_2": ("person12", 201, 541),
+    "person14_1": ("person14", 1, 283),
+    "person14_2": ("person14", 283, 605),
+    "person14_3": ("person14", 605, 975),
+    "person17_1": ("person17", 1, 501),
+    "person17_2": ("person17", 501, 783),
+    "person19_1": ("person19", 1, 415),
+    "person19_2": ("person19", 415, 931),
+    "person19_3": ("person19", 931, 1453),
+    "truck4_1": ("truck4", 1, 193),
+    "truck4_2": ("truck4", 193, 421),
+    "uav1_1": ("uav1", 1, 519),
+    "uav1_2": ("uav1", 519, 793),
+    "uav1_3": ("uav1", 825, 1157),
+}
 
 
-def _uav_root(root: Path) -> Path | None:
-    for r in (root, root / "UAV123"):
-        if (r / "data_seq" / "UAV123").is_dir() and any((r / "anno" / s).is_dir() for s in _UAV_SUBSETS):
+@dataclass(frozen=True)
+class _UavSubset:
+    """One benchmark of the UAV123 family: where its annotations and frames are, and how
+    annotation files map to frame ranges when ``configSeqs.m`` does not say."""
+
+    layout: str
+    anno: str  # folder under anno/
+    data: str  # folder under data_seq/
+    splits: dict[str, tuple[str, int, int]]
+
+
+_UAV_FAMILY = {
+    "uav123": _UavSubset("uav123", "UAV123", "UAV123", _UAV123_SPLITS),
+    "uav123_10fps": _UavSubset("uav123_10fps", "UAV123_10fps", "UAV123_10fps", _UAV123_10FPS_SPLITS),
+    # UAV20L annotates whole folders of the 30 fps release (configSeqs.m: startFrame 1).
+    "uav20l": _UavSubset("uav20l", "UAV20L", "UAV123", {}),
+}
+_CONFIG_SEQS = "configSeqs.m"
+
+
+def _uav_root(root: Path, subset: _UavSubset) -> Path | None:
+    """The folder holding ``anno/<subset>`` and ``data_seq/<frames>``: ``root`` or one below."""
+    for r in (root, root / subset.anno, root / subset.data):
+        if (r / "data_seq" / subset.data).is_dir() and (r / "anno" / subset.anno).is_dir():
             return r
     return None
 
 
-def _load_uav(root: Path, subset: str, name: str) -> Sequence:
-    what = f"{subset} sequence {name}"
-    gt_file = root / "anno" / subset / f"{name}.txt"
+def _strip_matlab_comments(text: str) -> str:
+    """``text`` without MATLAB ``%`` comments (a ``%`` inside a quoted string is kept), so that a
+    commented-out struct is not read as a sequence."""
+    out = []
+    for line in text.splitlines():
+        quoted = False
+        for i, ch in enumerate(line):
+            if ch == "'":
+                quoted = not quoted
+            elif ch == "%" and not quoted:
+                line = line[:i]
+                break
+        out.append(line)
+    return "\n".join(out)
+
+
+_CLOSER = {"(": ")", "[": "]", "{": "}"}
+
+
+def _matlab_group(text: str, start: int) -> tuple[list[str], int]:
+    """Top-level elements of the bracketed group opened at ``text[start]`` (``(``, ``[`` or
+    ``{``) and the index after its closer.  Elements are split at commas, and for ``{``/``[``
+    also at ``;`` and line ends; quoted strings and nested groups are kept whole, and ``...``
+    continues a line."""
+    closer = _CLOSER[text[start]]
+    rows = closer != ")"
+    depth, quoted, items, cur = 0, False, [], []
+    i = start + 1
+    while i < len(text):
+        ch = text[i]
+        if quoted:
+            cur.append(ch)
+            if ch == "'":
+                if text.startswith("''", i):  # a quote inside the string
+                    cur.append("'")
+                    i += 1
+                else:
+                    quoted = False
+        elif ch == "'":
+            quoted = True
+            cur.append(ch)
+        elif text.startswith("...", i):  # the rest of the line and its end are skipped
+            nl = text.find("\n", i)
+            i = len(text) if nl < 0 else nl + 1
+            continue
+        elif ch in _CLOSER:
+            depth += 1
+            cur.append(ch)
+        elif depth == 0 and ch == closer:
+            items.append("".join(cur).strip())
+            return [s for s in items if s], i + 1
+        elif ch in ")]}":
+            depth -= 1
+            cur.append(ch)
+        elif depth == 0 and (ch == "," or (rows and ch in ";\n")):
+            items.append("".join(cur).strip())
+            cur = []
+        else:
+            cur.append(ch)
+        i += 1
+    raise ValueError(f"no closing {closer!r}")
+
+
+_MATLAB_STRING = re.compile(r"'((?:[^']|'')*)'")
+_CELL_START = re.compile(r"\b(seq\w*)\s*=\s*\{")
+_STRUCT_CALL = re.compile(r"struct\s*\(")
+
+
+def _matlab_string(token: str) -> str | None:
+    m = _MATLAB_STRING.fullmatch(token.strip())
+    return m.group(1).replace("''", "'") if m else None
+
+
+def parse_config_seqs(path: str | os.PathLike[str]) -> dict[str, dict[str, tuple[str, int, int]]]:
+    """Read the sequence tables of a UAV123-style ``configSeqs.m``.
+
+    The UAV123 releases describe each sequence as a MATLAB struct inside a cell array,
+    ``seqUAV123_10fps = {struct('name','bird1_2','path','D:\\data_seq\\UAV123_10fps\\bird1\\',
+    'startFrame',259,'endFrame',493,'nz',6,'ext','jpg','init_rect',[0,0,0,0]), ...}``: the
+    annotation file ``anno/<subset>/<name>.txt`` holds one line per frame ``startFrame`` ..
+    ``endFrame`` (1-based, inclusive) of the image folder that ends ``path``.  The path may be a
+    literal, ``fullfile(root, 'bird1\\')`` or ``[root '\\bird1\\']``: its last quoted piece
+    names the folder (the sequence's own name when there is no path).
+
+    Parameters
+    ----------
+    path:
+        The ``configSeqs.m`` file.
+
+    Returns
+    -------
+    dict
+        Cell-array name without its ``seq`` prefix (``"UAV123_10fps"``, ``"UAV20L"``, ...) ->
+        ``{sequence name: (folder, start frame, end frame)}``.
+
+    Raises
+    ------
+    LayoutError
+        If a cell array or struct is not closed, a struct has no name, or its frame numbers
+        are missing, not integers, or not ``1 <= startFrame <= endFrame``; the message names
+        the file and the struct.
+    """
+    p = Path(path)
+    text = _strip_matlab_comments(p.read_text(encoding="utf-8-sig", errors="replace"))
+    tables: dict[str, dict[str, tuple[str, int, int]]] = {}
+    pos = 0
+    while (cell := _CELL_START.search(text, pos)) is not None:
+        var = cell.group(1)
+        try:
+            items, pos = _matlab_group(text, cell.end() - 1)
+        except ValueError:
+            raise LayoutError(f"{p}: the cell array {var} is not closed") from None
+        table = tables.setdefault(var[3:].lstrip("_"), {})
+        for item in items:
+            call = _STRUCT_CALL.match(item)
+            if call is None:
+                continue
+            try:
+                args, _ = _matlab_group(item, call.end() - 1)
+            except ValueError:
+                raise LayoutError(f"{p}: a struct of {var} is not closed: {item[:80]!r}") from None
+            fields = {(_matlab_string(k) or k): v for k, v in zip(args[0::2], args[1::2])}
+            name = _matlab_string(fields.get("name", ""))
+            if not name:
+                raise LayoutError(f"{p}: a struct of {var} has no 'name': {item[:80]!r}")
+            try:
+                start, end = int(fields["startFrame"]), int(fields["endFrame"])
+            except (KeyError, ValueError):
+                raise LayoutError(
+                    f"{p}: struct {name!r} of {var} needs integer 'startFrame' and 'endFrame'"
+                ) from None
+            if not 1 <= start <= end:
+                raise LayoutError(
+                    f"{p}: struct {name!r} of {var} has startFrame {start} and endFrame {end}"
+                )
+            pieces = _MATLAB_STRING.findall(fields.get("path", ""))
+            parts = [c for c in re.split(r"[\\/]+", pieces[-1]) if c] if pieces else []
+            table[name] = (parts[-1] if parts else name, start, end)
+    return tables
+
+
+@lru_cache(maxsize=8)
+def _cached_config(path: str, mtime_ns: int, size: int) -> dict[str, dict[str, tuple[str, int, int]]]:
+    return parse_config_seqs(path)  # keyed on mtime and size: an edited file is read again
+
+
+def _uav_config(r: Path, subset: _UavSubset) -> tuple[dict[str, tuple[str, int, int]], Path] | None:
+    """This subset's table from the ``configSeqs.m`` beside ``anno/`` (or one folder up)."""
+    for cfg in (r / _CONFIG_SEQS, r.parent / _CONFIG_SEQS):
+        if cfg.is_file():
+            st = cfg.stat()
+            for var, table in _cached_config(str(cfg), st.st_mtime_ns, st.st_size).items():
+                if var.lower() == subset.anno.lower():
+                    return table, cfg
+    return None
+
+
+def _uav_span(r: Path, subset: _UavSubset, name: str) -> tuple[tuple[str, int, int] | None, str]:
+    """Folder and frame range of a sequence, and where they come from."""
+    config = _uav_config(r, subset)
+    if config is not None and name in config[0]:
+        return config[0][name], str(config[1])
+    if name in subset.splits:
+        return subset.splits[name], "wmiltrack's copy of the published table"
+    return None, "the image folder"
+
+
+def _load_uav(root: Path, subset: _UavSubset, name: str) -> Sequence:
+    what = f"{subset.anno} sequence {name}"
+    gt_file = root / "anno" / subset.anno / f"{name}.txt"
     gt = _read_box_file(gt_file)
     if len(gt) == 0:
         raise LayoutError(f"{what}: {gt_file} holds no box")
-    split = _UAV123_SPLITS.get(name) if subset == "UAV123" else None
-    folder_name, start, end = split if split is not None else (name, 1, len(gt))
-    img_dir = root / "data_seq" / "UAV123" / folder_name
+    span, source = _uav_span(root, subset, name)
+    folder_name = span[0] if span is not None else name
+    img_dir = root / "data_seq" / subset.data / folder_name
     images = _images_in(img_dir)
     if not images:
         raise LayoutError(f"{what}: no images in {img_dir}")
-    if split is None:
+    if span is None:
         _check_count(what, len(images), img_dir, len(gt), gt_file)
-        frames = images
+        frames, start, end = images, 1, len(gt)
     else:
+        _, start, end = span
         if end - start + 1 != len(gt):
             raise LayoutError(
                 f"{what}: {gt_file} has {len(gt)} boxes but the sequence is frames {start}-{end} "
-                f"of {folder_name} ({end - start + 1} frames)"
+                f"of {folder_name} ({end - start + 1} frames, from {source})"
             )
         by_number = _frame_numbers(images)
         missing = [i for i in range(start, end + 1) if i not in by_number]
@@ -547,25 +825,82 @@ def _load_uav(root: Path, subset: str, name: str) -> Sequence:
             )
         frames = [by_number[i] for i in range(start, end + 1)]
     meta = {
-        "layout": "uav123",
+        "layout": subset.layout,
         "absent_policy": "exclude",
-        "subset": subset,
+        "subset": subset.anno,
         "folder": folder_name,
         "frame_range": (start, end),
+        "frame_range_source": source,
     }
     return _make_sequence(name, frames, gt, _absent_rows(gt), meta)
 
 
-def _index_uav123(root: Path) -> list[_Entry] | None:
-    r = _uav_root(root)
+def _index_uav(key: str, root: Path) -> list[_Entry] | None:
+    subset = _UAV_FAMILY[key]
+    r = _uav_root(root, subset)
     if r is None:
         return None
-    subset = "UAV123" if (r / "anno" / "UAV123").is_dir() else "UAV20L"
-    anno_dir = r / "anno" / subset
-    names = sorted((p.stem for p in anno_dir.glob("*.txt")), key=natural_key)
+    names = sorted((p.stem for p in (r / "anno" / subset.anno).glob("*.txt")), key=natural_key)
     if not names:
         return None
     return [_Entry(n, partial(_load_uav, r, subset, n)) for n in names]
+
+
+# ---------------------------------------------------------------------- DTB70
+# The 70 sequence names of DTB70 (the list in pytracking-style DTB70 loaders; the folders
+# themselves are listed, this only tells DTB70 from OTB when detecting).
+_DTB70_NAMES = frozenset(
+    "Animal1 Animal2 Animal3 Animal4 Basketball BMX2 BMX3 BMX4 BMX5 Car2 Car4 Car5 Car6 Car8 "
+    "ChasingDrones Girl1 Girl2 Gull1 Gull2 Horse1 Horse2 Kiting ManRunning1 ManRunning2 Motor1 "
+    "Motor2 MountainBike1 MountainBike5 MountainBike6 Paragliding3 Paragliding5 RaceCar RaceCar1 "
+    "RcCar3 RcCar4 RcCar5 RcCar6 RcCar7 RcCar8 RcCar9 Sheep1 Sheep2 SkateBoarding4 Skiing1 "
+    "Skiing2 SnowBoarding2 SnowBoarding4 SnowBoarding6 Soccer1 Soccer2 SpeedCar2 SpeedCar4 "
+    "StreetBasketball1 StreetBasketball2 StreetBasketball3 SUP2 SUP4 SUP5 Surfing03 Surfing04 "
+    "Surfing06 Surfing10 Surfing12 Vaulting Wakeboarding1 Wakeboarding2 Walking Yacht2 Yacht4 "
+    "Zebra".split()
+)
+_DTB70_FIRST = "00001.jpg"  # five-digit frame names (OTB uses four, but for Board)
+
+
+def _is_dtb70_seq(d: Path) -> bool:
+    return (d / "img").is_dir() and (d / GT_FILE).is_file()
+
+
+def _dtb70_dirs(root: Path) -> list[Path]:
+    if _is_dtb70_seq(root):
+        return [root]
+    return [d for d in _subdirs(root) if _is_dtb70_seq(d)]
+
+
+def _looks_dtb70(root: Path, dirs: list[Path]) -> bool:
+    """Tell a DTB70 folder from an OTB one, which has the same structure: five-digit frame
+    names in every sequence, and the folder named DTB70 or most sequences named as DTB70's."""
+    if not all((d / "img" / _DTB70_FIRST).is_file() for d in dirs):
+        return False
+    if any("dtb70" in p.name.lower() for p in (root, root.parent)):
+        return True
+    return 2 * sum(d.name in _DTB70_NAMES for d in dirs) >= len(dirs)
+
+
+def _load_dtb70(seq_dir: Path) -> Sequence:
+    name = seq_dir.name
+    what = f"DTB70 sequence {name}"
+    gt_file = seq_dir / GT_FILE
+    img_dir = seq_dir / "img"
+    gt = _read_box_file(gt_file)
+    images = _images_in(img_dir)
+    if len(gt) == 0:
+        raise LayoutError(f"{what}: {gt_file} holds no box")
+    _check_count(what, len(images), img_dir, len(gt), gt_file)
+    meta = {"layout": "dtb70", "absent_policy": "exclude"}
+    return _make_sequence(name, images, gt, _absent_rows(gt), meta)
+
+
+def _index_dtb70(root: Path, detecting: bool = False) -> list[_Entry] | None:
+    dirs = _dtb70_dirs(root)
+    if not dirs or (detecting and not _looks_dtb70(root, dirs)):
+        return None
+    return [_Entry(d.name, partial(_load_dtb70, d)) for d in dirs]
 
 
 # ---------------------------------------------------------------------- TrackingNet
@@ -832,12 +1167,20 @@ def _load_otb(path: Path) -> Sequence:
 # ---------------------------------------------------------------------- public API
 _INDEXERS: dict[str, Callable[[Path], list[_Entry] | None]] = {
     # Order matters for detection: the most specific folder structures first.
-    "uav123": _index_uav123,
+    "uav123": partial(_index_uav, "uav123"),
+    "uav123_10fps": partial(_index_uav, "uav123_10fps"),
+    "uav20l": partial(_index_uav, "uav20l"),  # found when the release has no anno/UAV123
     "trackingnet": _index_trackingnet,
     "got10k": _index_got10k,
     "lasot": _index_lasot,
     "vot": _index_vot,
+    "dtb70": _index_dtb70,
     "otb": _index_otb,
+}
+# Detection asks DTB70 for more than its (OTB-like) structure; see _looks_dtb70.
+_DETECTORS: dict[str, Callable[[Path], list[_Entry] | None]] = {
+    **_INDEXERS,
+    "dtb70": partial(_index_dtb70, detecting=True),
 }
 
 
@@ -859,7 +1202,18 @@ def _root(path: str | os.PathLike[str]) -> Path:
 
 
 def _not_a(p: Path, layout: str) -> LayoutError:
-    return LayoutError(f"{p} is not a {_TITLES[layout]} dataset: expected {_EXPECTED[layout]}")
+    hint = ""
+    for key, index in _DETECTORS.items():
+        try:
+            found = key != layout and index(p)
+        except LayoutError:
+            found = False
+        if found:
+            hint = f"; it looks like a {_TITLES[key]} dataset (layout {key!r})"
+            break
+    return LayoutError(
+        f"{p} is not a {_TITLES[layout]} dataset: expected {_EXPECTED[layout]}{hint}"
+    )
 
 
 def _entries(path: str | os.PathLike[str], layout: str | None) -> tuple[str, list[_Entry]]:
@@ -870,7 +1224,7 @@ def _entries(path: str | os.PathLike[str], layout: str | None) -> tuple[str, lis
         if not found:
             raise _not_a(p, key)
         return key, found
-    for key, index in _INDEXERS.items():
+    for key, index in _DETECTORS.items():
         found = index(p)
         if found:
             return key, found
