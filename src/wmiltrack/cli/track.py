@@ -63,21 +63,23 @@ def _stop_signals() -> Iterator[_StopRequest]:
 
 class _BoxLines:
     """One ``x,y,w,h`` line per frame, written and flushed as soon as it is computed, to a file
-    (same format as :func:`wmiltrack.data.boxes.write_boxes`) or to standard output."""
+    (same format as :func:`wmiltrack.data.boxes.write_boxes`) or to standard output.
+
+    The file is opened (and an existing one emptied) at the first line, once the first frame
+    and box are known to be good: a run that fails before it starts leaves the file as it was.
+    """
 
     def __init__(self, path: Path | None) -> None:
         from ..data.boxes import format_box
 
         self.path = path
         self.count = 0
-        self._fh: IO[str]
+        self._fh: IO[str] | None = None
         self._format: Callable[[Sequence[float]], str]
         if path is None:
             self._fh = sys.stdout
             self._format = lambda box: ",".join(f"{float(v):g}" for v in box)
         else:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            self._fh = path.open("w", encoding="utf-8")
             self._format = format_box
 
     def write(self, box: Sequence[float]) -> None:
@@ -85,12 +87,16 @@ class _BoxLines:
 
     def write_line(self, line: str) -> None:
         """One line (of one frame), flushed at once."""
+        if self._fh is None:
+            assert self.path is not None
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._fh = self.path.open("w", encoding="utf-8")
         self._fh.write(line + "\n")
         self._fh.flush()
         self.count += 1
 
     def close(self) -> None:
-        if self.path is not None:
+        if self.path is not None and self._fh is not None:
             self._fh.close()
 
 
@@ -134,8 +140,7 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     ids: list[int] = []
     reader = TolerantFrames(seq)
     frames = iter(reader)
-    # Opened before tracking starts: an output that cannot be written fails now, not at the end.
-    out = _BoxLines(args.output)
+    out = _BoxLines(args.output)  # the file is opened at the first box, not before
     bar = progress(frames, total=reader.expected, desc=f"{args.tracker} {seq.name}")
     writer = None
     skipped = 0
