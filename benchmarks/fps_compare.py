@@ -44,7 +44,7 @@ try:
 except ImportError:  # a checkout that was not installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from wmiltrack.eval.peers import OPENCV_TRACKERS, available_opencv_trackers, installed_opencv
+from wmiltrack.trackers import OPENCV_TRACKERS, available_opencv_trackers, installed_opencv
 
 VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
 REFERENCE = "opencv:MIL"

@@ -15,8 +15,8 @@ import pytest
 from wmiltrack.cli import main
 from wmiltrack.data.boxes import read_boxes
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.eval.peers import make_tracker, parse_spec, split_specs
 from wmiltrack.eval.report import safe_name
+from wmiltrack.trackers import make_tracker, parse_spec, split_specs
 
 N = 20
 

@@ -13,8 +13,8 @@ import cv2
 import numpy as np
 import pytest
 
-import wmiltrack.eval.peers as peers
 import wmiltrack.eval.runner as runner
+import wmiltrack.trackers as peers
 from wmiltrack.cli import main
 from wmiltrack.data.boxes import read_boxes
 from wmiltrack.engine.result import TrackResult

@@ -9,8 +9,8 @@ import pytest
 from conftest import import_extra
 
 pytestmark = pytest.mark.extras("got10k", "six")
-import_extra("six")     # got10k imports it without declaring it
 import_extra("got10k")
+import_extra("six")     # got10k imports it without declaring it
 
 import matplotlib  # noqa: E402
 

@@ -24,7 +24,7 @@ import pytest
 from wmiltrack import cli
 from wmiltrack.data import sequences, synthetic
 from wmiltrack.data.boxes import read_boxes
-from wmiltrack.eval.peers import make_tracker
+from wmiltrack.trackers import make_tracker
 
 SIZE = (120, 160)        # frame height, width: small frames keep the runs short
 TARGET = (24, 20)        # target width, height

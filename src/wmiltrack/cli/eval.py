@@ -10,7 +10,7 @@ from .options import Subparsers
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
-    from ..eval.peers import split_specs
+    from ..trackers import split_specs
 
     trackers = split_specs(args.trackers)
     if args.results is None and not trackers:

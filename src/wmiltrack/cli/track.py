@@ -107,8 +107,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
 
 def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     from ..data.sequences import TolerantFrames, open_input
-    from ..eval.peers import make_tracker
     from ..progress import progress
+    from ..trackers import make_tracker
 
     seq = open_input(args.input)
     starts: list[tuple[float, ...]]

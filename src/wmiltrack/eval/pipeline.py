@@ -86,8 +86,8 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from ..trackers import TrackerUnavailable
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
-from .peers import TrackerUnavailable
 from .report import (
     box_path,
     caption,
@@ -310,7 +310,7 @@ def _got10k_section(
 
 
 def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
-    from .peers import make_tracker
+    from ..trackers import make_tracker
 
     ok: list[str] = []
     for spec in specs:

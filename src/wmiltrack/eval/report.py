@@ -506,7 +506,7 @@ def environment() -> dict[str, Any]:
     import cv2
 
     from .. import __version__
-    from .peers import installed_opencv
+    from ..trackers import installed_opencv
 
     try:
         import matplotlib

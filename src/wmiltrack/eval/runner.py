@@ -43,8 +43,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ..engine.result import TrackerLike, TrackResult
+from ..trackers import make_tracker
 from .metrics import valid_mask
-from .peers import make_tracker
 
 __all__ = [
     "Executor",
@@ -181,7 +181,7 @@ def run_sequence(
     Parameters
     ----------
     spec:
-        A tracker name for :func:`wmiltrack.eval.peers.make_tracker` (``"rcwmil"``,
+        A tracker name for :func:`wmiltrack.trackers.make_tracker` (``"rcwmil"``,
         ``"opencv:MIL"``...) or a callable returning a new tracker.
     frames:
         The decoded frames (decode before calling: decoding is not timed).
@@ -288,7 +288,7 @@ class Task:
     Attributes
     ----------
     tracker:
-        Tracker spec for :func:`wmiltrack.eval.peers.make_tracker`.
+        Tracker spec for :func:`wmiltrack.trackers.make_tracker`.
     sequence:
         Path of the OTB sequence (:func:`wmiltrack.data.sequences.load_otb_sequence`), or for
         another layout the sequence's name in ``dataset``.
