@@ -433,6 +433,17 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     kw = {**overrides, **params}
     if s.lower().startswith(_PREFIX):
         return OpenCVTracker(s[len(_PREFIX) :], seed=seed, **kw)
+    from .engine.params import variants
+
+    presets = list(variants())
+    if s.lower() not in presets:
+        import difflib
+
+        close = difflib.get_close_matches(s.lower(), presets + [f"opencv:{n}" for n in OPENCV_TRACKERS],
+                                          n=2)
+        hint = f"did you mean {' or '.join(close)}? " if close else ""
+        raise ValueError(f"unknown tracker {s!r}; {hint}choose one of {', '.join(presets)}, "
+                         f"or opencv:NAME with NAME one of {', '.join(OPENCV_TRACKERS)}")
     from .engine.tracker import Tracker  # the compiled core is loaded only now
 
     tracker: TrackerLike = Tracker(s, seed=seed, **kw)

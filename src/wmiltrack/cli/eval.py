@@ -6,12 +6,16 @@ import argparse
 from pathlib import Path
 
 from ..data.layouts import LAYOUTS
-from .options import Subparsers
+from .options import Subparsers, UsageError
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
     from ..trackers import split_specs
 
+    if args.dataset.is_file():
+        raise UsageError(f"{args.dataset} is a file, not a dataset folder: eval takes a folder of "
+                         "sequences (OTB, LaSOT, GOT-10k, UAV123, TrackingNet or VOT layout); "
+                         "to track one video use `wmiltrack track`")
     trackers = split_specs(args.trackers)
     if args.results is None and not trackers:
         raise ValueError("give --trackers (or --results DIR to score existing box files)")

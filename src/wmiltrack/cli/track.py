@@ -19,7 +19,7 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, Any
 
-from .options import Subparsers, add_tracker_options, parse_box, parse_overrides
+from .options import Subparsers, UsageError, add_tracker_options, open_frames, parse_box, tracker_from_args
 
 EXIT_OK = 0
 EXIT_ERROR = 1
@@ -106,36 +106,24 @@ def _cmd_track(args: argparse.Namespace) -> int:
 
 
 def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
-    from ..data.sequences import TolerantFrames, open_input
+    from ..data.sequences import TolerantFrames
+    from ..engine.frames import clip_box
     from ..progress import progress
-    from ..trackers import make_tracker
 
-    seq = open_input(args.input)
+    if args.boxes is not None and args.box is not None:
+        raise UsageError("give either --box (one target) or --boxes (several), not both")
+    several = args.boxes is not None
+    tracker: Any = tracker_from_args(args, several=several)
+    seq = open_frames(args.input, has_box=args.box is not None or several)
     starts: list[tuple[float, ...]]
-    if args.boxes is not None:
-        if args.box is not None:
-            raise ValueError("give either --box (one target) or --boxes (several), not both")
+    if several:
         starts = _read_start_boxes(args.boxes)
     elif args.box is not None:
         starts = [tuple(args.box)]
     elif seq.groundtruth is not None:
         starts = [tuple(seq.init_box)]
     else:
-        raise SystemExit(
-            f"wmiltrack: {args.input} has no ground truth; give the first box with --box x,y,w,h"
-        )
-    several = args.boxes is not None
-    overrides = parse_overrides(args.set)
-    tracker: Any
-    if several:
-        from ..engine.multi import MultiTracker
-
-        if args.tracker.lower().startswith("opencv:"):
-            raise ValueError("--boxes tracks several targets with wmiltrack's presets only; "
-                             f"{args.tracker} is an OpenCV tracker")
-        tracker = MultiTracker(args.tracker, seed=args.seed, **overrides)
-    else:
-        tracker = make_tracker(args.tracker, seed=args.seed, **overrides)
+        raise UsageError(f"{args.input} has no ground truth; give the first box with --box x,y,w,h")
     box = starts[0]
     ids: list[int] = []
     reader = TolerantFrames(seq)
@@ -168,10 +156,12 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
                 boxes, scores = last_boxes, [math.nan] * len(last_boxes)
             elif i == 0:
                 if several:
-                    ids = [tracker.add(frame, b) for b in starts]
+                    ids = [_add_target(tracker, frame, b, k, args.boxes) for k, b in enumerate(starts)]
                 else:
                     tracker.init(frame, box)
-                boxes = [tuple(float(v) for v in b) for b in starts]
+                # the boxes the trackers start from: rounded to whole pixels, clipped to the frame
+                fw, fh = frame.shape[1], frame.shape[0]
+                boxes = [tuple(float(v) for v in clip_box(b, fw, fh)) for b in starts]
                 scores, shown = [math.nan] * len(boxes), frame
             else:
                 t0 = time.perf_counter()
@@ -190,7 +180,7 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
                 out.write(boxes[0])
             frames_done += 1
             if args.video is not None:
-                writer = _write_video_frame(writer, args.video, shown, boxes, i,
+                writer = _write_video_frame(writer, args.video, shown, boxes, i + 1,
                                             scores[0] if not several else math.nan, seq.fps, color)
             last_boxes, last_frame = boxes, shown
             if stop.signum is not None:
@@ -238,13 +228,26 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
 
 
 def _read_start_boxes(path: Path) -> list[tuple[float, ...]]:
-    """The first boxes of ``--boxes FILE``: one ``x,y,w,h`` line per target."""
+    """The first boxes of ``--boxes FILE``: one ``x,y,w,h`` line per target (a bad line is
+    named as ``FILE:LINE`` by :func:`~wmiltrack.data.boxes.read_boxes`)."""
     from ..data.boxes import read_boxes
 
     boxes = read_boxes(path)
     if len(boxes) == 0:
         raise ValueError(f"{path} holds no box: write one x,y,w,h line per target")
     return [tuple(float(v) for v in b) for b in boxes]
+
+
+def _add_target(tracker: Any, frame: Any, box: Sequence[float], k: int, path: Path) -> int:
+    """``tracker.add(frame, box)`` for the ``k``-th box of ``--boxes FILE``; a box the tracker
+    refuses is named by its line in the file."""
+    try:
+        return int(tracker.add(frame, box))
+    except (ValueError, TypeError) as exc:
+        lines = [n for n, text in enumerate(path.read_text(encoding="utf-8-sig").splitlines(), 1)
+                 if text.strip()]
+        where = f"{path}:{lines[k]}" if k < len(lines) else str(path)
+        raise ValueError(f"{where}: {exc}") from None
 
 
 def _mot_line(index: int, target: int, box: Sequence[float], score: float, held: bool) -> str:
@@ -258,8 +261,9 @@ def _mot_line(index: int, target: int, box: Sequence[float], score: float, held:
 
 
 def _write_video_frame(writer: Any, path: Path, frame: Any, boxes: Sequence[Sequence[float]],
-                       index: int, score: float, fps: float | None,
+                       number: int, score: float, fps: float | None,
                        color: tuple[int, int, int] = (0, 255, 0)) -> Any:
+    """Add one frame with its boxes to ``--video``; ``number`` counts frames from 1."""
     import cv2
     import numpy as np
 
@@ -270,11 +274,11 @@ def _write_video_frame(writer: Any, path: Path, frame: Any, boxes: Sequence[Sequ
         fourcc = cv2.VideoWriter.fourcc(*("mp4v" if str(path).lower().endswith(".mp4") else "MJPG"))
         writer = cv2.VideoWriter(str(path), fourcc, float(fps or 25.0), (w, h))
         if not writer.isOpened():
-            raise SystemExit(f"wmiltrack: cannot write video {path}")
+            raise RuntimeError(f"cannot write video {path}")
     img = (frame if frame.ndim == 3 and frame.shape[2] == 3
            else cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_GRAY2BGR))
     for k, box in enumerate(boxes):  # frame number and score written once
-        img = draw_result(img, box, index=index if k == 0 else None,
+        img = draw_result(img, box, index=number if k == 0 else None,
                           score=score if k == 0 else None, color=color)
     writer.write(img)
     return writer
@@ -287,13 +291,16 @@ def add_track(sub: Subparsers) -> None:
         description="Track one object. INPUT is a video file, a folder of images, or an OTB "
         "sequence folder (img/ + groundtruth_rect.txt: the first box comes from its ground truth "
         "unless --box is given). Prints or writes one x,y,w,h line per frame, each line as soon "
-        "as it is computed, so an interrupted run keeps every box computed. A frame that cannot "
+        "as it is computed, so an interrupted run keeps every box computed; the first line is the "
+        "first box as the tracker uses it (rounded to whole pixels, clipped to the frame), and "
+        "-o FILE is not touched before it. A frame that cannot "
         "be used (an image file that is truncated or does not decode, an image of another size) "
         "is skipped: its line repeats the last box, a warning names it, and the summary counts "
         "it. A video that stops reading before the frame count its header announces is reported "
         "too.",
         epilog="Exit status: 0 done (skipped frames included); 1 error, including a bad frame "
-        "with --strict or an output that cannot be written; 2 bad command line; 130 interrupted "
+        "with --strict or an output that cannot be written; 2 bad command line (also an unknown "
+        "tracker or parameter, or a bad --set value); 130 interrupted "
         "by SIGINT (Ctrl-C), 143 by SIGTERM. An interrupt stops after the current frame; the "
         "output then holds one line per frame processed and --video is closed so that it plays. "
         "A second interrupt stops at once (the lines and video already written are still kept).")

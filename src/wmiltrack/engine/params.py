@@ -542,10 +542,16 @@ class Params:
         """A copy with some fields changed (validated like the constructor)."""
         unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
         if unknown:
-            raise TypeError(
-                f"unknown parameter(s) {', '.join(sorted(unknown))}; valid: "
-                + ", ".join(f.name for f in dataclasses.fields(self) if f.name != "description")
-            )
+            import difflib
+
+            names = [f.name for f in dataclasses.fields(self) if f.name != "description"]
+            hints = []
+            for name in sorted(unknown):
+                close = difflib.get_close_matches(name, names, n=3)
+                hints.append(f"{name!r}" + (f" (did you mean {' or '.join(map(repr, close))}?)"
+                                            if close else ""))
+            raise TypeError(f"unknown parameter(s) {', '.join(hints)}; `wmiltrack variants "
+                            f"{self.variant}` lists the {len(names)} parameters")
         return dataclasses.replace(self, **changes)
 
     @classmethod

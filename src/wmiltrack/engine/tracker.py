@@ -147,7 +147,7 @@ class Tracker:
     ----------
     variant : str
         ``"rcwmil"`` (default, the paper's tracker), ``"ct"``, ``"fct"``, ``"mil"``,
-        ``"wmil"`` or ``"osil"``; see :func:`wmiltrack.variants`.
+        ``"wmil"``, ``"osil"`` or ``"rcwmil-plus"``; see :func:`wmiltrack.variants`.
     seed : int
         Seed of the random feature bank and negative sampling. The same seed and the same
         frames give identical boxes.

@@ -449,7 +449,7 @@ def _score_and_write(
 ) -> dict[str, Any]:
     """Score stage and report stage: the table (captioned), plots; returns the JSON document
     (without the run's own fields) and records the files in ``files``."""
-    env = environment()
+    env = environment(settings["cv_threads"])
     missing = settings["missing"]
     title = caption(env, {**settings, "missing": missing if protocol == "ope" else None})
     got10k: dict[str, Any] | None = None

@@ -260,7 +260,7 @@ def run_sequence(
             oks[i:] = False
             times[i:] = np.nan
         warnings.warn(
-            f"tracker {name!r} raised at frame {i}: {error}", RuntimeWarning, stacklevel=2
+            f"tracker {name!r} raised at frame {i + 1}: {error}", RuntimeWarning, stacklevel=2
         )
     finally:
         if was_enabled:
@@ -470,7 +470,8 @@ def _run_ope(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> 
         median_update_time=run.median_update_time,
         n_updates=run.n_updates,
         n_lost=int(np.sum(~oks[start + 1 : end])),
-        error=None if run.error is None else f"{run.error} (frame {error_frame})",
+        error=None if run.error is None else (
+            run.error if error_frame is None else f"{run.error} (frame {error_frame + 1})"),
         error_frame=error_frame,
     )
 
