@@ -110,8 +110,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     from wmiltrack.data.synthetic import make_sequence
     from wmiltrack.eval.metrics import ope_metrics
     from wmiltrack.eval.report import cpu_model
-    from wmiltrack.eval.runner import run_sequence, set_cv_threads
+    from wmiltrack.eval.runner import run_sequence
     from wmiltrack.eval.scoring import scored_boxes
+    from wmiltrack.executors import set_cv_threads
 
     set_cv_threads(args.cv_threads)
     n_frames = args.frames or (30 if args.quick else 60)

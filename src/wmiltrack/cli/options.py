@@ -117,3 +117,19 @@ def open_frames(path: Any, *, has_box: bool) -> Any:
         seq = open_input(path, groundtruth=False)
         print(f"wmiltrack: warning: ground truth not used: {exc}", file=sys.stderr)
         return seq
+
+
+def add_executor_options(p: argparse.ArgumentParser, inputs: str) -> None:
+    """``-j/--jobs``, ``--executor`` and ``--scheduler`` (:func:`wmiltrack.executors.make_executor`),
+    shared by ``eval`` and ``track --list``; ``inputs`` names what the workers must see."""
+    from ..executors import EXECUTORS
+
+    p.add_argument("-j", "--jobs", type=int, default=1,
+                   help="parallel processes or Dask workers (default 1)")
+    p.add_argument("--executor", choices=EXECUTORS, default=None,
+                   help="where tasks run: serial (this process), process (-j worker processes) or "
+                   "dask (a LocalCluster of -j workers, or the cluster at --scheduler; needs "
+                   "pip install \"wmiltrack[cluster]\"); default serial for -j 1, else process")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="with --executor dask: an existing Dask scheduler (tcp://host:8786) whose "
+                   f"workers see {inputs} at the same path")

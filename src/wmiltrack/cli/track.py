@@ -19,7 +19,16 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, Any
 
-from .options import Subparsers, UsageError, add_tracker_options, open_frames, parse_box, tracker_from_args
+from .options import (
+    Subparsers,
+    UsageError,
+    add_executor_options,
+    add_tracker_options,
+    open_frames,
+    parse_box,
+    parse_overrides,
+    tracker_from_args,
+)
 
 EXIT_OK = 0
 EXIT_ERROR = 1
@@ -101,8 +110,73 @@ class _BoxLines:
 
 
 def _cmd_track(args: argparse.Namespace) -> int:
+    if args.list is not None:
+        return _track_list(args)
+    if args.input is None:
+        raise UsageError("give INPUT (a video, image folder or OTB sequence) or --list FILE")
+    if args.jobs != 1 or args.executor is not None or args.scheduler is not None:
+        raise UsageError("-j, --executor and --scheduler go with --list (many clips)")
     with _stop_signals() as stop:
         return _track(args, stop)
+
+
+def _track_list(args: argparse.Namespace) -> int:
+    """``track --list FILE -o DIR``: every clip of the list on the chosen executor; each box
+    file written as its clip finishes; clips whose box file exists are skipped (resume)."""
+    from ..batch import ClipResult, describe_clip, failed_clip, read_clip_list, track_clips
+    from ..executors import make_executor
+    from ..progress import progress
+
+    if args.input is not None:
+        raise UsageError("give either INPUT (one clip) or --list FILE (many), not both")
+    mixed = [o for o, v in (("--box", args.box), ("--boxes", args.boxes), ("--video", args.video))
+             if v is not None] + (["--strict"] if args.strict else [])
+    if mixed:
+        raise UsageError(f"--list takes each clip's first box from its line; {', '.join(mixed)} "
+                         "goes with one INPUT")
+    if args.output is None:
+        raise UsageError("--list needs -o DIR, the folder of the clips' box files")
+    if args.output.is_file():
+        raise UsageError(f"-o {args.output} is a file; --list writes one box file per clip into a folder")
+    tracker_from_args(args)  # an unknown tracker or parameter is a usage error before any clip runs
+    clips = read_clip_list(args.list, args.output)
+    args.output.mkdir(parents=True, exist_ok=True)
+    try:
+        executor = make_executor(args.executor, args.jobs, 1, args.scheduler,
+                                 log=lambda line: print(f"wmiltrack: {line}", file=sys.stderr),
+                                 failed=failed_clip, describe=describe_clip)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    done = sum(Path(c.output).is_file() for c in clips)
+    failed: list[ClipResult] = []
+    tracked = 0
+
+    def bar(results: Iterator[ClipResult], n: int) -> Iterator[ClipResult]:
+        return iter(progress(results, total=n, desc=f"{args.tracker} clips"))
+
+    interrupted = False
+    try:
+        for result in track_clips(clips, executor, tracker=args.tracker, seed=args.seed,
+                                  overrides=parse_overrides(args.set), wrap=bar):
+            if result.error is None:
+                tracked += 1
+            else:
+                failed.append(result)
+                print(f"wmiltrack: error: {result.clip.label}: {result.error}", file=sys.stderr)
+    except KeyboardInterrupt:
+        interrupted = True
+    summary = [f"{len(clips)} clips: {tracked} tracked"]
+    if done:
+        summary.append(f"{done} already done (their box files exist)")
+    if failed:
+        summary.append(f"{len(failed)} failed")
+    left = len(clips) - done - tracked - len(failed)
+    if interrupted:
+        summary.append(f"interrupted with {left} not done: run the same command again to resume")
+    print(f"wmiltrack: {'; '.join(summary)}; boxes in {args.output}", file=sys.stderr)
+    if interrupted:
+        return EXIT_SIGINT
+    return EXIT_ERROR if failed else EXIT_OK
 
 
 def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
@@ -304,13 +378,21 @@ def add_track(sub: Subparsers) -> None:
         "by SIGINT (Ctrl-C), 143 by SIGTERM. An interrupt stops after the current frame; the "
         "output then holds one line per frame processed and --video is closed so that it plays. "
         "A second interrupt stops at once (the lines and video already written are still kept).")
-    p.add_argument("input", type=Path, help="video file, image folder or OTB sequence folder")
+    p.add_argument("input", type=Path, nargs="?",
+                   help="video file, image folder or OTB sequence folder (or give --list)")
     p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (pixels)")
     p.add_argument("--boxes", type=Path, metavar="FILE",
                    help="track several targets: FILE holds one x,y,w,h line per target (on the "
                    "first frame); output lines are MOTChallenge-style frame,id,x,y,w,h,score,-1,-1,-1 "
                    "(frame and id from 1, id = line in FILE), one per target and frame")
-    p.add_argument("-o", "--output", type=Path, help="write boxes here (default: print them)")
+    p.add_argument("-o", "--output", type=Path,
+                   help="write boxes here (default: print them); with --list, the folder of the "
+                   "clips' box files")
+    p.add_argument("--list", type=Path, metavar="FILE",
+                   help="track many clips: FILE holds one 'PATH x,y,w,h' line per clip (PATH "
+                   "relative to FILE's folder); each clip's boxes go to -o DIR/<clip name>.txt as "
+                   "soon as it is finished (written complete, then renamed), and a clip whose box "
+                   "file exists is skipped, so running the command again resumes a stopped run")
     p.add_argument("--video", type=Path, help="write a video with the box, frame number and score "
                    "drawn (a skipped frame shows the last good frame with the held box in red)")
     p.add_argument("--strict", action="store_true",
@@ -318,4 +400,5 @@ def add_track(sub: Subparsers) -> None:
                    "a video ends before the frame count its container announces (default: skip "
                    "the frame, hold the last box, warn)")
     add_tracker_options(p)
+    add_executor_options(p, "the clips")
     p.set_defaults(func=_cmd_track)
