@@ -84,9 +84,10 @@ def default_rows() -> dict[str, str]:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ablation; print the markdown table; return the exit status."""
     from wmiltrack.data.sequences import default_otb_root, list_otb_sequences, load_otb_sequence
-    from wmiltrack.eval.peers import available_opencv_trackers
     from wmiltrack.eval.pipeline import run_eval
-    from wmiltrack.eval.runner import run_sequence, set_cv_threads
+    from wmiltrack.eval.runner import run_sequence
+    from wmiltrack.executors import set_cv_threads
+    from wmiltrack.trackers import available_opencv_trackers
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
     ap.add_argument("--otb", type=Path, default=None, help="OTB folder (default $WMILTRACK_OTB "

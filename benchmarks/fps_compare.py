@@ -44,7 +44,7 @@ try:
 except ImportError:  # a checkout that was not installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from wmiltrack.eval.peers import OPENCV_TRACKERS, available_opencv_trackers, installed_opencv
+from wmiltrack.trackers import OPENCV_TRACKERS, available_opencv_trackers, installed_opencv
 
 VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
 REFERENCE = "opencv:MIL"
@@ -110,8 +110,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     from wmiltrack.data.synthetic import make_sequence
     from wmiltrack.eval.metrics import ope_metrics
     from wmiltrack.eval.report import cpu_model
-    from wmiltrack.eval.runner import run_sequence, set_cv_threads
+    from wmiltrack.eval.runner import run_sequence
     from wmiltrack.eval.scoring import scored_boxes
+    from wmiltrack.executors import set_cv_threads
 
     set_cv_threads(args.cv_threads)
     n_frames = args.frames or (30 if args.quick else 60)

@@ -39,7 +39,7 @@ from wmiltrack import _core
 from wmiltrack.data.sequences import list_otb_sequences, load_otb_sequence
 from wmiltrack.data.synthetic import make_sequence
 from wmiltrack.eval.metrics import iou
-from wmiltrack.eval.peers import parse_spec, split_specs
+from wmiltrack.trackers import parse_spec, split_specs
 
 
 def roc_auc(pos: np.ndarray, neg: np.ndarray) -> float:

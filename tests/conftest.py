@@ -1,14 +1,63 @@
-"""Shared pytest fixtures."""
+"""Shared pytest fixtures, and the ``extras`` marker's rule.
+
+Tests of an optional extra (the ``integrations`` and ``cluster`` packages, or the C++ benchmarks
+built by ``benchmarks/cpp/run.sh``) carry ``@pytest.mark.extras(...)``. Without what they need
+they are skipped with the reason, so that the README's bare set-up (``pip install ".[test]"``,
+``python -m pytest``) passes; with ``WMILTRACK_REQUIRE_EXTRAS=1`` (``.ci/run``'s second test step,
+after it installed the extras) the same absence is a failure, so no skip hides a check in CI.
+"""
 
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import os
 from pathlib import Path
+from types import ModuleType
+from typing import NoReturn
 
 import pytest
 
 OTB_ENV = "WMILTRACK_OTB"
+REQUIRE_EXTRAS_ENV = "WMILTRACK_REQUIRE_EXTRAS"
 REPO_ROOT = Path(__file__).resolve().parent.parent
+
+#: Top-level module -> the extra of pyproject.toml that installs it.
+EXTRA_OF = {"got10k": "integrations", "six": "integrations", "trax": "integrations",
+            "distributed": "cluster", "dask": "cluster"}
+
+
+def extras_required() -> bool:
+    """True when a missing extra must fail the test instead of skipping it."""
+    return os.environ.get(REQUIRE_EXTRAS_ENV, "").strip() not in ("", "0")
+
+
+def skip_or_fail(reason: str) -> NoReturn:
+    """Skip with ``reason``, or fail with it under ``WMILTRACK_REQUIRE_EXTRAS=1``."""
+    if extras_required():
+        pytest.fail(f"{reason} ({REQUIRE_EXTRAS_ENV} is set: an absent extra is an error)")
+    pytest.skip(reason)
+
+
+def _missing_reason(module: str) -> str:
+    extra = EXTRA_OF.get(module.split(".")[0], "integrations")
+    return f"{module} not installed (optional extra: pip install '.[{extra}]')"
+
+
+def import_extra(module: str) -> ModuleType:
+    """Import an optional extra's module at a test module's top: skip the whole test module
+    when it is absent, unless ``WMILTRACK_REQUIRE_EXTRAS=1``, where the import error stands."""
+    if extras_required():
+        return importlib.import_module(module)
+    return pytest.importorskip(module, reason=_missing_reason(module))
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """Apply ``@pytest.mark.extras("module", ...)``: each named top-level module must import."""
+    for mark in item.iter_markers("extras"):
+        for module in mark.args:
+            if importlib.util.find_spec(module) is None:
+                skip_or_fail(_missing_reason(module))
 
 
 @pytest.fixture(scope="session")

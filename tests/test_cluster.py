@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import sys
@@ -16,8 +15,8 @@ import pytest
 from wmiltrack.cli import main
 from wmiltrack.data.boxes import read_boxes
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.eval.peers import make_tracker, parse_spec, split_specs
 from wmiltrack.eval.report import safe_name
+from wmiltrack.trackers import make_tracker, parse_spec, split_specs
 
 N = 20
 
@@ -95,22 +94,11 @@ def test_sweep_is_a_list_of_specs(otb: Path, tmp_path: Path) -> None:
 
 
 # ----------------------------------------------------------------------------- Dask
-@pytest.fixture
-def need_distributed() -> None:
-    """Skip without ``distributed`` (the ``cluster`` extra), but fail under CI, which installs
-    it (``.ci/run``)."""
-    if importlib.util.find_spec("distributed") is None:
-        msg = 'distributed not installed (pip install -e ".[cluster]")'
-        if os.environ.get("CI"):
-            pytest.fail(msg)
-        pytest.skip(msg)
-
-
 def _files(root: Path) -> dict[str, np.ndarray]:
     return {str(p.relative_to(root)): read_boxes(p) for p in sorted(root.rglob("*.txt"))}
 
 
-@pytest.mark.usefixtures("need_distributed")
+@pytest.mark.extras("distributed")
 def test_dask_local_cluster_gives_the_serial_boxes(otb: Path, tmp_path: Path) -> None:
     import socket
 
@@ -149,7 +137,7 @@ def test_dask_local_cluster_gives_the_serial_boxes(otb: Path, tmp_path: Path) ->
     assert len(rows_a) == 6 and rows_a == rows_b
 
 
-@pytest.mark.usefixtures("need_distributed")
+@pytest.mark.extras("distributed")
 def test_dask_existing_cluster_by_scheduler_address(otb: Path, tmp_path: Path) -> None:
     """--scheduler ADDRESS: a scheduler and a worker started apart from wmiltrack, as the README
     shows (`dask scheduler`, `dask worker`), run the tasks and give the serial boxes."""
@@ -208,7 +196,7 @@ def _die_once(marker: str, task: Any) -> Any:
     return run_task(task)
 
 
-@pytest.mark.usefixtures("need_distributed")
+@pytest.mark.extras("distributed")
 def test_dask_retries_a_failed_task_once_and_reports_it(otb: Path, tmp_path: Path) -> None:
     import functools
     import sys

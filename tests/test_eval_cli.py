@@ -292,7 +292,7 @@ def test_public_entry_points_are_unchanged(capsys: pytest.CaptureFixture[str]) -
 
     for name in ("Tracker", "Params", "TrackResult", "variants"):
         assert hasattr(wmiltrack, name), name
-    for mod in ("wmiltrack.compat", "wmiltrack.integrations.got10k", "wmiltrack.vot"):
+    for mod in ("wmiltrack.compat", "wmiltrack.vot"):
         importlib.import_module(mod)
     assert callable(importlib.import_module("wmiltrack.vot").main)
     with pytest.raises(SystemExit):
@@ -307,3 +307,10 @@ def test_public_entry_points_are_unchanged(capsys: pytest.CaptureFixture[str]) -
               "missing", "cv_threads"):
         assert p in params, p
     assert params["missing"].default == "hold" and params["cv_threads"].default == 1
+
+
+@pytest.mark.extras("got10k", "six")
+def test_got10k_entry_point_imports() -> None:
+    import importlib
+
+    assert hasattr(importlib.import_module("wmiltrack.integrations.got10k"), "GOT10kTracker")

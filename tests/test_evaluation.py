@@ -13,8 +13,8 @@ import cv2
 import numpy as np
 import pytest
 
-import wmiltrack.eval.peers as peers
 import wmiltrack.eval.runner as runner
+import wmiltrack.trackers as peers
 from wmiltrack.cli import main
 from wmiltrack.data.boxes import read_boxes
 from wmiltrack.engine.result import TrackResult
@@ -76,7 +76,7 @@ def test_run_sequence_with_scripted_tracker() -> None:
 
 def test_run_sequence_records_errors() -> None:
     frames, gt = _moving(8)
-    with pytest.warns(RuntimeWarning, match="frame 3"):
+    with pytest.warns(RuntimeWarning, match="frame 4"):  # index 3: frame 4 counted from 1
         r = run_sequence(lambda: Oracle(gt, raise_at=3), frames, gt[0])
     assert not r.completed
     assert r.error == "RuntimeError: boom" and r.error_frame == 3
@@ -216,10 +216,11 @@ def test_a_failing_sequence_is_reported_and_the_rest_goes_on(
                "--no-plots", "--no-progress", "--repeats", "2"])
     assert rc == 1  # an error is an exit status, not silence
     text = capsys.readouterr()
-    assert "fake:flaky on B (seed 0) failed: RuntimeError: boom (frame 3)" in text.err
+    # the 3rd update raises: frame 4 counted from 1, as every message counts frames
+    assert "fake:flaky on B (seed 0) failed: RuntimeError: boom (frame 4)" in text.err
     doc = json.loads((out / "eval_ope.json").read_text())
     assert doc["summary"]["fake:flaky"]["errors"] == 2  # both repeats on B
-    assert doc["results"]["fake:flaky"]["B"]["runs"][1]["error"] == "RuntimeError: boom (frame 3)"
+    assert doc["results"]["fake:flaky"]["B"]["runs"][1]["error"] == "RuntimeError: boom (frame 4)"
     assert doc["results"]["fake:flaky"]["A"]["runs"][0]["error"] is None
     for seq in "ABC":
         for suffix in ("", ".r1"):

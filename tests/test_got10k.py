@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import import_extra
 
-if not os.environ.get("CI"):
-    pytest.importorskip("got10k", reason="GOT-10k toolkit not installed (pip install -e '.[integrations]')")
+pytestmark = pytest.mark.extras("got10k", "six")
+import_extra("got10k")
+import_extra("six")     # got10k imports it without declaring it
 
-import matplotlib
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
 

@@ -101,9 +101,11 @@ def test_aggregate_pools_frames_like_the_toolkit() -> None:
     assert agg.n_sequences == 2 and agg.to_dict()["pooled"]["n_scored"] == 4
 
 
+@pytest.mark.extras("got10k", "six")
 def test_matches_got10k_toolkit_on_random_boxes() -> None:
-    metrics_mod = pytest.importorskip("got10k.utils.metrics")
-    exp_mod = pytest.importorskip("got10k.experiments.got10k")
+    import got10k.experiments.got10k as exp_mod
+    import got10k.utils.metrics as metrics_mod
+
     rng = np.random.default_rng(7)
     n = 300
     gt = np.column_stack([rng.uniform(-20, 300, n), rng.uniform(-20, 200, n), rng.uniform(1, 80, n), rng.uniform(1, 80, n)])

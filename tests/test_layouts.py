@@ -602,8 +602,9 @@ def test_parse_vot_region_and_polygon_to_box() -> None:
     assert polygon_to_box([0, 0, 4, 0, 4, 2, 0, 2], mode="area") == (-0.5, -0.5, 5.0, 3.0)
 
 
+@pytest.mark.extras("got10k", "six")
 def test_polygon_area_mode_matches_got10k_toolkit() -> None:
-    vot_mod = pytest.importorskip("got10k.datasets.vot")
+    import got10k.datasets.vot as vot_mod
     rng = np.random.default_rng(3)
     corners = []
     for _ in range(20):

@@ -24,7 +24,7 @@ import pytest
 from wmiltrack import cli
 from wmiltrack.data import sequences, synthetic
 from wmiltrack.data.boxes import read_boxes
-from wmiltrack.eval.peers import make_tracker
+from wmiltrack.trackers import make_tracker
 
 SIZE = (120, 160)        # frame height, width: small frames keep the runs short
 TARGET = (24, 20)        # target width, height
@@ -43,7 +43,8 @@ def box_arg(box: tuple[float, ...]) -> str:
 
 
 def expected_boxes(frames: list[np.ndarray | None], box: tuple[float, ...]) -> np.ndarray:
-    """What ``wmiltrack track`` must write: frame 0 gets ``box``; a ``None`` frame (skipped)
+    """What ``wmiltrack track`` must write: frame 0 gets ``box`` as the tracker starts from it
+    (rounded to whole pixels, clipped to the frame); a ``None`` frame (skipped)
     repeats the previous box; the others get the tracker's box."""
     tracker = make_tracker("rcwmil", seed=0)
     out: list[tuple[float, ...]] = []
@@ -51,7 +52,7 @@ def expected_boxes(frames: list[np.ndarray | None], box: tuple[float, ...]) -> n
         if i == 0:
             assert f is not None
             tracker.init(f, box)
-            out.append(box)
+            out.append(tracker.box)
         elif f is None:
             out.append(out[-1])
         else:

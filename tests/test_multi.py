@@ -158,7 +158,10 @@ def test_track_cli_with_boxes_writes_mot_lines(two_targets, tmp_path, capsys) ->
     mt = MultiTracker("rcwmil", seed=2)
     for b in boxes:
         mt.add(frames[0], b)
-    want = [tuple(float(v) for v in b) for b in boxes]
+    from wmiltrack.engine.frames import clip_box  # the first line: the box each tracker starts from
+
+    h, w = frames[0].shape[:2]
+    want = [tuple(float(v) for v in clip_box(b, w, h)) for b in boxes]
     for f in frames[1:12]:
         res = mt.update(f)
         want += [res[0].box, res[1].box]
@@ -180,9 +183,9 @@ def test_track_cli_boxes_errors(tmp_path, capsys) -> None:
     assert "holds no box" in capsys.readouterr().err
     one = tmp_path / "one.txt"
     one.write_text("10,10,20,20\n")
-    assert main(["track", str(folder), "--boxes", str(one), "-t", "opencv:MIL"]) == 1
+    assert main(["track", str(folder), "--boxes", str(one), "-t", "opencv:MIL"]) == 2  # usage errors: 2
     assert "OpenCV tracker" in capsys.readouterr().err
-    assert main(["track", str(folder), "--boxes", str(one), "--box", "1,1,5,5"]) == 1
+    assert main(["track", str(folder), "--boxes", str(one), "--box", "1,1,5,5"]) == 2
     assert "not both" in capsys.readouterr().err
 
 

@@ -1,4 +1,4 @@
-"""Tests of wmiltrack.eval.peers (OpenCV trackers behind wmiltrack's interface)."""
+"""Tests of wmiltrack.trackers (OpenCV trackers behind wmiltrack's interface)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ cv2 = pytest.importorskip("cv2")
 
 from wmiltrack.engine.result import TrackResult
 from wmiltrack.eval.metrics import iou
-from wmiltrack.eval.peers import (
+from wmiltrack.trackers import (
     OPENCV_TRACKERS,
     OpenCVTracker,
     TrackerLike,
@@ -82,7 +82,7 @@ def test_contrib_tracker_absent_raises_with_swap_hint(
 ) -> None:
     _hide_contrib(monkeypatch, name)
     monkeypatch.setattr(
-        "wmiltrack.eval.peers.installed_opencv", lambda: ("opencv-python-headless", "5.0.0.93")
+        "wmiltrack.trackers.installed_opencv", lambda: ("opencv-python-headless", "5.0.0.93")
     )
     assert name not in available_opencv_trackers()
     with pytest.raises(TrackerUnavailable) as info:
@@ -98,7 +98,7 @@ def test_contrib_tracker_absent_raises_with_swap_hint(
 
 def test_swap_hint_uses_installed_version(monkeypatch: pytest.MonkeyPatch) -> None:
     _hide_contrib(monkeypatch, "CSRT")
-    from wmiltrack.eval.peers import installed_opencv
+    from wmiltrack.trackers import installed_opencv
 
     dist, ver = installed_opencv()
     with pytest.raises(TrackerUnavailable) as info:

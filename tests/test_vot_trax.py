@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import import_extra
 
-if not os.environ.get("CI"):
-    pytest.importorskip("trax", reason="vot-trax not installed (pip install -e '.[integrations]')")
+pytestmark = pytest.mark.extras("trax")
+trax = import_extra("trax")
 
-import trax  # noqa: E402
 from trax.client import Client  # noqa: E402
 
 import wmiltrack  # noqa: E402

@@ -12,7 +12,9 @@ import numpy as np
 
 def draw_result(frame: np.ndarray, box: Sequence[float], *, index: int | None = None,
                 score: float | None = None, color: tuple[int, int, int] = (0, 255, 0)) -> np.ndarray:
-    """A BGR copy of ``frame`` with ``box`` drawn, and the frame number and score written."""
+    """A BGR copy of ``frame`` with ``box`` drawn, and the frame number and score written
+    (``index`` is shown as ``#index``: pass the frame's number counted from 1, as the command
+    line's output, warnings and MOT lines count them)."""
     out: np.ndarray[Any, Any] = np.array(frame, dtype=np.uint8, copy=True)
     if out.ndim == 2:
         out = cv2.cvtColor(out, cv2.COLOR_GRAY2BGR)

@@ -6,12 +6,16 @@ import argparse
 from pathlib import Path
 
 from ..data.layouts import LAYOUTS
-from .options import Subparsers
+from .options import Subparsers, UsageError, add_executor_options
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
-    from ..eval.peers import split_specs
+    from ..trackers import split_specs
 
+    if args.dataset.is_file():
+        raise UsageError(f"{args.dataset} is a file, not a dataset folder: eval takes a folder of "
+                         "sequences (OTB, LaSOT, GOT-10k, UAV123, TrackingNet or VOT layout); "
+                         "to track one video use `wmiltrack track`")
     trackers = split_specs(args.trackers)
     if args.results is None and not trackers:
         raise ValueError("give --trackers (or --results DIR to score existing box files)")
@@ -94,24 +98,7 @@ def add_eval(sub: Subparsers) -> None:
         help="score box files DIR/<tracker>/<seq>.txt instead of running trackers",
     )
     p.add_argument("--out", type=Path, required=True, help="output folder")
-    p.add_argument(
-        "-j", "--jobs", type=int, default=1, help="parallel processes or Dask workers (default 1)"
-    )
-    p.add_argument(
-        "--executor",
-        choices=("serial", "process", "dask"),
-        default=None,
-        help="where tasks run: serial (this process), process (-j worker processes) or dask "
-        "(a LocalCluster of -j workers, or the cluster at --scheduler; needs "
-        "pip install \"wmiltrack[cluster]\"); default serial for -j 1, else process",
-    )
-    p.add_argument(
-        "--scheduler",
-        default=None,
-        metavar="ADDRESS",
-        help="with --executor dask: an existing Dask scheduler (tcp://host:8786) whose workers "
-        "see the dataset at the same path",
-    )
+    add_executor_options(p, "the dataset")
     p.add_argument(
         "--repeats",
         type=int,

@@ -6,39 +6,37 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from .options import add_tracker_options, parse_box, parse_overrides
+from .options import UsageError, add_tracker_options, open_frames, parse_box, tracker_from_args
 
 
 def _cmd_inspect(args: argparse.Namespace) -> int:
     import cv2
 
-    from ..data.sequences import open_input
-    from ..engine.tracker import Tracker
     from ..visualize import draw_samples
 
-    seq = open_input(args.input)
+    if args.frame < 2:
+        raise UsageError("--frame must be >= 2 (frames count from 1; the first one has no update)")
+    t = tracker_from_args(args, ours=True)
+    seq = open_frames(args.input, has_box=args.box is not None)
     if args.box is not None:
         box: Any = args.box
     elif seq.groundtruth is not None:
         box = seq.init_box
     else:
-        raise SystemExit(f"wmiltrack: {args.input} has no ground truth; give the first box with --box")
-    if args.frame < 1:
-        raise SystemExit("wmiltrack: --frame must be >= 1 (the frame after the first)")
-    t = Tracker(args.tracker, seed=args.seed, **parse_overrides(args.set))
+        raise UsageError(f"{args.input} has no ground truth; give the first box with --box")
     frame = None
     for i, frame in enumerate(seq):
         if i == 0:
             t.init(frame, box)
         else:
             t.update(frame)
-        if i == args.frame:
+        if i + 1 == args.frame:
             break
     else:
-        raise SystemExit(f"wmiltrack: {args.input} has fewer than {args.frame + 1} frames")
+        raise ValueError(f"{args.input} has fewer than {args.frame} frames")
     img = draw_samples(frame, t.samples(), scale=args.scale)
     if not cv2.imwrite(str(args.output), img, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
-        raise SystemExit(f"wmiltrack: cannot write {args.output}")
+        raise RuntimeError(f"cannot write {args.output}")
     s = t.samples()
     scales = f", {len(s['scales'])} other scales" if s["scales"] else ""
     print(f"frame {args.frame}: {len(s['positive'])} positives, {len(s['negative'])} negatives, "
@@ -62,7 +60,8 @@ def add_inspect(sub: Any) -> None:
         "the other scales searched (magenta; rcwmil-plus).")
     p.add_argument("input", type=Path, help="video file, image folder or OTB sequence folder")
     p.add_argument("-o", "--output", type=Path, default=Path("samples.png"), help="PNG to write")
-    p.add_argument("--frame", type=int, default=1, help="frame index to draw (default 1)")
+    p.add_argument("--frame", type=int, default=2,
+                   help="frame to draw, counted from 1 (default 2: the first update)")
     p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (default: ground truth)")
     p.add_argument("--scale", type=int, default=3, help="enlargement of the crop (default 3)")
     add_tracker_options(p)

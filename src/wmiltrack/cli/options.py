@@ -3,10 +3,41 @@
 from __future__ import annotations
 
 import argparse
+import re
+import sys
 from collections.abc import Sequence
 from typing import Any
 
 Subparsers = Any  # argparse's _SubParsersAction is private
+
+#: Options whose value may start with a minus sign (``--box -10,-10,40,40``).
+BOX_OPTIONS = ("--box",)
+_NEGATIVE_VALUE = re.compile(r"^-[0-9.]")
+
+
+class UsageError(ValueError):
+    """The command line cannot run as given (a bad option value, a missing option, an unknown
+    tracker or parameter): ``wmiltrack: error: ...`` and exit status 2, as argparse's own."""
+
+
+def join_negative_values(argv: Sequence[str]) -> list[str]:
+    """``--box -10,-10,40,40`` as ``--box=-10,-10,40,40``: argparse takes a value that starts
+    with ``-`` and is not a plain number for an option, so a box left of or above the frame
+    could only be given with ``=``."""
+    out: list[str] = []
+    args = list(argv)
+    i = 0
+    while i < len(args):
+        if args[i] in BOX_OPTIONS and i + 1 < len(args) and _NEGATIVE_VALUE.match(args[i + 1]):
+            out.append(f"{args[i]}={args[i + 1]}")
+            i += 2
+            continue
+        if args[i] == "--":  # everything after is positional
+            out += args[i:]
+            break
+        out.append(args[i])
+        i += 1
+    return out
 
 
 def parse_box(text: str) -> tuple[float, float, float, float]:
@@ -29,7 +60,7 @@ def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for item in items:
         if "=" not in item:
-            raise SystemExit(f"wmiltrack: --set expects name=value, got {item!r}")
+            raise UsageError(f"--set expects name=value, got {item!r}")
         key, raw = item.split("=", 1)
         try:
             out[key.strip()] = ast.literal_eval(raw)
@@ -41,7 +72,64 @@ def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
 def add_tracker_options(p: argparse.ArgumentParser) -> None:
     """``-t/--tracker``, ``--seed`` and ``--set NAME=VALUE``, shared by the commands that run one tracker."""
     p.add_argument("-t", "--tracker", default="rcwmil",
-                   help="variant: rcwmil (default), ct, fct, mil, wmil, osil, or opencv:NAME")
+                   help="variant: rcwmil (default), rcwmil-plus (most accurate), ct, fct, mil, wmil, "
+                   "osil, or opencv:NAME (not for inspect)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="override a parameter, e.g. --set num_selected=30 (repeatable)")
+
+
+def tracker_from_args(args: argparse.Namespace, *, several: bool = False, ours: bool = False) -> Any:
+    """The tracker that ``-t``, ``--seed`` and ``--set`` ask for.
+
+    ``several``: a :class:`wmiltrack.MultiTracker` (wmiltrack's presets only); ``ours``: a
+    :class:`wmiltrack.Tracker` (not an OpenCV tracker). An unknown tracker or parameter, or a
+    bad value, is a :class:`UsageError`; an OpenCV tracker missing from the installed ``cv2``
+    stays a :class:`wmiltrack.trackers.TrackerUnavailable` (exit status 1).
+    """
+    from ..trackers import make_tracker
+
+    overrides = parse_overrides(args.set)
+    if (several or ours) and args.tracker.lower().startswith("opencv:"):
+        what = "--boxes tracks several targets" if several else "this command runs"
+        raise UsageError(f"{what} with wmiltrack's presets only; {args.tracker} is an OpenCV tracker")
+    try:
+        if several:
+            from ..engine.multi import MultiTracker
+
+            return MultiTracker(args.tracker, seed=args.seed, **overrides)
+        return make_tracker(args.tracker, seed=args.seed, **overrides)
+    except (ValueError, TypeError) as exc:
+        raise UsageError(str(exc)) from None
+
+
+def open_frames(path: Any, *, has_box: bool) -> Any:
+    """:func:`wmiltrack.data.sequences.open_input`, where a ground-truth file that cannot be read
+    does not stop a run that has its first box (``--box``/``--boxes``): the frames are then
+    opened without it, and a warning says why."""
+    from ..data.sequences import open_input
+
+    try:
+        return open_input(path)
+    except ValueError as exc:
+        if not has_box:
+            raise
+        seq = open_input(path, groundtruth=False)
+        print(f"wmiltrack: warning: ground truth not used: {exc}", file=sys.stderr)
+        return seq
+
+
+def add_executor_options(p: argparse.ArgumentParser, inputs: str) -> None:
+    """``-j/--jobs``, ``--executor`` and ``--scheduler`` (:func:`wmiltrack.executors.make_executor`),
+    shared by ``eval`` and ``track --list``; ``inputs`` names what the workers must see."""
+    from ..executors import EXECUTORS
+
+    p.add_argument("-j", "--jobs", type=int, default=1,
+                   help="parallel processes or Dask workers (default 1)")
+    p.add_argument("--executor", choices=EXECUTORS, default=None,
+                   help="where tasks run: serial (this process), process (-j worker processes) or "
+                   "dask (a LocalCluster of -j workers, or the cluster at --scheduler; needs "
+                   "pip install \"wmiltrack[cluster]\"); default serial for -j 1, else process")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="with --executor dask: an existing Dask scheduler (tcp://host:8786) whose "
+                   f"workers see {inputs} at the same path")

@@ -279,11 +279,11 @@ class Sequence:
                 raise ValueError(f"could not open video {self.video}")
         while self._cap_pos < j:
             if not self._cap.grab():
-                raise ValueError(f"{self.video}: video ended before frame {j}")
+                raise ValueError(f"{self.video}: video ended before frame {j + 1}")
             self._cap_pos += 1
         ok, img = self._cap.read()
         if not ok or img is None:
-            raise ValueError(f"{self.video}: could not decode frame {j}")
+            raise ValueError(f"{self.video}: could not decode frame {j + 1}")
         self._cap_pos += 1
         return _as_frame(img)
 
@@ -634,7 +634,7 @@ def load_dataset(
     return [load_otb_sequence(by_name[n]) for n in names]
 
 
-def open_input(path: str | os.PathLike[str]) -> Sequence:
+def open_input(path: str | os.PathLike[str], *, groundtruth: bool = True) -> Sequence:
     """Open whatever the user pointed at as a :class:`Sequence`.
 
     Parameters
@@ -648,6 +648,10 @@ def open_input(path: str | os.PathLike[str]) -> Sequence:
         * a folder of images, taken in natural order (``2.png`` before ``10.png``); a
           ``groundtruth_rect.txt`` next to them is used if present;
         * a video file, read with :class:`cv2.VideoCapture`.
+    groundtruth:
+        ``False``: a folder's ground-truth file is not read (for a caller that has its own
+        first box, so that a damaged file does not stop it); an OTB folder then gives all the
+        images of ``img/``, in natural order.
 
     Returns
     -------
@@ -665,12 +669,13 @@ def open_input(path: str | os.PathLike[str]) -> Sequence:
     if not p.exists():
         raise FileNotFoundError(f"input not found: {p}")
     if p.is_dir():
-        if _is_otb_folder(p):
+        if groundtruth and _is_otb_folder(p):
             return load_otb_sequence(p)
         if (p / "img").is_dir():
             return _image_sequence(p.name, p / "img", None, None)
         gt = p / GT_FILE
-        return _image_sequence(p.name, p, gt if gt.is_file() else None, p / START_FILE)
+        return _image_sequence(p.name, p, gt if groundtruth and gt.is_file() else None,
+                               p / START_FILE)
     if p.suffix.lower() in IMAGE_EXTENSIONS:
         raise ValueError(f"{p} is a single image; pass the folder holding the frames instead")
     cap = cv2.VideoCapture(str(p))

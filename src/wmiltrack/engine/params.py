@@ -95,9 +95,10 @@ class Params(ScoreSettings, ColourSettings, MotionSettings, ScaleSettings, Searc
             hints = []
             for name in unknown:
                 close = difflib.get_close_matches(name, names, n=3)
-                hints.append(f"{name!r} (did you mean {' or '.join(close)}?)" if close else repr(name))
-            raise TypeError(f"unknown parameter(s) {', '.join(hints)}; `wmiltrack variants NAME` "
-                            "lists a variant's parameters")
+                hints.append(f"{name!r}" + (f" (did you mean {' or '.join(map(repr, close))}?)"
+                                            if close else ""))
+            raise TypeError(f"unknown parameter(s) {', '.join(hints)}; `wmiltrack variants "
+                            f"{self.variant}` lists the {len(names)} parameters")
         return dataclasses.replace(self, **changes)
 
     @classmethod

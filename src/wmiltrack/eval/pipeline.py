@@ -86,8 +86,9 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from ..executors import Executor, ExecutorName, make_executor
+from ..trackers import TrackerUnavailable
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
-from .peers import TrackerUnavailable
 from .report import (
     box_path,
     caption,
@@ -100,15 +101,13 @@ from .report import (
     write_plots,
     write_run_boxes,
 )
-from .runner import Executor, ProcessExecutor, RunOutcome, SerialExecutor, Task, run_task
+from .runner import RunOutcome, SerialExecutor, Task, run_task
 from .scoring import Missing, run_boxes, score_ope, score_vot
 
 __all__ = ["make_tasks", "run_eval", "run_tasks"]
 
 FloatArray = npt.NDArray[np.float64]
 Protocol = Literal["ope", "vot"]
-ExecutorName = Literal["serial", "process", "dask"]
-EXECUTORS: tuple[ExecutorName, ...] = ("serial", "process", "dask")
 REFERENCE = "opencv:MIL"
 
 
@@ -310,7 +309,7 @@ def _got10k_section(
 
 
 def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
-    from .peers import make_tracker
+    from ..trackers import make_tracker
 
     ok: list[str] = []
     for spec in specs:
@@ -331,24 +330,21 @@ def _executor(
     scheduler: str | None,
     say: Callable[[str], None],
 ) -> Executor:
-    if executor is None:
-        executor = "serial" if jobs == 1 else "process"
-    if scheduler is not None and executor != "dask":
-        raise ValueError("--scheduler needs --executor dask")
-    if not isinstance(executor, str):
+    if executor is not None and not isinstance(executor, str):
+        if scheduler is not None:
+            raise ValueError("--scheduler needs --executor dask")
         return executor
-    if executor == "serial":
+    if executor == "serial" or (executor is None and jobs == 1):
         if jobs != 1:
             raise ValueError(f"--executor serial runs one task at a time; -j {jobs} needs another")
-        return SerialExecutor(cv_threads)
-    if executor == "process":
-        return ProcessExecutor(jobs, cv_threads)
-    if executor == "dask":
-        from .cluster import DaskExecutor, require_distributed
+        if scheduler is not None:
+            raise ValueError("--scheduler needs --executor dask")
+        return SerialExecutor(cv_threads)  # eval's: also frees the decoded sequence
+    from .cluster import describe_task, failed_outcome
 
-        require_distributed()  # fail before anything runs, saying how to install it
-        return DaskExecutor(jobs, cv_threads, scheduler=scheduler, log=say)
-    raise ValueError(f"executor must be one of {', '.join(EXECUTORS)}, not {executor!r}")
+    # fails before anything runs when --executor dask lacks distributed, saying how to install it
+    return make_executor(executor, jobs, cv_threads, scheduler, log=say, failed=failed_outcome,
+                         describe=describe_task)
 
 
 def _executor_name(executor: Executor | ExecutorName | None, jobs: int) -> str:
@@ -449,7 +445,7 @@ def _score_and_write(
 ) -> dict[str, Any]:
     """Score stage and report stage: the table (captioned), plots; returns the JSON document
     (without the run's own fields) and records the files in ``files``."""
-    env = environment()
+    env = environment(settings["cv_threads"])
     missing = settings["missing"]
     title = caption(env, {**settings, "missing": missing if protocol == "ope" else None})
     got10k: dict[str, Any] | None = None

@@ -494,8 +494,12 @@ def cpu_model() -> str:
     return platform.processor() or "?"
 
 
-def environment() -> dict[str, Any]:
+def environment(cv_threads: int | None = None) -> dict[str, Any]:
     """Machine and versions that timings depend on, for benchmark reports.
+
+    ``cv_threads``: the ``cv2.setNumThreads`` value the runs used (``None``: left alone);
+    ``opencv_threads`` is then the count OpenCV reports under it (``setNumThreads(0)`` runs
+    on 1 thread, for instance), read with the setting applied and then restored.
 
     Returns
     -------
@@ -506,7 +510,7 @@ def environment() -> dict[str, Any]:
     import cv2
 
     from .. import __version__
-    from .peers import installed_opencv
+    from ..trackers import installed_opencv
 
     try:
         import matplotlib
@@ -515,6 +519,11 @@ def environment() -> dict[str, Any]:
     except ImportError:
         mpl = None
     dist, ver = installed_opencv()
+    before = cv2.getNumThreads()
+    if cv_threads is not None:
+        cv2.setNumThreads(int(cv_threads))
+    used = int(cv2.getNumThreads())
+    cv2.setNumThreads(before)
     return {
         "date": time.strftime("%Y-%m-%d %H:%M:%S"),
         "python": platform.python_version(),
@@ -524,7 +533,7 @@ def environment() -> dict[str, Any]:
         "numpy": np.__version__,
         "opencv": cv2.__version__,
         "opencv_wheel": f"{dist} {ver}",
-        "opencv_threads": cv2.getNumThreads(),
+        "opencv_threads": used,
         "matplotlib": mpl,
         "wmiltrack": __version__,
     }

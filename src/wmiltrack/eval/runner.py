@@ -3,10 +3,9 @@
 The unit of work is a :class:`Task`, one (tracker spec, sequence, seed) with the protocol's
 settings; :func:`run_task` turns it into a :class:`RunOutcome` (boxes as the tracker gave
 them, its "found" flags, timing, any error).  An executor maps tasks to outcomes and hands
-each one back as soon as it is finished (:class:`SerialExecutor` in this process,
-:class:`ProcessExecutor` in worker processes; anything with the same ``map`` method, e.g. a
-Dask client wrapper, can stand in), so the caller can write each result at once and a failure
-or an interruption loses only the tasks not yet finished.
+each one back as soon as it is finished (:mod:`wmiltrack.executors`: in this process, in
+worker processes or on Dask), so the caller can write each result at once and a failure or an
+interruption loses only the tasks not yet finished.
 
 Timing rules
 ------------
@@ -33,35 +32,33 @@ import time
 import traceback
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from multiprocessing import get_context
 from pathlib import Path
-from typing import Any, Literal, Protocol
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 
+from .. import executors
 from ..engine.result import TrackerLike, TrackResult
+from ..trackers import make_tracker
 from .metrics import valid_mask
-from .peers import make_tracker
 
 __all__ = [
-    "Executor",
-    "ProcessExecutor",
     "RunOutcome",
     "RunResult",
     "SerialExecutor",
     "Task",
     "run_sequence",
     "run_task",
-    "set_cv_threads",
 ]
 
 FloatArray = npt.NDArray[np.float64]
 BoolArray = npt.NDArray[np.bool_]
 Frame = npt.NDArray[np.uint8]
 TrackerSpec = str | Callable[[], TrackerLike]
+T = TypeVar("T")
+R = TypeVar("R")
 
 
 @dataclass(frozen=True)
@@ -181,7 +178,7 @@ def run_sequence(
     Parameters
     ----------
     spec:
-        A tracker name for :func:`wmiltrack.eval.peers.make_tracker` (``"rcwmil"``,
+        A tracker name for :func:`wmiltrack.trackers.make_tracker` (``"rcwmil"``,
         ``"opencv:MIL"``...) or a callable returning a new tracker.
     frames:
         The decoded frames (decode before calling: decoding is not timed).
@@ -260,7 +257,7 @@ def run_sequence(
             oks[i:] = False
             times[i:] = np.nan
         warnings.warn(
-            f"tracker {name!r} raised at frame {i}: {error}", RuntimeWarning, stacklevel=2
+            f"tracker {name!r} raised at frame {i + 1}: {error}", RuntimeWarning, stacklevel=2
         )
     finally:
         if was_enabled:
@@ -288,7 +285,7 @@ class Task:
     Attributes
     ----------
     tracker:
-        Tracker spec for :func:`wmiltrack.eval.peers.make_tracker`.
+        Tracker spec for :func:`wmiltrack.trackers.make_tracker`.
     sequence:
         Path of the OTB sequence (:func:`wmiltrack.data.sequences.load_otb_sequence`), or for
         another layout the sequence's name in ``dataset``.
@@ -376,27 +373,6 @@ class RunOutcome:
         return int(self.boxes.shape[0]) if self.error_frame is None else self.error_frame
 
 
-def set_cv_threads(n: int | None) -> int:
-    """Set OpenCV's thread pool size (``cv2.setNumThreads``) and return the previous size.
-
-    Parameters
-    ----------
-    n:
-        Threads; ``None`` leaves the setting alone.
-
-    Returns
-    -------
-    int
-        ``cv2.getNumThreads()`` before the call.
-    """
-    import cv2
-
-    before = int(cv2.getNumThreads())
-    if n is not None:
-        cv2.setNumThreads(int(n))
-    return before
-
-
 # one decoded sequence per process: tasks come sequence by sequence, so each is decoded once
 _decoded: dict[tuple[str, str | None, str], tuple[str, FloatArray, list[Frame]]] = {}
 
@@ -470,7 +446,8 @@ def _run_ope(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> 
         median_update_time=run.median_update_time,
         n_updates=run.n_updates,
         n_lost=int(np.sum(~oks[start + 1 : end])),
-        error=None if run.error is None else f"{run.error} (frame {error_frame})",
+        error=None if run.error is None else (
+            run.error if error_frame is None else f"{run.error} (frame {error_frame + 1})"),
         error_frame=error_frame,
     )
 
@@ -546,18 +523,9 @@ def run_task(task: Task) -> RunOutcome:
 
 
 # ----------------------------------------------------------------------------- executors
-class Executor(Protocol):
-    """Maps tasks to outcomes, yielding each outcome as soon as its task is finished."""
-
-    def map(
-        self, fn: Callable[[Task], RunOutcome], tasks: Sequence[Task]
-    ) -> Iterator[RunOutcome]:
-        """Run ``fn`` on every task; yield the outcomes in the order they finish."""
-        ...
-
-
-class SerialExecutor:
-    """Runs the tasks one after the other in this process.
+class SerialExecutor(executors.SerialExecutor):
+    """:class:`wmiltrack.executors.SerialExecutor` that also lets go of the decoded sequence
+    it kept between tasks (one per process, see :func:`run_task`) once the tasks are done.
 
     Parameters
     ----------
@@ -565,56 +533,9 @@ class SerialExecutor:
         ``cv2.setNumThreads`` while the tasks run (restored afterwards); ``None`` leaves it.
     """
 
-    def __init__(self, cv_threads: int | None = 1) -> None:
-        self.cv_threads = cv_threads
-
-    def map(
-        self, fn: Callable[[Task], RunOutcome], tasks: Sequence[Task]
-    ) -> Iterator[RunOutcome]:
+    def map(self, fn: Callable[[T], R], tasks: Sequence[T]) -> Iterator[R]:
         """Run ``fn`` on every task in order, yielding each outcome at once."""
-        before = set_cv_threads(self.cv_threads)
         try:
-            for t in tasks:
-                yield fn(t)
+            yield from super().map(fn, tasks)
         finally:
-            set_cv_threads(before)
             _decoded.clear()
-
-
-class ProcessExecutor:
-    """Runs the tasks in ``jobs`` worker processes (spawned: OpenCV's thread pool does not
-    survive a fork reliably).
-
-    Parameters
-    ----------
-    jobs:
-        Worker processes.
-    cv_threads:
-        ``cv2.setNumThreads`` in every worker; ``None`` leaves OpenCV's default.
-    """
-
-    def __init__(self, jobs: int, cv_threads: int | None = 1) -> None:
-        if jobs < 1:
-            raise ValueError(f"jobs must be at least 1, got {jobs}")
-        self.jobs = jobs
-        self.cv_threads = cv_threads
-
-    def map(
-        self, fn: Callable[[Task], RunOutcome], tasks: Sequence[Task]
-    ) -> Iterator[RunOutcome]:
-        """Submit every task; yield outcomes as they finish.  Closing the iterator early (an
-        interruption) cancels the tasks not yet started."""
-        if not tasks:
-            return
-        pool = ProcessPoolExecutor(
-            max_workers=min(self.jobs, len(tasks)),
-            mp_context=get_context("spawn"),
-            initializer=set_cv_threads,
-            initargs=(self.cv_threads,),
-        )
-        try:
-            futures: list[Future[RunOutcome]] = [pool.submit(fn, t) for t in tasks]
-            for fut in as_completed(futures):
-                yield fut.result()
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)

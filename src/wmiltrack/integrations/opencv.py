@@ -44,7 +44,8 @@ class TrackerCompat:
     Parameters
     ----------
     variant : str
-        Variant name (``"rcwmil"``, ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``).
+        Variant name (``"rcwmil"``, ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``,
+        ``"rcwmil-plus"``).
     params : Params or mapping, optional
         Full parameters, or a mapping of overrides of the variant's defaults.
     seed : int

@@ -1,8 +1,12 @@
-"""OpenCV's trackers behind wmiltrack's tracker interface, to compare against.
+"""The registry of tracker specs, shared by the command line, the evaluation and the benchmarks.
 
-``make_tracker("opencv:KCF")`` and ``make_tracker("rcwmil")`` give objects with the same two
-methods, ``init(frame, box)`` and ``update(frame) -> TrackResult``, so the benchmark code never
-needs to know which library it runs.
+A spec names a tracker and may set its parameters: ``"rcwmil"``, ``"rcwmil-plus:scale_steps=2"``
+(one of wmiltrack's presets, see :func:`wmiltrack.variants`) or ``"opencv:KCF"`` (one of OpenCV's
+trackers). :func:`make_tracker` turns a spec into an object with the two methods
+``init(frame, box)`` and ``update(frame) -> TrackResult``, so the code that runs trackers never
+needs to know which library one comes from; :func:`parse_spec` and :func:`split_specs` read
+specs from the command line. It lives outside ``eval/`` so that tracking a video does not
+depend on the evaluation package.
 
 Which wheel has which tracker (checked with OpenCV 5.0.0.93):
 
@@ -35,8 +39,8 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from ..engine.frames import clip_box
-from ..engine.result import Box, Frame, TrackerLike, TrackResult
+from .engine.frames import clip_box
+from .engine.result import Box, Frame, TrackerLike, TrackResult
 
 __all__ = [
     "OPENCV_TRACKERS",
@@ -403,7 +407,8 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     spec:
         ``"opencv:NAME"`` (NAME case-insensitive, one of :data:`OPENCV_TRACKERS`) for an
         :class:`OpenCVTracker`; anything else is a wmiltrack variant name (``"rcwmil"``,
-        ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``) given to ``wmiltrack.Tracker``;
+        ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``, ``"rcwmil-plus"``) given to
+        ``wmiltrack.Tracker``;
         either may end in ``:name=value`` overrides (``"rcwmil:num_selected=30"``, see
         :func:`parse_spec`), so a parameter sweep is a list of specs.
     seed:
@@ -428,7 +433,18 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     kw = {**overrides, **params}
     if s.lower().startswith(_PREFIX):
         return OpenCVTracker(s[len(_PREFIX) :], seed=seed, **kw)
-    from ..engine.tracker import Tracker  # the compiled core is loaded only now
+    from .engine.params import variants
+
+    presets = list(variants())
+    if s.lower() not in presets:
+        import difflib
+
+        close = difflib.get_close_matches(s.lower(), presets + [f"opencv:{n}" for n in OPENCV_TRACKERS],
+                                          n=2)
+        hint = f"did you mean {' or '.join(close)}? " if close else ""
+        raise ValueError(f"unknown tracker {s!r}; {hint}choose one of {', '.join(presets)}, "
+                         f"or opencv:NAME with NAME one of {', '.join(OPENCV_TRACKERS)}")
+    from .engine.tracker import Tracker  # the compiled core is loaded only now
 
     tracker: TrackerLike = Tracker(s, seed=seed, **kw)
     return tracker
