@@ -14,8 +14,8 @@ def _cmd_eval(args: argparse.Namespace) -> int:
 
     if args.dataset.is_file():
         raise UsageError(f"{args.dataset} is a file, not a dataset folder: eval takes a folder of "
-                         "sequences (OTB, LaSOT, GOT-10k, UAV123, TrackingNet or VOT layout); "
-                         "to track one video use `wmiltrack track`")
+                         "sequences (OTB, LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70, "
+                         "TrackingNet or VOT layout); to track one video use `wmiltrack track`")
     trackers = split_specs(args.trackers)
     if args.results is None and not trackers:
         raise ValueError("give --trackers (or --results DIR to score existing box files)")
@@ -73,7 +73,7 @@ def add_eval(sub: Subparsers) -> None:
     p.add_argument(
         "dataset",
         type=Path,
-        help="dataset folder (OTB, LaSOT, GOT-10k, UAV123, TrackingNet or VOT layout, detected), "
+        help="dataset folder (OTB, LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70, TrackingNet or VOT layout, detected), "
         "or one sequence folder",
     )
     p.add_argument(

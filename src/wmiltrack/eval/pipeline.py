@@ -4,13 +4,13 @@ Usage::
 
     wmiltrack eval DATASET --trackers rcwmil,fct,opencv:MIL --out DIR [-j N] [--repeats R]
                    [--executor serial|process|dask] [--scheduler ADDRESS] [--resume]
-                   [--layout otb|lasot|got10k|uav123|trackingnet|vot]
+                   [--layout otb|lasot|got10k|uav123|uav123_10fps|uav20l|dtb70|trackingnet|vot]
                    [--protocol ope|vot] [--sequences A,B] [--seed S]
     wmiltrack eval DATASET --results BOXDIR --out DIR      # score another tracker's files
 
 ``DATASET`` is a folder of OTB sequence folders (``<Seq>/img/`` + ``groundtruth_rect.txt``,
 optionally ``start.txt``) or one such sequence folder, or a dataset in another layout of
-:mod:`wmiltrack.data.layouts` (LaSOT, GOT-10k, UAV123, TrackingNet, VOT; detected, or named
+:mod:`wmiltrack.data.layouts` (LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70, TrackingNet, VOT; detected, or named
 with ``--layout``).  Absent frames are scored as each benchmark does (LaSOT: failures; the
 others: left out); GOT-10k datasets also get AO, SR@0.5 and SR@0.75; sequences annotated on
 the first frame only are run but not scored.  ``--resume`` (OPE) skips the runs whose box file
