@@ -73,8 +73,8 @@ def add_eval(sub: Subparsers) -> None:
     p.add_argument(
         "dataset",
         type=Path,
-        help="dataset folder (OTB, LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70, TrackingNet or VOT layout, detected), "
-        "or one sequence folder",
+        help="dataset folder (OTB, LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70, "
+        "TrackingNet or VOT layout, detected), or one sequence folder",
     )
     p.add_argument(
         "--layout",
