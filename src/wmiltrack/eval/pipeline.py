@@ -11,10 +11,10 @@ Usage::
 ``DATASET`` is a folder of OTB sequence folders (``<Seq>/img/`` + ``groundtruth_rect.txt``,
 optionally ``start.txt``) or one such sequence folder, or a dataset in another layout of
 :mod:`wmiltrack.data.layouts` (LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70,
-TrackingNet, VOT; detected, or named with ``--layout``).  Absent frames are scored as each
+TrackingNet, VOT; detected, or named with ``--layout``). Absent frames are scored as each
 benchmark does (LaSOT: failures; the others: left out); GOT-10k datasets also get AO, SR@0.5
-and SR@0.75; sequences annotated on the first frame only are run but not scored.  ``--resume`` (OPE) skips the runs whose box file
-and ``.run.json`` record are already in ``--out``.
+and SR@0.75; sequences annotated on the first frame only are run but not scored. ``--resume``
+(OPE) skips the runs whose box file and ``.run.json`` record are already in ``--out``.
 
 Protocols
 ---------
