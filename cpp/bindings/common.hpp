@@ -49,6 +49,7 @@ void bind_haar(py::module_& m);
 void bind_scoring(py::module_& m);
 void bind_colour(py::module_& m);
 void bind_frame(py::module_& m);
+void bind_cf(py::module_& m);
 
 inline void require(bool ok, const std::string& message) {
   if (!ok) throw py::value_error(message);

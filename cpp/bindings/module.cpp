@@ -18,4 +18,5 @@ PYBIND11_MODULE(_core, m) {
   wmiltrack::bindings::bind_scoring(m);
   wmiltrack::bindings::bind_colour(m);
   wmiltrack::bindings::bind_frame(m);
+  wmiltrack::bindings::bind_cf(m);
 }

@@ -1,0 +1,109 @@
+"""Probe: track with the correlation filters alone (translation + DSST scale), no MIL.
+
+An experiment, not a preset: it measures what the correlation-filter parts of
+:mod:`wmiltrack.engine.correlation` do on their own, Staple's loop without its colour
+model. Each frame: the translation filter searches around the last centre at the last
+size, the scale filter estimates the size change at the new centre, then both learn there
+(rates 0.01 and 0.025). Deterministic, so one run per sequence.
+
+Usage::
+
+    python benchmarks/cf_probe.py                     # the 17 shared sequences
+    python benchmarks/cf_probe.py --names Car4,David --no-scale
+
+AUC: OTB success AUC with a box on every frame (``ope_metrics(..., missing="hold")``, as
+``wmiltrack eval`` scores); frames/s: the tracking loop (init + updates) on frames decoded
+beforehand, in this process.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+try:
+    import wmiltrack  # noqa: F401
+except ImportError:  # a checkout that was not installed
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from wmiltrack.data.sequences import default_otb_root, load_dataset
+from wmiltrack.engine.correlation import (
+    CorrelationFilter,
+    CorrelationSettings,
+    ScaleEstimator,
+    ScaleSettings,
+)
+from wmiltrack.eval.metrics import ope_metrics
+
+
+def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettings,
+          scale_settings: ScaleSettings, use_scale: bool) -> np.ndarray:
+    """Boxes (n, 4) of the CF-only tracker on ``frames`` from ``box`` on the first."""
+    x, y, w, h = (float(v) for v in box)
+    cf = CorrelationFilter(settings)
+    cf.init(frames[0], (x, y, w, h))
+    se = ScaleEstimator(scale_settings)
+    if use_scale:
+        se.init(frames[0], (x, y, w, h))
+    cx, cy = x + w / 2, y + h / 2
+    fh, fw = frames[0].shape[:2]
+    min_side = 4.0
+    out = [np.array([x, y, w, h])]
+    for frame in frames[1:]:
+        loc = cf.locate(frame, (cx, cy), (w, h))
+        cx = min(max(cx + loc.dx, 0.0), fw - 1.0)
+        cy = min(max(cy + loc.dy, 0.0), fh - 1.0)
+        if use_scale:
+            f = se.estimate(frame, (cx, cy), (w, h)).factor
+            f = min(f, fw / w, fh / h)  # never larger than the frame
+            f = max(f, min_side / w, min_side / h)
+            w, h = w * f, h * f
+            se.learn(frame, (cx, cy), (w, h))
+        cf.learn(frame, (cx - w / 2, cy - h / 2, w, h))
+        out.append(np.array([cx - w / 2, cy - h / 2, w, h]))
+    return np.array(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the probe and print per-sequence AUC, the mean and frames/s."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--otb", type=Path, default=None, help="OTB folder (default: the project's)")
+    ap.add_argument("--names", default=None, help="comma-separated sequence names (default: all)")
+    ap.add_argument("--no-scale", action="store_true", help="translation only (fixed size)")
+    ap.add_argument("--padding", type=float, default=CorrelationSettings.padding)
+    ap.add_argument("--cell", type=int, default=CorrelationSettings.cell)
+    ap.add_argument("--rate", type=float, default=CorrelationSettings.learning_rate)
+    args = ap.parse_args(argv)
+    settings = CorrelationSettings(cell=args.cell, padding=args.padding, learning_rate=args.rate)
+    root = args.otb if args.otb is not None else default_otb_root()
+    names = args.names.split(",") if args.names else None
+    seqs = load_dataset(root, names)
+    rows = []
+    total_frames, total_time = 0, 0.0
+    for seq in tqdm(seqs, desc="sequences", unit="seq"):
+        frames = seq.load()
+        gt = seq.groundtruth
+        assert gt is not None
+        t0 = time.perf_counter()
+        boxes = track(frames, np.asarray(seq.init_box), settings, ScaleSettings(), not args.no_scale)
+        dt = time.perf_counter() - t0
+        auc = ope_metrics(boxes, gt, missing="hold").auc
+        rows.append((seq.name, len(frames), auc, len(frames) / dt))
+        total_frames += len(frames)
+        total_time += dt
+    print(f"{'sequence':<16} {'frames':>6} {'AUC':>6} {'fps':>7}")
+    for name, n, auc, fps in rows:
+        print(f"{name:<16} {n:>6} {auc:6.3f} {fps:7.1f}")
+    mean = float(np.mean([r[2] for r in rows]))
+    print(f"{'mean':<16} {total_frames:>6} {mean:6.3f} {total_frames / total_time:7.1f}")
+    return 0 if math.isfinite(mean) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
