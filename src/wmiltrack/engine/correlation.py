@@ -114,7 +114,7 @@ class CorrelationSettings:
 
     cell: int = 4
     template_area: float = 150.0**2
-    padding: float = 1.0
+    padding: float = 2.0
     sigma_factor: float = 1.0 / 16.0
     lam: float = 1e-3
     learning_rate: float = 0.01
@@ -126,8 +126,10 @@ class CorrelationSettings:
         _need(_is_int(self.exclusion) and self.exclusion >= 0,
               f"exclusion must be an int >= 0, got {self.exclusion!r}")
         _need(math.isfinite(self.template_area) and self.template_area >= (4 * self.cell) ** 2,
-              f"template_area must be at least (4 cell)**2 = {(4 * self.cell) ** 2}, got {self.template_area!r}")
-        _need(math.isfinite(self.padding) and self.padding >= 0.0, f"padding must be >= 0, got {self.padding!r}")
+              f"template_area must be at least (4 cell)**2 = {(4 * self.cell) ** 2}, "
+              f"got {self.template_area!r}")
+        _need(math.isfinite(self.padding) and self.padding >= 0.0,
+              f"padding must be >= 0, got {self.padding!r}")
         _need(math.isfinite(self.sigma_factor) and self.sigma_factor > 0.0,
               f"sigma_factor must be > 0, got {self.sigma_factor!r}")
         _need(math.isfinite(self.lam) and self.lam >= 0.0, f"lam must be >= 0, got {self.lam!r}")
