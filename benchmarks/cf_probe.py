@@ -25,7 +25,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 try:
     import wmiltrack  # noqa: F401
@@ -40,6 +39,7 @@ from wmiltrack.engine.correlation import (
     ScaleSettings,
 )
 from wmiltrack.eval.metrics import ope_metrics
+from wmiltrack.progress import progress
 
 
 def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettings,
@@ -86,10 +86,11 @@ def main(argv: list[str] | None = None) -> int:
     seqs = load_dataset(root, names)
     rows = []
     total_frames, total_time = 0, 0.0
-    for seq in tqdm(seqs, desc="sequences", unit="seq"):
+    for seq in progress(seqs, desc="sequences"):
         frames = seq.load()
         gt = seq.groundtruth
-        assert gt is not None
+        if gt is None:
+            ap.error(f"{seq.name} has no ground truth")
         t0 = time.perf_counter()
         boxes = track(frames, np.asarray(seq.init_box), settings, ScaleSettings(), not args.no_scale)
         dt = time.perf_counter() - t0
