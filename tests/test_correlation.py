@@ -135,9 +135,10 @@ def test_gray_patch_is_the_frame_on_whole_pixels_and_luma_of_colour() -> None:
     np.testing.assert_allclose(corner * 255, luma[0, 0], atol=1e-3)
 
 
-def test_translation_filter_matches_numpy_reference() -> None:
+@pytest.mark.parametrize(("rows", "cols"), [(12, 15), (9, 16), (10, 10)])
+def test_translation_filter_matches_numpy_reference(rows: int, cols: int) -> None:
     rng = np.random.default_rng(2)
-    rows, cols, k = 12, 15, 3
+    k = 3
     a = rng.random((k, rows, cols)).astype(np.float32)
     b = rng.random((k, rows, cols)).astype(np.float32)
     z = rng.random((k, rows, cols)).astype(np.float32)
@@ -162,9 +163,9 @@ def test_translation_filter_matches_numpy_reference() -> None:
     assert r.apce == pytest.approx((want.max() - lo) ** 2 / np.mean((want - lo) ** 2), rel=1e-3)
 
 
-def test_scale_filter_matches_numpy_reference() -> None:
+@pytest.mark.parametrize(("n", "d"), [(33, 20), (33, 7), (17, 1), (4, 5)])
+def test_scale_filter_matches_numpy_reference(n: int, d: int) -> None:
     rng = np.random.default_rng(3)
-    n, d = 33, 20
     a, b, z = (rng.random((n, d)).astype(np.float32) for _ in range(3))
     sigma, lam = math.sqrt(n) / 4, 1e-3
     f = _core.ScaleFilter(n, d, sigma, lam)

@@ -14,50 +14,65 @@ namespace {
 using Complex = std::complex<float>;
 constexpr double kPi = 3.14159265358979323846;
 
-// 2-D transforms of rows x cols row-major arrays, rows then columns, with Eigen's 1-D FFT.
-// Plans are cached in the Eigen object, so one Fft2 serves every plane of a call; each call
-// makes its own (the filters stay const and need no lock to respond).
+// 2-D transforms of rows x cols row-major real arrays with Eigen's 1-D FFT, rows then columns.
+// Spectra of real arrays are Hermitian (X[r][c] = conj(X[-r][-c])), so only their columns
+// 0 .. cols / 2 are kept ("half spectra", rows x (cols / 2 + 1)): the filters' products and
+// sums run over those, and the inverse rebuilds the rest. Plans are cached in the Eigen
+// objects, so one Fft2 serves every plane of a call; each call makes its own (the filters
+// stay const and need no lock to respond).
 class Fft2 {
  public:
   Fft2(int rows, int cols)
-      : rows_(rows), cols_(cols), col_in_(static_cast<std::size_t>(rows)),
-        col_out_(static_cast<std::size_t>(rows)), row_buf_(static_cast<std::size_t>(cols)) {}
-
-  // Full complex spectrum of a real plane (numpy's fft2).
-  void forward(const float* in, Complex* out) {
-    for (int r = 0; r < rows_; ++r) {
-      fft_.fwd(out + static_cast<std::size_t>(r) * cols_, in + static_cast<std::size_t>(r) * cols_,
-               cols_);
-    }
-    columns(out, false);
+      : rows_(rows), cols_(cols), half_(cols / 2 + 1), col_in_(static_cast<std::size_t>(rows)),
+        col_out_(static_cast<std::size_t>(rows)), row_buf_(static_cast<std::size_t>(cols)),
+        full_(static_cast<std::size_t>(rows) * cols) {
+    half_fft_.SetFlag(Eigen::FFT<float>::HalfSpectrum);
   }
 
-  // Real part of the inverse transform, scaled by 1 / (rows * cols) (numpy's ifft2).
-  void inverse_real(Complex* in_out, float* out) {
-    columns(in_out, true);
+  int half() const { return half_; }
+
+  // Columns 0 .. cols / 2 of numpy's fft2 of a real plane (rows x half()).
+  void forward_half(const float* in, Complex* out) {
     for (int r = 0; r < rows_; ++r) {
-      Complex* row = in_out + static_cast<std::size_t>(r) * cols_;
-      fft_.inv(row_buf_.data(), row, cols_);
+      half_fft_.fwd(out + static_cast<std::size_t>(r) * half_,
+                    in + static_cast<std::size_t>(r) * cols_, cols_);
+    }
+    columns(out, half_, false);
+  }
+
+  // numpy's real(ifft2(X)) of the Hermitian spectrum X whose half spectrum is `in`.
+  void inverse_half_real(const Complex* in, float* out) {
+    for (int r = 0; r < rows_; ++r) {
+      Complex* row = &full_[static_cast<std::size_t>(r) * cols_];
+      const Complex* mirror = in + static_cast<std::size_t>((rows_ - r) % rows_) * half_;
+      std::copy(in + static_cast<std::size_t>(r) * half_,
+                in + static_cast<std::size_t>(r) * half_ + half_, row);
+      for (int c = half_; c < cols_; ++c) row[c] = std::conj(mirror[cols_ - c]);
+    }
+    columns(full_.data(), cols_, true);
+    for (int r = 0; r < rows_; ++r) {
+      fft_.inv(row_buf_.data(), &full_[static_cast<std::size_t>(r) * cols_], cols_);
       for (int c = 0; c < cols_; ++c) out[static_cast<std::size_t>(r) * cols_ + c] = row_buf_[c].real();
     }
   }
 
  private:
-  void columns(Complex* data, bool inverse) {
-    for (int c = 0; c < cols_; ++c) {
-      for (int r = 0; r < rows_; ++r) col_in_[r] = data[static_cast<std::size_t>(r) * cols_ + c];
+  // 1-D transforms down each of the first `width` columns of a rows x width array.
+  void columns(Complex* data, int width, bool inverse) {
+    for (int c = 0; c < width; ++c) {
+      for (int r = 0; r < rows_; ++r) col_in_[r] = data[static_cast<std::size_t>(r) * width + c];
       if (inverse) {
         fft_.inv(col_out_.data(), col_in_.data(), rows_);
       } else {
         fft_.fwd(col_out_.data(), col_in_.data(), rows_);
       }
-      for (int r = 0; r < rows_; ++r) data[static_cast<std::size_t>(r) * cols_ + c] = col_out_[r];
+      for (int r = 0; r < rows_; ++r) data[static_cast<std::size_t>(r) * width + c] = col_out_[r];
     }
   }
 
-  int rows_, cols_;
-  Eigen::FFT<float> fft_;
-  std::vector<Complex> col_in_, col_out_, row_buf_;
+  int rows_, cols_, half_;
+  Eigen::FFT<float> fft_, half_fft_;
+  std::vector<Complex> col_in_, col_out_, row_buf_, full_;
 };
 
 // MATLAB's hann(n): 0.5 (1 - cos(2 pi k / (n - 1))), k = 0 .. n - 1; 1 for n == 1.
@@ -130,9 +145,9 @@ TranslationFilter::TranslationFilter(int rows, int cols, int channels, double si
       label_[at] = static_cast<float>(std::exp(-0.5 * (dr * dr + dc * dc) / (sigma * sigma)));
     }
   }
-  label_f_.resize(window_.size());
   Fft2 fft(rows, cols);
-  fft.forward(label_.data(), label_f_.data());
+  label_f_.resize(static_cast<std::size_t>(rows) * fft.half());
+  fft.forward_half(label_.data(), label_f_.data());
   for (auto& v : label_f_) v = std::conj(v);
 }
 
@@ -149,13 +164,14 @@ void TranslationFilter::check(const FeatureMap& x) const {
 
 std::vector<Complex> TranslationFilter::spectra(const FeatureMap& x) const {
   const std::size_t plane = x.plane_size();
-  std::vector<Complex> out(plane * static_cast<std::size_t>(channels_));
-  std::vector<float> windowed(plane);
   Fft2 fft(rows_, cols_);
+  const std::size_t half = static_cast<std::size_t>(rows_) * fft.half();
+  std::vector<Complex> out(half * static_cast<std::size_t>(channels_));
+  std::vector<float> windowed(plane);
   for (int k = 0; k < channels_; ++k) {
     const float* src = &x.data[k * plane];
     for (std::size_t i = 0; i < plane; ++i) windowed[i] = src[i] * window_[i];
-    fft.forward(windowed.data(), &out[k * plane]);
+    fft.forward_half(windowed.data(), &out[k * half]);
   }
   return out;
 }
@@ -163,13 +179,13 @@ std::vector<Complex> TranslationFilter::spectra(const FeatureMap& x) const {
 void TranslationFilter::learn(const FeatureMap& x, double rate) {
   check(x);
   check_rate(rate);
-  const std::size_t plane = x.plane_size();
-  const float inv_n = 1.0f / static_cast<float>(plane);
+  const float inv_n = 1.0f / static_cast<float>(x.plane_size());
   std::vector<Complex> num = spectra(x);
-  std::vector<float> den(plane, 0.0f);
+  const std::size_t half = label_f_.size();
+  std::vector<float> den(half, 0.0f);
   for (int k = 0; k < channels_; ++k) {
-    Complex* xk = &num[k * plane];
-    for (std::size_t i = 0; i < plane; ++i) {
+    Complex* xk = &num[k * half];
+    for (std::size_t i = 0; i < half; ++i) {
       den[i] += std::norm(xk[i]) * inv_n;
       xk[i] = label_f_[i] * xk[i] * inv_n;
     }
@@ -184,20 +200,21 @@ TranslationResponse TranslationFilter::respond(const FeatureMap& z, int exclusio
   if (exclusion < 0) throw std::invalid_argument("TranslationFilter: exclusion must be >= 0");
   const std::size_t plane = z.plane_size();
   const std::vector<Complex> zf = spectra(z);
-  std::vector<Complex> acc(plane, Complex(0.0f, 0.0f));
+  const std::size_t half = label_f_.size();
+  std::vector<Complex> acc(half, Complex(0.0f, 0.0f));
   for (int k = 0; k < channels_; ++k) {
-    const Complex* a = &num_[k * plane];
-    const Complex* zk = &zf[k * plane];
-    for (std::size_t i = 0; i < plane; ++i) acc[i] += std::conj(a[i]) * zk[i];
+    const Complex* a = &num_[k * half];
+    const Complex* zk = &zf[k * half];
+    for (std::size_t i = 0; i < half; ++i) acc[i] += std::conj(a[i]) * zk[i];
   }
   const float lambda = static_cast<float>(lambda_);
-  for (std::size_t i = 0; i < plane; ++i) acc[i] /= den_[i] + lambda;
+  for (std::size_t i = 0; i < half; ++i) acc[i] /= den_[i] + lambda;
   TranslationResponse out;
   out.rows = rows_;
   out.cols = cols_;
   out.values.resize(plane);
   Fft2 fft(rows_, cols_);
-  fft.inverse_real(acc.data(), out.values.data());
+  fft.inverse_half_real(acc.data(), out.values.data());
 
   const auto& v = out.values;
   const std::size_t best =
@@ -254,26 +271,42 @@ ScaleFilter::ScaleFilter(int num_scales, int dims, double sigma, double lambda)
     label[s] = Complex(static_cast<float>(
         std::exp(-0.5 * (s - centre) * (s - centre) / (sigma * sigma))), 0.0f);
   }
-  label_f_.resize(label.size());
+  const int half = num_scales / 2 + 1;
+  std::vector<Complex> label_f(label.size());
   Eigen::FFT<float> fft;
-  fft.fwd(label_f_.data(), label.data(), num_scales);
+  fft.fwd(label_f.data(), label.data(), num_scales);
+  label_f_.assign(label_f.begin(), label_f.begin() + half);
   for (auto& v : label_f_) v = std::conj(v);
 }
 
+// Bins 0 .. n / 2 of the FFT along the scales of each windowed feature (dims x (n / 2 + 1)).
+// Two features go through one complex FFT, as real and imaginary part: with Z the FFT of
+// a + i b and Z*(k) = conj(Z(n - k)), A = (Z + Z*) / 2 and B = (Z - Z*) / (2 i).
 std::vector<Complex> ScaleFilter::spectra(const std::vector<float>& samples) const {
   if (samples.size() != static_cast<std::size_t>(n_) * dims_) {
     throw std::invalid_argument("ScaleFilter: " + std::to_string(samples.size()) +
                                 " values for " + std::to_string(n_) + " samples of " +
                                 std::to_string(dims_) + " features");
   }
-  std::vector<Complex> out(samples.size());
-  std::vector<Complex> column(static_cast<std::size_t>(n_));
+  const std::size_t half = label_f_.size();
+  std::vector<Complex> out(half * static_cast<std::size_t>(dims_));
+  const std::size_t n = static_cast<std::size_t>(n_);
+  std::vector<Complex> pair(n), spectrum(n);
   Eigen::FFT<float> fft;
-  for (int d = 0; d < dims_; ++d) {
+  for (int d = 0; d < dims_; d += 2) {
+    const bool two = d + 1 < dims_;
     for (int s = 0; s < n_; ++s) {
-      column[s] = Complex(samples[static_cast<std::size_t>(s) * dims_ + d] * window_[s], 0.0f);
+      const float* row = &samples[static_cast<std::size_t>(s) * dims_ + d];
+      pair[s] = Complex(row[0] * window_[s], two ? row[1] * window_[s] : 0.0f);
     }
-    fft.fwd(&out[static_cast<std::size_t>(d) * n_], column.data(), n_);
+    fft.fwd(spectrum.data(), pair.data(), n_);
+    Complex* a = &out[static_cast<std::size_t>(d) * half];
+    for (std::size_t k = 0; k < half; ++k) {
+      const Complex z = spectrum[k];
+      const Complex mirror = std::conj(spectrum[(n - k) % n]);
+      a[k] = 0.5f * (z + mirror);
+      if (two) a[half + k] = Complex(0.0f, -0.5f) * (z - mirror);
+    }
   }
   return out;
 }
@@ -281,12 +314,13 @@ std::vector<Complex> ScaleFilter::spectra(const std::vector<float>& samples) con
 void ScaleFilter::learn(const std::vector<float>& samples, double rate) {
   check_rate(rate);
   std::vector<Complex> num = spectra(samples);
-  std::vector<float> den(static_cast<std::size_t>(n_), 0.0f);
+  const std::size_t half = label_f_.size();
+  std::vector<float> den(half, 0.0f);
   for (int d = 0; d < dims_; ++d) {
-    Complex* xd = &num[static_cast<std::size_t>(d) * n_];
-    for (int s = 0; s < n_; ++s) {
-      den[s] += std::norm(xd[s]);
-      xd[s] = label_f_[s] * xd[s];
+    Complex* xd = &num[static_cast<std::size_t>(d) * half];
+    for (std::size_t k = 0; k < half; ++k) {
+      den[k] += std::norm(xd[k]);
+      xd[k] = label_f_[k] * xd[k];
     }
   }
   blend(num_, num, rate, !trained_, den_, den);
@@ -296,17 +330,20 @@ void ScaleFilter::learn(const std::vector<float>& samples, double rate) {
 ScaleResponse ScaleFilter::respond(const std::vector<float>& samples) const {
   if (!trained_) throw std::logic_error("ScaleFilter: learn() before respond()");
   const std::vector<Complex> zf = spectra(samples);
-  std::vector<Complex> acc(static_cast<std::size_t>(n_), Complex(0.0f, 0.0f));
+  const std::size_t half = label_f_.size();
+  std::vector<Complex> acc(half, Complex(0.0f, 0.0f));
   for (int d = 0; d < dims_; ++d) {
-    const Complex* a = &num_[static_cast<std::size_t>(d) * n_];
-    const Complex* zd = &zf[static_cast<std::size_t>(d) * n_];
-    for (int s = 0; s < n_; ++s) acc[s] += std::conj(a[s]) * zd[s];
+    const Complex* a = &num_[static_cast<std::size_t>(d) * half];
+    const Complex* zd = &zf[static_cast<std::size_t>(d) * half];
+    for (std::size_t k = 0; k < half; ++k) acc[k] += std::conj(a[k]) * zd[k];
   }
   const float lambda = static_cast<float>(lambda_);
-  for (int s = 0; s < n_; ++s) acc[s] /= den_[s] + lambda;
-  std::vector<Complex> time(static_cast<std::size_t>(n_));
+  // The full (Hermitian) spectrum from its first half, then the inverse.
+  std::vector<Complex> full(static_cast<std::size_t>(n_)), time(full.size());
+  for (std::size_t k = 0; k < half; ++k) full[k] = acc[k] / (den_[k] + lambda);
+  for (std::size_t k = half; k < full.size(); ++k) full[k] = std::conj(full[full.size() - k]);
   Eigen::FFT<float> fft;
-  fft.inv(time.data(), acc.data(), n_);
+  fft.inv(time.data(), full.data(), n_);
   ScaleResponse out;
   out.values.resize(static_cast<std::size_t>(n_));
   for (int s = 0; s < n_; ++s) out.values[s] = time[s].real();
@@ -332,14 +369,11 @@ std::vector<float> scale_samples(const ImageView& frame, double cx, double cy, d
                                  int model_rows, int cell) {
   if (factors.empty()) throw std::invalid_argument("scale_samples: no scale factors");
   const int dims = scale_sample_dims(model_cols, model_rows, cell);
+  const std::vector<GrayPatch> patches =
+      sample_gray_scales(frame, cx, cy, w, h, factors, model_cols, model_rows);
   std::vector<float> out(factors.size() * static_cast<std::size_t>(dims));
-  for (std::size_t s = 0; s < factors.size(); ++s) {
-    const double f = factors[s];
-    if (!(f > 0.0 && std::isfinite(f))) {
-      throw std::invalid_argument("scale_samples: scale factors must be positive and finite");
-    }
-    const FeatureMap x = fhog(sample_gray(frame, cx, cy, w * f, h * f, model_cols, model_rows),
-                              cell);
+  for (std::size_t s = 0; s < patches.size(); ++s) {
+    const FeatureMap x = fhog(patches[s], cell);
     std::copy(x.data.begin(), x.data.end(), out.begin() + static_cast<std::ptrdiff_t>(s * dims));
   }
   return out;

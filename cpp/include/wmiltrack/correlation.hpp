@@ -65,9 +65,10 @@ class TranslationFilter {
   bool trained_ = false;
   std::vector<float> window_;
   std::vector<float> label_;
-  std::vector<std::complex<float>> label_f_;  // conj(fft2(label))
-  std::vector<std::complex<float>> num_;      // channels x rows x cols
-  std::vector<float> den_;                    // rows x cols
+  // Half spectra (columns 0 .. cols / 2; the rest is their Hermitian mirror).
+  std::vector<std::complex<float>> label_f_;  // conj(fft2(label)), rows x (cols / 2 + 1)
+  std::vector<std::complex<float>> num_;      // channels x rows x (cols / 2 + 1)
+  std::vector<float> den_;                    // rows x (cols / 2 + 1)
 };
 
 // A scale filter's answer to one set of scale samples.
@@ -103,9 +104,10 @@ class ScaleFilter {
   double lambda_;
   bool trained_ = false;
   std::vector<float> window_;
-  std::vector<std::complex<float>> label_f_;  // conj(fft(label))
-  std::vector<std::complex<float>> num_;      // dims x n
-  std::vector<float> den_;                    // n
+  // Half spectra (bins 0 .. n / 2; the rest is their Hermitian mirror).
+  std::vector<std::complex<float>> label_f_;  // conj(fft(label)), n / 2 + 1
+  std::vector<std::complex<float>> num_;      // dims x (n / 2 + 1)
+  std::vector<float> den_;                    // n / 2 + 1
 };
 
 // Scale samples around (cx, cy): for each factor f, the region of size (w f) x (h f) is

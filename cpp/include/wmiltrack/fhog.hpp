@@ -45,6 +45,13 @@ constexpr int kFhogChannels = 31;
 GrayPatch sample_gray(const ImageView& frame, double cx, double cy, double w, double h,
                       int out_cols, int out_rows);
 
+// sample_gray of the regions (w f) x (h f) around (cx, cy) for each factor f, all resampled to
+// out_cols x out_rows; the frame's luma under them is converted once. Same errors as
+// sample_gray, and std::invalid_argument for a non-positive or non-finite factor.
+std::vector<GrayPatch> sample_gray_scales(const ImageView& frame, double cx, double cy, double w,
+                                          double h, const std::vector<double>& factors,
+                                          int out_cols, int out_rows);
+
 // fHOG of a gray patch: floor(rows / cell) x floor(cols / cell) cells, kFhogChannels
 // planes. Gradients are central differences (edge replicated); each pixel votes its
 // gradient magnitude into the two nearest of 18 signed orientation bins (linearly) and the
