@@ -13,16 +13,21 @@ Usage::
 
 AUC: OTB success AUC with a box on every frame (``ope_metrics(..., missing="hold")``, as
 ``wmiltrack eval`` scores); frames/s: the tracking loop (init + updates) on frames decoded
-beforehand, in this process.
+beforehand, in this process. ``--confidence`` also prints how well each of the translation
+filter's confidences (peak, PSR, APCE, and each divided by its running mean over the
+earlier frames, "rel") tells tracked frames (IoU > 0) from lost ones (IoU == 0), as ROC AUC
+over all frames pooled (``scripts/score_study.py``'s ``roc_auc``).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -38,13 +43,32 @@ from wmiltrack.engine.correlation import (
     ScaleEstimator,
     ScaleSettings,
 )
-from wmiltrack.eval.metrics import ope_metrics
+from wmiltrack.eval.metrics import iou, ope_metrics
 from wmiltrack.progress import progress
+
+CONFIDENCES = ("peak", "psr", "apce")
+RELATIVE_RATE = 0.05  # running mean of a confidence over earlier frames, for the "rel" rows
+
+
+def relative(values: np.ndarray) -> np.ndarray:
+    """Each value divided by the running mean (rate RELATIVE_RATE) of the values before it;
+    NaN on the first."""
+    out = np.full(values.shape, np.nan)
+    mean = math.nan
+    for i, v in enumerate(values):
+        if math.isfinite(v):
+            if math.isfinite(mean):
+                out[i] = v / mean if mean > 0 else np.nan
+                mean = (1 - RELATIVE_RATE) * mean + RELATIVE_RATE * v
+            else:
+                mean = v
+    return out
 
 
 def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettings,
-          scale_settings: ScaleSettings, use_scale: bool) -> np.ndarray:
-    """Boxes (n, 4) of the CF-only tracker on ``frames`` from ``box`` on the first."""
+          scale_settings: ScaleSettings, use_scale: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes (n, 4) of the CF-only tracker on ``frames`` from ``box`` on the first, and the
+    translation filter's confidences (n, 3: peak, PSR, APCE; NaN on the first frame)."""
     x, y, w, h = (float(v) for v in box)
     cf = CorrelationFilter(settings)
     cf.init(frames[0], (x, y, w, h))
@@ -55,8 +79,10 @@ def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettin
     fh, fw = frames[0].shape[:2]
     min_side = 4.0
     out = [np.array([x, y, w, h])]
+    conf = [np.full(len(CONFIDENCES), np.nan)]
     for frame in frames[1:]:
         loc = cf.locate(frame, (cx, cy), (w, h))
+        conf.append(np.array([loc.peak, loc.psr, loc.apce]))
         cx = min(max(cx + loc.dx, 0.0), fw - 1.0)
         cy = min(max(cy + loc.dy, 0.0), fh - 1.0)
         if use_scale:
@@ -67,7 +93,23 @@ def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettin
             se.learn(frame, (cx, cy), (w, h))
         cf.learn(frame, (cx - w / 2, cy - h / 2, w, h))
         out.append(np.array([cx - w / 2, cy - h / 2, w, h]))
-    return np.array(out)
+    return np.array(out), np.array(conf)
+
+
+def _median(values: np.ndarray) -> float:
+    finite = values[np.isfinite(values)]
+    return float(np.median(finite)) if finite.size else math.nan
+
+
+def _roc_auc() -> Any:
+    """``roc_auc`` of scripts/score_study.py (the project's tracked-vs-lost measure)."""
+    path = Path(__file__).resolve().parents[1] / "scripts" / "score_study.py"
+    spec = importlib.util.spec_from_file_location("score_study", path)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"cannot load {path}")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.roc_auc
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,12 +121,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--padding", type=float, default=CorrelationSettings.padding)
     ap.add_argument("--cell", type=int, default=CorrelationSettings.cell)
     ap.add_argument("--rate", type=float, default=CorrelationSettings.learning_rate)
+    ap.add_argument("--confidence", action="store_true",
+                    help="also the ROC AUC of each confidence for tracked vs lost frames")
+    ap.add_argument("--area", type=float, default=CorrelationSettings.template_area,
+                    help="template pixels (default 150**2)")
     args = ap.parse_args(argv)
-    settings = CorrelationSettings(cell=args.cell, padding=args.padding, learning_rate=args.rate)
+    settings = CorrelationSettings(cell=args.cell, padding=args.padding, learning_rate=args.rate,
+                                   template_area=args.area)
     root = args.otb if args.otb is not None else default_otb_root()
     names = args.names.split(",") if args.names else None
     seqs = load_dataset(root, names)
     rows = []
+    ious, confs = [], []
     total_frames, total_time = 0, 0.0
     for seq in progress(seqs, desc="sequences"):
         frames = seq.load()
@@ -92,8 +140,12 @@ def main(argv: list[str] | None = None) -> int:
         if gt is None:
             ap.error(f"{seq.name} has no ground truth")
         t0 = time.perf_counter()
-        boxes = track(frames, np.asarray(seq.init_box), settings, ScaleSettings(), not args.no_scale)
+        boxes, conf = track(frames, np.asarray(seq.init_box), settings, ScaleSettings(),
+                            not args.no_scale)
         dt = time.perf_counter() - t0
+        ious.append(iou(boxes[1:], gt[1:]))
+        rel = np.stack([relative(conf[:, k]) for k in range(conf.shape[1])], axis=1)
+        confs.append(np.concatenate([conf, rel], axis=1)[1:])
         auc = ope_metrics(boxes, gt, missing="hold").auc
         rows.append((seq.name, len(frames), auc, len(frames) / dt))
         total_frames += len(frames)
@@ -103,6 +155,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name:<16} {n:>6} {auc:6.3f} {fps:7.1f}")
     mean = float(np.mean([r[2] for r in rows]))
     print(f"{'mean':<16} {total_frames:>6} {mean:6.3f} {total_frames / total_time:7.1f}")
+    if args.confidence:
+        ov, cf = np.concatenate(ious), np.concatenate(confs)
+        scored = np.isfinite(ov)
+        tracked, lost = scored & (ov > 0), scored & (ov == 0)
+        roc_auc = _roc_auc()
+        print(f"confidence: tracked (IoU > 0) {int(tracked.sum())} frames, lost {int(lost.sum())}")
+        names = [*CONFIDENCES, *(f"{n} rel" for n in CONFIDENCES)]
+        for k, name in enumerate(names):
+            print(f"  {name:<9} ROC AUC {roc_auc(cf[tracked, k], cf[lost, k]):.3f}  "
+                  f"median tracked {_median(cf[tracked, k]):.3g}, lost {_median(cf[lost, k]):.3g}")
     return 0 if math.isfinite(mean) else 1
 
 
