@@ -206,6 +206,12 @@ def test_filter_finds_a_known_shift_within_a_pixel(dx: float, dy: float) -> None
     cf.init(frame, box)
     loc = cf.locate(shifted(frame, dx, dy), (160.0, 115.0))
     assert abs(loc.dx - dx) < 1.0 and abs(loc.dy - dy) < 1.0, (loc.dx, loc.dy)
+    # The response's peak cell is the shift, in cells of loc.cell frame pixels.
+    rows, cols = loc.response.shape
+    r, c = np.unravel_index(np.argmax(loc.response), loc.response.shape)
+    sx = ((c + cols // 2) % cols - cols // 2) * loc.cell[0]
+    sy = ((r + rows // 2) % rows - rows // 2) * loc.cell[1]
+    assert abs(sx - dx) <= 0.6 * loc.cell[0] and abs(sy - dy) <= 0.6 * loc.cell[1]
 
 
 def test_psr_is_high_on_the_target_and_low_on_noise() -> None:

@@ -186,7 +186,10 @@ class Location:
 
     ``dx``, ``dy``: the target's shift in frame pixels; ``peak``, ``psr``, ``apce``: the
     response's maximum, peak-to-sidelobe ratio and average peak-to-correlation energy (higher
-    is surer); ``response``: the response per circular shift of the template grid.
+    is surer); ``response``: the response per circular shift of the template grid, entry
+    ``[r, c]`` for a shift of ``(c * cell[0], r * cell[1])`` frame pixels (``r``, ``c`` modulo
+    the grid's rows and columns), so another cue can read the filter's score of any
+    candidate centre.
     """
 
     dx: float
@@ -195,6 +198,7 @@ class Location:
     psr: float
     apce: float
     response: npt.NDArray[np.float32]
+    cell: tuple[float, float]
 
 
 @dataclass(frozen=True)
@@ -280,10 +284,10 @@ class CorrelationFilter:
         _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
         r = f.respond(self._features(frame, c, sz), self.settings.exclusion)
         scale = math.sqrt(sz[0] * sz[1] / (self._base_size[0] * self._base_size[1]))
-        pixel = self._base_region[0] * scale / f.cols  # frame pixels per cell (both axes)
-        pixel_y = self._base_region[1] * scale / f.rows
-        return Location(dx=r.col_shift * pixel, dy=r.row_shift * pixel_y, peak=r.peak,
-                        psr=r.psr, apce=r.apce, response=r.values)
+        cell_w = self._base_region[0] * scale / f.cols  # frame pixels per cell
+        cell_h = self._base_region[1] * scale / f.rows
+        return Location(dx=r.col_shift * cell_w, dy=r.row_shift * cell_h, peak=r.peak,
+                        psr=r.psr, apce=r.apce, response=r.values, cell=(cell_w, cell_h))
 
     def learn(self, frame: Any, box: Any, rate: float | None = None) -> None:
         """Fold in the template around ``box`` at ``rate`` (default: the settings')."""
