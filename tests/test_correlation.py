@@ -235,16 +235,17 @@ def zoomed(frame: npt.NDArray[np.uint8], factor: float, cx: float, cy: float) ->
                           borderMode=cv2.BORDER_REPLICATE)
 
 
-@pytest.mark.parametrize("factor", [1.1, 1 / 1.1])
+@pytest.mark.parametrize("factor", [1.1, 1 / 1.1, 1.05])
 def test_scale_estimator_recovers_a_known_scale_change(factor: float) -> None:
     frame = texture(240, 320, 8, blur=1.5)
     box = (120.0, 90.0, 80.0, 60.0)
-    centre = (159.5, 119.5)
+    centre = (160.0, 120.0)  # the box's centre; pixel i covers [i, i + 1)
     se = ScaleEstimator()
     se.init(frame, box)
-    assert se.estimate(frame, centre, (80.0, 60.0)).factor == pytest.approx(1.0, abs=0.01)
-    est = se.estimate(zoomed(frame, factor, *centre), centre, (80.0, 60.0))
-    assert est.factor == pytest.approx(factor, rel=0.02), est.factor
+    assert se.estimate(frame, centre, (80.0, 60.0)).factor == pytest.approx(1.0, abs=0.005)
+    # warpAffine's pixel centres are at integers: the box's centre is (159.5, 119.5) there.
+    est = se.estimate(zoomed(frame, factor, 159.5, 119.5), centre, (80.0, 60.0))
+    assert est.factor == pytest.approx(factor, rel=0.01), est.factor
     assert est.response.shape == (33,)
 
 
@@ -260,6 +261,26 @@ def test_learning_follows_the_rate() -> None:
     # rate 1 forgets the first frame; rate 0.01 hardly learns the second.
     assert fast.locate(other, (100.0, 100.0)).psr > fast.locate(frame, (100.0, 100.0)).psr
     assert slow.locate(frame, (100.0, 100.0)).psr > slow.locate(other, (100.0, 100.0)).psr
+
+
+def test_copies_are_independent() -> None:
+    frame, other = texture(200, 200, 13), texture(200, 200, 14)
+    box = (70.0, 70.0, 60.0, 60.0)
+    cf, se = CorrelationFilter(), ScaleEstimator()
+    cf.init(frame, box)
+    se.init(frame, box)
+    cf2, se2 = cf.copy(), se.copy()
+    before = cf.locate(frame, (100.0, 100.0)).response
+    scale_before = se.estimate(frame, (100.0, 100.0), (60.0, 60.0)).response
+    cf.learn(other, box, 1.0)
+    se.learn(other, (100.0, 100.0), (60.0, 60.0), 1.0)
+    np.testing.assert_array_equal(cf2.locate(frame, (100.0, 100.0)).response, before)
+    np.testing.assert_array_equal(se2.estimate(frame, (100.0, 100.0), (60.0, 60.0)).response,
+                                  scale_before)
+    assert not np.array_equal(cf.locate(frame, (100.0, 100.0)).response, before)
+    assert cf2.grid == cf.grid and cf2.size == cf.size
+    with pytest.raises(RuntimeError, match="init"):
+        CorrelationFilter().copy().locate(frame, (1.0, 1.0))
 
 
 def test_template_grid_is_fixed_and_smooth() -> None:

@@ -74,12 +74,14 @@ struct LockedTranslation {
   std::mutex lock;
   LockedTranslation(int rows, int cols, int channels, double sigma, double lambda)
       : filter(rows, cols, channels, sigma, lambda) {}
+  explicit LockedTranslation(const cf::TranslationFilter& f) : filter(f) {}
 };
 
 struct LockedScale {
   cf::ScaleFilter filter;
   std::mutex lock;
   LockedScale(int n, int dims, double sigma, double lambda) : filter(n, dims, sigma, lambda) {}
+  explicit LockedScale(const cf::ScaleFilter& f) : filter(f) {}
 };
 
 void check_rate(double rate) {
@@ -206,6 +208,13 @@ void bind_cf(py::module_& m) {
            }),
            py::arg("rows"), py::arg("cols"), py::arg("channels"), py::arg("sigma"),
            py::arg("lam"))
+      .def(
+          "copy",
+          [](LockedTranslation& t) {
+            std::lock_guard<std::mutex> guard(t.lock);
+            return std::make_unique<LockedTranslation>(t.filter);
+          },
+          "An independent copy (the model as it is now).")
       .def_property_readonly("rows", [](const LockedTranslation& t) { return t.filter.rows(); })
       .def_property_readonly("cols", [](const LockedTranslation& t) { return t.filter.cols(); })
       .def_property_readonly("channels",
@@ -282,6 +291,13 @@ void bind_cf(py::module_& m) {
              return std::make_unique<LockedScale>(num_scales, dims, sigma, lam);
            }),
            py::arg("num_scales"), py::arg("dims"), py::arg("sigma"), py::arg("lam"))
+      .def(
+          "copy",
+          [](LockedScale& s) {
+            std::lock_guard<std::mutex> guard(s.lock);
+            return std::make_unique<LockedScale>(s.filter);
+          },
+          "An independent copy (the model as it is now).")
       .def_property_readonly("num_scales", [](const LockedScale& s) { return s.filter.num_scales(); })
       .def_property_readonly("dims", [](const LockedScale& s) { return s.filter.dims(); })
       .def_property_readonly("trained", [](LockedScale& s) {

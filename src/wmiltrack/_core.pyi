@@ -249,6 +249,8 @@ class TranslationResponse:
 class TranslationFilter:
     """A multi-channel linear correlation filter trained and applied in the Fourier domain."""
     def __init__(self, rows: int, cols: int, channels: int, sigma: float, lam: float) -> None: ...
+    def copy(self) -> TranslationFilter:
+        """An independent copy (the model as it is now)."""
     @property
     def rows(self) -> int: ...
     @property
@@ -278,6 +280,8 @@ class ScaleResponse:
 class ScaleFilter:
     """DSST's 1-D correlation filter over num_scales samples of dims features."""
     def __init__(self, num_scales: int, dims: int, sigma: float, lam: float) -> None: ...
+    def copy(self) -> ScaleFilter:
+        """An independent copy (the model as it is now)."""
     @property
     def num_scales(self) -> int: ...
     @property

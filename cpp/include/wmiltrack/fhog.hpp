@@ -36,7 +36,8 @@ struct FeatureMap {
 constexpr int kFhogChannels = 31;
 
 // The frame region of size w x h (frame pixels, may be fractional) centred on (cx, cy),
-// resampled to out_cols x out_rows gray pixels (luma as OpenCV's BGR2GRAY, / 255). Parts
+// in coordinates where pixel (r, c) covers [c, c + 1) x [r, r + 1) (so a box (x, y, w, h)
+// has its centre at (x + w / 2, y + h / 2)), resampled to out_cols x out_rows gray pixels (luma as OpenCV's BGR2GRAY, / 255). Parts
 // of the region outside the frame take the nearest edge pixel. Each output pixel is a
 // tent-weighted average of the frame pixels under it (radius: one output pixel in frame
 // pixels, at least one), i.e. bilinear when enlarging and an anti-aliased average when

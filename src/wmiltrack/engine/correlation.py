@@ -7,6 +7,9 @@ factor its size changed (a 1-D filter over a pyramid of scale samples, DSST). Bo
 their own rate when the caller says so; neither decides when. The pixel, FFT and filter
 work runs in the compiled core (``_core.fhog_region``, ``_core.TranslationFilter``,
 ``_core.scale_samples``, ``_core.ScaleFilter``).
+
+Coordinates are those of boxes: pixel ``(row, col)`` covers ``[col, col + 1) x [row, row + 1)``,
+so the centre of a box ``(x, y, w, h)`` is ``(x + w / 2, y + h / 2)``.
 """
 
 from __future__ import annotations
@@ -244,6 +247,15 @@ class CorrelationFilter:
         """The target's size ``(w, h)`` last learnt (the default of :meth:`locate`)."""
         return self._size
 
+    def copy(self) -> CorrelationFilter:
+        """An independent copy (template geometry and model as they are now), e.g. to keep
+        the last model a tracker trusted."""
+        out = CorrelationFilter(self.settings)
+        out._filter = None if self._filter is None else self._filter.copy()
+        out._base_size, out._base_region = self._base_size, self._base_region
+        out._out_size, out._size = self._out_size, self._size
+        return out
+
     def _require(self) -> _core.TranslationFilter:
         if self._filter is None:
             raise RuntimeError("call init() first")
@@ -312,6 +324,13 @@ class ScaleEstimator:
         self.factors: tuple[float, ...] = tuple(s.step ** (k - half) for k in range(s.num_scales))
         self._filter: _core.ScaleFilter | None = None
         self._model_size = (0, 0)
+
+    def copy(self) -> ScaleEstimator:
+        """An independent copy (sample size and model as they are now)."""
+        out = ScaleEstimator(self.settings)
+        out._filter = None if self._filter is None else self._filter.copy()
+        out._model_size = self._model_size
+        return out
 
     def _require(self) -> _core.ScaleFilter:
         if self._filter is None:
