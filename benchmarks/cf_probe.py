@@ -66,9 +66,13 @@ def relative(values: np.ndarray) -> np.ndarray:
 
 
 def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettings,
-          scale_settings: ScaleSettings, use_scale: bool) -> tuple[np.ndarray, np.ndarray]:
+          scale_settings: ScaleSettings, use_scale: bool,
+          learn_every: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Boxes (n, 4) of the CF-only tracker on ``frames`` from ``box`` on the first, and the
-    translation filter's confidences (n, 3: peak, PSR, APCE; NaN on the first frame)."""
+    translation filter's confidences (n, 3: peak, PSR, APCE; NaN on the first frame).
+
+    ``learn_every`` = k > 1: both filters learn on every k-th frame only, at the rate that
+    forgets as fast per frame (1 - (1 - rate)**k), as ECO's sparse updates."""
     x, y, w, h = (float(v) for v in box)
     cf = CorrelationFilter(settings)
     cf.init(frames[0], (x, y, w, h))
@@ -80,7 +84,10 @@ def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettin
     min_side = 4.0
     out = [np.array([x, y, w, h])]
     conf = [np.full(len(CONFIDENCES), np.nan)]
-    for frame in frames[1:]:
+    cf_rate = 1.0 - (1.0 - settings.learning_rate) ** learn_every
+    scale_rate = 1.0 - (1.0 - scale_settings.learning_rate) ** learn_every
+    for i, frame in enumerate(frames[1:], start=1):
+        learn = i % learn_every == 0
         loc = cf.locate(frame, (cx, cy), (w, h))
         conf.append(np.array([loc.peak, loc.psr, loc.apce]))
         cx = min(max(cx + loc.dx, 0.0), fw - 1.0)
@@ -90,8 +97,10 @@ def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettin
             f = min(f, fw / w, fh / h)  # never larger than the frame
             f = max(f, min_side / w, min_side / h)
             w, h = w * f, h * f
-            se.learn(frame, (cx, cy), (w, h))
-        cf.learn(frame, (cx - w / 2, cy - h / 2, w, h))
+            if learn:
+                se.learn(frame, (cx, cy), (w, h), scale_rate)
+        if learn:
+            cf.learn(frame, (cx - w / 2, cy - h / 2, w, h), cf_rate)
         out.append(np.array([cx - w / 2, cy - h / 2, w, h]))
     return np.array(out), np.array(conf)
 
@@ -121,11 +130,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--padding", type=float, default=CorrelationSettings.padding)
     ap.add_argument("--cell", type=int, default=CorrelationSettings.cell)
     ap.add_argument("--rate", type=float, default=CorrelationSettings.learning_rate)
+    ap.add_argument("--learn-every", type=int, default=1, metavar="K",
+                    help="learn on every K-th frame only (at the equivalent rate)")
     ap.add_argument("--confidence", action="store_true",
                     help="also the ROC AUC of each confidence for tracked vs lost frames")
     ap.add_argument("--area", type=float, default=CorrelationSettings.template_area,
                     help="template pixels (default 150**2)")
     args = ap.parse_args(argv)
+    if args.learn_every < 1:
+        ap.error("--learn-every must be >= 1")
     settings = CorrelationSettings(cell=args.cell, padding=args.padding, learning_rate=args.rate,
                                    template_area=args.area)
     root = args.otb if args.otb is not None else default_otb_root()
@@ -141,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
             ap.error(f"{seq.name} has no ground truth")
         t0 = time.perf_counter()
         boxes, conf = track(frames, np.asarray(seq.init_box), settings, ScaleSettings(),
-                            not args.no_scale)
+                            not args.no_scale, args.learn_every)
         dt = time.perf_counter() - t0
         ious.append(iou(boxes[1:], gt[1:]))
         rel = np.stack([relative(conf[:, k]) for k in range(conf.shape[1])], axis=1)
