@@ -130,6 +130,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--padding", type=float, default=CorrelationSettings.padding)
     ap.add_argument("--cell", type=int, default=CorrelationSettings.cell)
     ap.add_argument("--rate", type=float, default=CorrelationSettings.learning_rate)
+    ap.add_argument("--scales", type=int, default=ScaleSettings.num_scales,
+                    help="scale samples (odd; default 33)")
     ap.add_argument("--learn-every", type=int, default=1, metavar="K",
                     help="learn on every K-th frame only (at the equivalent rate)")
     ap.add_argument("--confidence", action="store_true",
@@ -141,6 +143,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--learn-every must be >= 1")
     settings = CorrelationSettings(cell=args.cell, padding=args.padding, learning_rate=args.rate,
                                    template_area=args.area)
+    scale_settings = ScaleSettings(num_scales=args.scales)
     root = args.otb if args.otb is not None else default_otb_root()
     names = args.names.split(",") if args.names else None
     seqs = load_dataset(root, names)
@@ -153,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         if gt is None:
             ap.error(f"{seq.name} has no ground truth")
         t0 = time.perf_counter()
-        boxes, conf = track(frames, np.asarray(seq.init_box), settings, ScaleSettings(),
+        boxes, conf = track(frames, np.asarray(seq.init_box), settings, scale_settings,
                             not args.no_scale, args.learn_every)
         dt = time.perf_counter() - t0
         ious.append(iou(boxes[1:], gt[1:]))

@@ -325,6 +325,8 @@ def test_bad_calls_raise() -> None:
         cf.locate(frame, (math.nan, 50.0))
     with pytest.raises(ValueError, match="rate"):
         cf.learn(frame, (30.0, 30.0, 40.0, 40.0), 0.0)
+    with pytest.raises(ValueError, match="rate"):
+        cf.learn(frame, (30.0, 30.0, 40.0, 40.0), True)
     se = ScaleEstimator()
     with pytest.raises(RuntimeError, match="init"):
         se.estimate(frame, (50.0, 50.0), (20.0, 20.0))

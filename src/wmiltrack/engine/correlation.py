@@ -88,7 +88,7 @@ def _check_point(name: str, value: Any) -> tuple[float, float]:
 
 
 def _check_rate(rate: float) -> float:
-    _need(isinstance(rate, (int, float)) and 0.0 < float(rate) <= 1.0,
+    _need(isinstance(rate, (int, float)) and not isinstance(rate, bool) and 0.0 < float(rate) <= 1.0,
           f"rate must be in (0, 1], got {rate!r}")
     return float(rate)
 
