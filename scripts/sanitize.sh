@@ -71,10 +71,11 @@ SAN_CXX="-O1 -g -fno-omit-frame-pointer"
 
 run_asan() {
   log "C++ tests under AddressSanitizer + UndefinedBehaviorSanitizer (build/sanitize)"
-  build build/sanitize test_core test_threads -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
+  build build/sanitize test_core test_cf test_threads -- -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="$SAN_CXX" \
     -DWMILTRACK_BUILD_TESTS=ON -DWMILTRACK_SANITIZE=ON -DWMILTRACK_TSAN=OFF -DWMILTRACK_BUILD_PYTHON=OFF
   local opts="detect_leaks=1:abort_on_error=0:halt_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1"
   ASAN_OPTIONS="$opts" build/sanitize/test_core
+  ASAN_OPTIONS="$opts" build/sanitize/test_cf
   ASAN_OPTIONS="$opts" build/sanitize/test_threads
   log "asan: clean"
 }

@@ -138,6 +138,17 @@ def test_ablation_on_a_generated_dataset(tmp_path: Path) -> None:
     assert bad.returncode == 2 and "unknown rows" in bad.stderr
 
 
+def test_cf_probe_on_a_generated_dataset(tmp_path: Path) -> None:
+    data = _tiny_dataset(tmp_path)
+    r = _run([str(BENCH / "cf_probe.py"), "--otb", str(data), "--confidence"])
+    assert r.returncode == 0, r.stderr
+    row = next(line for line in r.stdout.splitlines() if line.startswith("SynC "))
+    auc = float(row.split()[2])
+    assert 0.3 < auc <= 1.0, r.stdout  # a slow, textured target on a generated sequence
+    assert re.search(r"^mean\s+20\s", r.stdout, re.M), r.stdout
+    assert re.search(r"^  psr\s+ROC AUC", r.stdout, re.M), r.stdout
+
+
 @pytest.mark.extras()
 def test_cpp_bench_binary_if_built() -> None:
     exe = REPO / "build" / "bench" / "benchmarks" / "cpp" / "bench_core"

@@ -52,6 +52,7 @@ void bind_search(py::module_& m);
 void bind_learn(py::module_& m);
 void bind_draws(py::module_& m);
 void bind_batch(py::module_& m);
+void bind_cf(py::module_& m);
 
 inline void require(bool ok, const std::string& message) {
   if (!ok) throw py::value_error(message);

@@ -21,4 +21,5 @@ PYBIND11_MODULE(_core, m) {
   wmiltrack::bindings::bind_learn(m);
   wmiltrack::bindings::bind_draws(m);
   wmiltrack::bindings::bind_batch(m);
+  wmiltrack::bindings::bind_cf(m);
 }

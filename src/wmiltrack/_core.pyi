@@ -255,3 +255,85 @@ def search_many(requests: Sequence[SearchRequest], threads: int) -> list[_Search
 
 def learn_many(requests: Sequence[LearnRequest], threads: int) -> list[_Learnt]:
     """learn() for several requests in one call, on up to `threads` threads."""
+
+# --- correlation filters (fhog.hpp, correlation.hpp) ------------------------------------------
+_F32 = npt.NDArray[np.float32]
+FHOG_CHANNELS: Final[int]  # 31: 18 signed + 9 unsigned orientation bins + 4 block energies
+
+def cf_gray_patch(frame: npt.NDArray[np.uint8], centre: tuple[float, float],
+                  size: tuple[float, float], out_size: tuple[int, int]) -> _F32:
+    """The region of size (w, h) centred on centre, resampled to out_size = (w, h) pixels of
+    luma / 255 (rows x cols; edge pixels replicated outside the frame)."""
+def fhog(patch: npt.ArrayLike, cell: int = 4) -> _F32:
+    """fHOG of a gray patch: (31, rows // cell, cols // cell)."""
+def fhog_region(frame: npt.NDArray[np.uint8], centre: tuple[float, float],
+                size: tuple[float, float], out_size: tuple[int, int], cell: int = 4) -> _F32:
+    """fhog(cf_gray_patch(frame, centre, size, out_size), cell)."""
+def scale_samples(frame: npt.NDArray[np.uint8], centre: tuple[float, float],
+                  size: tuple[float, float], factors: Sequence[float],
+                  model_size: tuple[int, int], cell: int = 4) -> _F32:
+    """(len(factors), dims): per factor f, fHOG of the region (w f, h f) resampled to
+    model_size = (w, h), flattened."""
+
+class TranslationResponse:
+    """A translation filter's response and the confidences of its peak."""
+    @property
+    def values(self) -> _F32:
+        """Score per circular shift (rows x cols); [0, 0] is no motion."""
+    @property
+    def row_shift(self) -> float: ...
+    @property
+    def col_shift(self) -> float: ...
+    @property
+    def peak(self) -> float: ...
+    @property
+    def psr(self) -> float: ...
+    @property
+    def apce(self) -> float: ...
+
+class TranslationFilter:
+    """A multi-channel linear correlation filter trained and applied in the Fourier domain."""
+    def __init__(self, rows: int, cols: int, channels: int, sigma: float, lam: float) -> None: ...
+    def copy(self) -> TranslationFilter:
+        """An independent copy (the model as it is now)."""
+    @property
+    def rows(self) -> int: ...
+    @property
+    def cols(self) -> int: ...
+    @property
+    def channels(self) -> int: ...
+    @property
+    def trained(self) -> bool: ...
+    @property
+    def window(self) -> _F32: ...
+    @property
+    def label(self) -> _F32: ...
+    def learn(self, features: npt.ArrayLike, rate: float) -> None:
+        """Fold in (channels, rows, cols) features (the first call replaces the model)."""
+    def respond(self, features: npt.ArrayLike, exclusion: int = 5) -> TranslationResponse:
+        """The response to (channels, rows, cols) features (ValueError before learn())."""
+
+class ScaleResponse:
+    """A scale filter's response."""
+    @property
+    def values(self) -> _F32: ...
+    @property
+    def best(self) -> int: ...
+    @property
+    def offset(self) -> float: ...
+
+class ScaleFilter:
+    """DSST's 1-D correlation filter over num_scales samples of dims features."""
+    def __init__(self, num_scales: int, dims: int, sigma: float, lam: float) -> None: ...
+    def copy(self) -> ScaleFilter:
+        """An independent copy (the model as it is now)."""
+    @property
+    def num_scales(self) -> int: ...
+    @property
+    def dims(self) -> int: ...
+    @property
+    def trained(self) -> bool: ...
+    def learn(self, samples: npt.ArrayLike, rate: float) -> None:
+        """Fold in (num_scales, dims) samples (the first call replaces the model)."""
+    def respond(self, samples: npt.ArrayLike) -> ScaleResponse:
+        """The response to (num_scales, dims) samples (ValueError before learn())."""

@@ -1,0 +1,382 @@
+// Correlation filters in the Fourier domain (see correlation.hpp).
+#include "wmiltrack/correlation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <unsupported/Eigen/FFT>
+
+namespace wmiltrack::cf {
+
+namespace {
+
+using Complex = std::complex<float>;
+constexpr double kPi = 3.14159265358979323846;
+
+// 2-D transforms of rows x cols row-major real arrays with Eigen's 1-D FFT, rows then columns.
+// Spectra of real arrays are Hermitian (X[r][c] = conj(X[-r][-c])), so only their columns
+// 0 .. cols / 2 are kept ("half spectra", rows x (cols / 2 + 1)): the filters' products and
+// sums run over those, and the inverse rebuilds the rest. Plans are cached in the Eigen
+// objects, so one Fft2 serves every plane of a call; each call makes its own (the filters
+// stay const and need no lock to respond).
+class Fft2 {
+ public:
+  Fft2(int rows, int cols)
+      : rows_(rows), cols_(cols), half_(cols / 2 + 1), col_in_(static_cast<std::size_t>(rows)),
+        col_out_(static_cast<std::size_t>(rows)), row_buf_(static_cast<std::size_t>(cols)),
+        full_(static_cast<std::size_t>(rows) * cols) {
+    half_fft_.SetFlag(Eigen::FFT<float>::HalfSpectrum);
+  }
+
+  int half() const { return half_; }
+
+  // Columns 0 .. cols / 2 of numpy's fft2 of a real plane (rows x half()).
+  void forward_half(const float* in, Complex* out) {
+    for (int r = 0; r < rows_; ++r) {
+      half_fft_.fwd(out + static_cast<std::size_t>(r) * half_,
+                    in + static_cast<std::size_t>(r) * cols_, cols_);
+    }
+    columns(out, half_, false);
+  }
+
+  // numpy's real(ifft2(X)) of the Hermitian spectrum X whose half spectrum is `in`.
+  void inverse_half_real(const Complex* in, float* out) {
+    for (int r = 0; r < rows_; ++r) {
+      Complex* row = &full_[static_cast<std::size_t>(r) * cols_];
+      const Complex* mirror = in + static_cast<std::size_t>((rows_ - r) % rows_) * half_;
+      std::copy(in + static_cast<std::size_t>(r) * half_,
+                in + static_cast<std::size_t>(r) * half_ + half_, row);
+      for (int c = half_; c < cols_; ++c) row[c] = std::conj(mirror[cols_ - c]);
+    }
+    columns(full_.data(), cols_, true);
+    for (int r = 0; r < rows_; ++r) {
+      fft_.inv(row_buf_.data(), &full_[static_cast<std::size_t>(r) * cols_], cols_);
+      for (int c = 0; c < cols_; ++c) out[static_cast<std::size_t>(r) * cols_ + c] = row_buf_[c].real();
+    }
+  }
+
+ private:
+  // 1-D transforms down each of the first `width` columns of a rows x width array.
+  void columns(Complex* data, int width, bool inverse) {
+    for (int c = 0; c < width; ++c) {
+      for (int r = 0; r < rows_; ++r) col_in_[r] = data[static_cast<std::size_t>(r) * width + c];
+      if (inverse) {
+        fft_.inv(col_out_.data(), col_in_.data(), rows_);
+      } else {
+        fft_.fwd(col_out_.data(), col_in_.data(), rows_);
+      }
+      for (int r = 0; r < rows_; ++r) data[static_cast<std::size_t>(r) * width + c] = col_out_[r];
+    }
+  }
+
+  int rows_, cols_, half_;
+  Eigen::FFT<float> fft_, half_fft_;
+  std::vector<Complex> col_in_, col_out_, row_buf_, full_;
+};
+
+// MATLAB's hann(n): 0.5 (1 - cos(2 pi k / (n - 1))), k = 0 .. n - 1; 1 for n == 1.
+std::vector<float> hann(int n) {
+  std::vector<float> w(static_cast<std::size_t>(n), 1.0f);
+  if (n > 1) {
+    for (int k = 0; k < n; ++k) {
+      w[k] = static_cast<float>(0.5 * (1.0 - std::cos(2.0 * kPi * k / (n - 1))));
+    }
+  }
+  return w;
+}
+
+void check_rate(double rate) {
+  if (!(rate > 0.0 && rate <= 1.0)) {
+    throw std::invalid_argument("the learning rate must be in (0, 1], got " + std::to_string(rate));
+  }
+}
+
+void check_filter_args(double sigma, double lambda) {
+  if (!(sigma > 0.0 && std::isfinite(sigma))) {
+    throw std::invalid_argument("sigma must be positive and finite");
+  }
+  if (!(lambda >= 0.0 && std::isfinite(lambda))) {
+    throw std::invalid_argument("lambda must be non-negative and finite");
+  }
+}
+
+// Vertex of the parabola through (-1, a), (0, b), (1, c), in [-0.5, 0.5]; 0 unless b is a
+// strict maximum of a curved parabola.
+double parabola_offset(double a, double b, double c) {
+  const double curve = a - 2.0 * b + c;
+  if (!(curve < 0.0)) return 0.0;
+  return std::clamp(0.5 * (a - c) / curve, -0.5, 0.5);
+}
+
+template <typename Num, typename Den>
+void blend(std::vector<Num>& model, const std::vector<Num>& sample, double rate, bool first,
+           std::vector<Den>& den_model, const std::vector<Den>& den_sample) {
+  if (first || rate >= 1.0) {
+    model = sample;
+    den_model = den_sample;
+    return;
+  }
+  const float keep = static_cast<float>(1.0 - rate), take = static_cast<float>(rate);
+  for (std::size_t i = 0; i < model.size(); ++i) model[i] = keep * model[i] + take * sample[i];
+  for (std::size_t i = 0; i < den_model.size(); ++i) {
+    den_model[i] = keep * den_model[i] + take * den_sample[i];
+  }
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ translation filter
+TranslationFilter::TranslationFilter(int rows, int cols, int channels, double sigma, double lambda)
+    : rows_(rows), cols_(cols), channels_(channels), lambda_(lambda) {
+  if (rows < 1 || cols < 1 || channels < 1) {
+    throw std::invalid_argument("TranslationFilter: rows, cols and channels must be at least 1");
+  }
+  check_filter_args(sigma, lambda);
+  const std::vector<float> wr = hann(rows), wc = hann(cols);
+  window_.resize(static_cast<std::size_t>(rows) * cols);
+  label_.resize(window_.size());
+  for (int r = 0; r < rows; ++r) {
+    const int dr = std::min(r, rows - r);
+    for (int c = 0; c < cols; ++c) {
+      const int dc = std::min(c, cols - c);
+      const std::size_t at = static_cast<std::size_t>(r) * cols + c;
+      window_[at] = wr[r] * wc[c];
+      label_[at] = static_cast<float>(std::exp(-0.5 * (dr * dr + dc * dc) / (sigma * sigma)));
+    }
+  }
+  Fft2 fft(rows, cols);
+  label_f_.resize(static_cast<std::size_t>(rows) * fft.half());
+  fft.forward_half(label_.data(), label_f_.data());
+  for (auto& v : label_f_) v = std::conj(v);
+}
+
+void TranslationFilter::check(const FeatureMap& x) const {
+  if (x.channels != channels_ || x.rows != rows_ || x.cols != cols_ ||
+      x.data.size() != x.plane_size() * static_cast<std::size_t>(x.channels)) {
+    throw std::invalid_argument(
+        "TranslationFilter: features of shape (" + std::to_string(x.channels) + ", " +
+        std::to_string(x.rows) + ", " + std::to_string(x.cols) + ") for a filter of (" +
+        std::to_string(channels_) + ", " + std::to_string(rows_) + ", " + std::to_string(cols_) +
+        ")");
+  }
+}
+
+std::vector<Complex> TranslationFilter::spectra(const FeatureMap& x) const {
+  const std::size_t plane = x.plane_size();
+  Fft2 fft(rows_, cols_);
+  const std::size_t half = static_cast<std::size_t>(rows_) * fft.half();
+  std::vector<Complex> out(half * static_cast<std::size_t>(channels_));
+  std::vector<float> windowed(plane);
+  for (int k = 0; k < channels_; ++k) {
+    const float* src = &x.data[k * plane];
+    for (std::size_t i = 0; i < plane; ++i) windowed[i] = src[i] * window_[i];
+    fft.forward_half(windowed.data(), &out[k * half]);
+  }
+  return out;
+}
+
+void TranslationFilter::learn(const FeatureMap& x, double rate) {
+  check(x);
+  check_rate(rate);
+  const float inv_n = 1.0f / static_cast<float>(x.plane_size());
+  std::vector<Complex> num = spectra(x);
+  const std::size_t half = label_f_.size();
+  std::vector<float> den(half, 0.0f);
+  for (int k = 0; k < channels_; ++k) {
+    Complex* xk = &num[k * half];
+    for (std::size_t i = 0; i < half; ++i) {
+      den[i] += std::norm(xk[i]) * inv_n;
+      xk[i] = label_f_[i] * xk[i] * inv_n;
+    }
+  }
+  blend(num_, num, rate, !trained_, den_, den);
+  trained_ = true;
+}
+
+TranslationResponse TranslationFilter::respond(const FeatureMap& z, int exclusion) const {
+  if (!trained_) throw std::logic_error("TranslationFilter: learn() before respond()");
+  check(z);
+  if (exclusion < 0) throw std::invalid_argument("TranslationFilter: exclusion must be >= 0");
+  const std::size_t plane = z.plane_size();
+  const std::vector<Complex> zf = spectra(z);
+  const std::size_t half = label_f_.size();
+  std::vector<Complex> acc(half, Complex(0.0f, 0.0f));
+  for (int k = 0; k < channels_; ++k) {
+    const Complex* a = &num_[k * half];
+    const Complex* zk = &zf[k * half];
+    for (std::size_t i = 0; i < half; ++i) acc[i] += std::conj(a[i]) * zk[i];
+  }
+  const float lambda = static_cast<float>(lambda_);
+  for (std::size_t i = 0; i < half; ++i) acc[i] /= den_[i] + lambda;
+  TranslationResponse out;
+  out.rows = rows_;
+  out.cols = cols_;
+  out.values.resize(plane);
+  Fft2 fft(rows_, cols_);
+  fft.inverse_half_real(acc.data(), out.values.data());
+
+  const auto& v = out.values;
+  const std::size_t best =
+      static_cast<std::size_t>(std::max_element(v.begin(), v.end()) - v.begin());
+  const int pr = static_cast<int>(best / cols_), pc = static_cast<int>(best % cols_);
+  const auto at = [&](int r, int c) {
+    return static_cast<double>(v[static_cast<std::size_t>((r % rows_ + rows_) % rows_) * cols_ +
+                                 (c % cols_ + cols_) % cols_]);
+  };
+  out.peak = v[best];
+  const double dr = rows_ >= 3 ? parabola_offset(at(pr - 1, pc), out.peak, at(pr + 1, pc)) : 0.0;
+  const double dc = cols_ >= 3 ? parabola_offset(at(pr, pc - 1), out.peak, at(pr, pc + 1)) : 0.0;
+  out.row_shift = (pr > (rows_ - 1) / 2 ? pr - rows_ : pr) + dr;
+  out.col_shift = (pc > (cols_ - 1) / 2 ? pc - cols_ : pc) + dc;
+
+  // PSR over the values outside the peak's (2 exclusion + 1)^2 circular window.
+  double sum = 0.0, sum2 = 0.0;
+  std::size_t count = 0;
+  const float lo = *std::min_element(v.begin(), v.end());
+  double energy = 0.0;
+  for (int r = 0; r < rows_; ++r) {
+    const int drr = std::min((r - pr + rows_) % rows_, (pr - r + rows_) % rows_);
+    for (int c = 0; c < cols_; ++c) {
+      const double value = v[static_cast<std::size_t>(r) * cols_ + c];
+      energy += (value - lo) * (value - lo);
+      const int dcc = std::min((c - pc + cols_) % cols_, (pc - c + cols_) % cols_);
+      if (drr <= exclusion && dcc <= exclusion) continue;
+      sum += value;
+      sum2 += value * value;
+      ++count;
+    }
+  }
+  if (count >= 2) {
+    const double mean = sum / static_cast<double>(count);
+    const double var = std::max(0.0, sum2 / static_cast<double>(count) - mean * mean);
+    out.psr = var > 0.0 ? (out.peak - mean) / std::sqrt(var) : 0.0;
+  }
+  energy /= static_cast<double>(plane);
+  out.apce = energy > 0.0 ? (out.peak - lo) * (out.peak - lo) / energy : 0.0;
+  return out;
+}
+
+// ------------------------------------------------------------------ scale filter
+ScaleFilter::ScaleFilter(int num_scales, int dims, double sigma, double lambda)
+    : n_(num_scales), dims_(dims), lambda_(lambda) {
+  if (num_scales < 3 || dims < 1) {
+    throw std::invalid_argument("ScaleFilter: num_scales must be >= 3 and dims >= 1");
+  }
+  check_filter_args(sigma, lambda);
+  window_ = hann(num_scales);
+  std::vector<Complex> label(static_cast<std::size_t>(num_scales));
+  const double centre = (num_scales - 1) / 2;
+  for (int s = 0; s < num_scales; ++s) {
+    label[s] = Complex(static_cast<float>(
+        std::exp(-0.5 * (s - centre) * (s - centre) / (sigma * sigma))), 0.0f);
+  }
+  const int half = num_scales / 2 + 1;
+  std::vector<Complex> label_f(label.size());
+  Eigen::FFT<float> fft;
+  fft.fwd(label_f.data(), label.data(), num_scales);
+  label_f_.assign(label_f.begin(), label_f.begin() + half);
+  for (auto& v : label_f_) v = std::conj(v);
+}
+
+// Bins 0 .. n / 2 of the FFT along the scales of each windowed feature (dims x (n / 2 + 1)).
+// Two features go through one complex FFT, as real and imaginary part: with Z the FFT of
+// a + i b and Z*(k) = conj(Z(n - k)), A = (Z + Z*) / 2 and B = (Z - Z*) / (2 i).
+std::vector<Complex> ScaleFilter::spectra(const std::vector<float>& samples) const {
+  if (samples.size() != static_cast<std::size_t>(n_) * dims_) {
+    throw std::invalid_argument("ScaleFilter: " + std::to_string(samples.size()) +
+                                " values for " + std::to_string(n_) + " samples of " +
+                                std::to_string(dims_) + " features");
+  }
+  const std::size_t half = label_f_.size();
+  std::vector<Complex> out(half * static_cast<std::size_t>(dims_));
+  const std::size_t n = static_cast<std::size_t>(n_);
+  std::vector<Complex> pair(n), spectrum(n);
+  Eigen::FFT<float> fft;
+  for (int d = 0; d < dims_; d += 2) {
+    const bool two = d + 1 < dims_;
+    for (int s = 0; s < n_; ++s) {
+      const float* row = &samples[static_cast<std::size_t>(s) * dims_ + d];
+      pair[s] = Complex(row[0] * window_[s], two ? row[1] * window_[s] : 0.0f);
+    }
+    fft.fwd(spectrum.data(), pair.data(), n_);
+    Complex* a = &out[static_cast<std::size_t>(d) * half];
+    for (std::size_t k = 0; k < half; ++k) {
+      const Complex z = spectrum[k];
+      const Complex mirror = std::conj(spectrum[(n - k) % n]);
+      a[k] = 0.5f * (z + mirror);
+      if (two) a[half + k] = Complex(0.0f, -0.5f) * (z - mirror);
+    }
+  }
+  return out;
+}
+
+void ScaleFilter::learn(const std::vector<float>& samples, double rate) {
+  check_rate(rate);
+  std::vector<Complex> num = spectra(samples);
+  const std::size_t half = label_f_.size();
+  std::vector<float> den(half, 0.0f);
+  for (int d = 0; d < dims_; ++d) {
+    Complex* xd = &num[static_cast<std::size_t>(d) * half];
+    for (std::size_t k = 0; k < half; ++k) {
+      den[k] += std::norm(xd[k]);
+      xd[k] = label_f_[k] * xd[k];
+    }
+  }
+  blend(num_, num, rate, !trained_, den_, den);
+  trained_ = true;
+}
+
+ScaleResponse ScaleFilter::respond(const std::vector<float>& samples) const {
+  if (!trained_) throw std::logic_error("ScaleFilter: learn() before respond()");
+  const std::vector<Complex> zf = spectra(samples);
+  const std::size_t half = label_f_.size();
+  std::vector<Complex> acc(half, Complex(0.0f, 0.0f));
+  for (int d = 0; d < dims_; ++d) {
+    const Complex* a = &num_[static_cast<std::size_t>(d) * half];
+    const Complex* zd = &zf[static_cast<std::size_t>(d) * half];
+    for (std::size_t k = 0; k < half; ++k) acc[k] += std::conj(a[k]) * zd[k];
+  }
+  const float lambda = static_cast<float>(lambda_);
+  // The full (Hermitian) spectrum from its first half, then the inverse.
+  std::vector<Complex> full(static_cast<std::size_t>(n_)), time(full.size());
+  for (std::size_t k = 0; k < half; ++k) full[k] = acc[k] / (den_[k] + lambda);
+  for (std::size_t k = half; k < full.size(); ++k) full[k] = std::conj(full[full.size() - k]);
+  Eigen::FFT<float> fft;
+  fft.inv(time.data(), full.data(), n_);
+  ScaleResponse out;
+  out.values.resize(static_cast<std::size_t>(n_));
+  for (int s = 0; s < n_; ++s) out.values[s] = time[s].real();
+  out.best = static_cast<int>(std::max_element(out.values.begin(), out.values.end()) -
+                              out.values.begin());
+  if (out.best > 0 && out.best < n_ - 1) {
+    out.offset = parabola_offset(out.values[out.best - 1], out.values[out.best],
+                                 out.values[out.best + 1]);
+  }
+  return out;
+}
+
+// ------------------------------------------------------------------ scale samples
+int scale_sample_dims(int model_cols, int model_rows, int cell) {
+  if (cell < 1 || model_cols < cell || model_rows < cell) {
+    throw std::invalid_argument("the scale model must hold at least one cell");
+  }
+  return kFhogChannels * (model_rows / cell) * (model_cols / cell);
+}
+
+std::vector<float> scale_samples(const ImageView& frame, double cx, double cy, double w,
+                                 double h, const std::vector<double>& factors, int model_cols,
+                                 int model_rows, int cell) {
+  if (factors.empty()) throw std::invalid_argument("scale_samples: no scale factors");
+  const int dims = scale_sample_dims(model_cols, model_rows, cell);
+  const std::vector<GrayPatch> patches =
+      sample_gray_scales(frame, cx, cy, w, h, factors, model_cols, model_rows);
+  std::vector<float> out(factors.size() * static_cast<std::size_t>(dims));
+  for (std::size_t s = 0; s < patches.size(); ++s) {
+    const FeatureMap x = fhog(patches[s], cell);
+    std::copy(x.data.begin(), x.data.end(), out.begin() + static_cast<std::ptrdiff_t>(s * dims));
+  }
+  return out;
+}
+
+}  // namespace wmiltrack::cf

@@ -1,0 +1,232 @@
+// Plain C++ checks of the correlation-filter kernels (fhog.hpp, correlation.hpp); run by
+// ctest and scripts/sanitize.sh.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdint>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "wmiltrack/correlation.hpp"
+#include "wmiltrack/fhog.hpp"
+
+namespace {
+int failures = 0;
+#define CHECK(cond)                                                                  \
+  do {                                                                               \
+    if (!(cond)) {                                                                   \
+      std::fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
+      ++failures;                                                                    \
+    }                                                                                \
+  } while (0)
+
+using namespace wmiltrack;
+using namespace wmiltrack::cf;
+
+template <typename F>
+bool throws_invalid(F&& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument&) {
+    return true;
+  }
+  return false;
+}
+
+// A smooth random texture: white noise box-blurred twice, stretched to 0..255.
+std::vector<std::uint8_t> texture(int rows, int cols, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> d(0.0, 1.0);
+  std::vector<double> a(static_cast<std::size_t>(rows) * cols), b(a.size());
+  for (auto& v : a) v = d(rng);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int r = 0; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) {
+        double s = 0.0;
+        int n = 0;
+        for (int dr = -2; dr <= 2; ++dr) {
+          for (int dc = -2; dc <= 2; ++dc) {
+            const int rr = r + dr, cc = c + dc;
+            if (rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
+            s += a[static_cast<std::size_t>(rr) * cols + cc];
+            ++n;
+          }
+        }
+        b[static_cast<std::size_t>(r) * cols + c] = s / n;
+      }
+    }
+    a.swap(b);
+  }
+  const auto [lo, hi] = std::minmax_element(a.begin(), a.end());
+  std::vector<std::uint8_t> out(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    out[i] = static_cast<std::uint8_t>(std::lround(255.0 * (a[i] - *lo) / (*hi - *lo)));
+  }
+  return out;
+}
+
+ImageView gray_view(const std::vector<std::uint8_t>& px, int rows, int cols) {
+  ImageView v;
+  v.data = px.data();
+  v.rows = rows;
+  v.cols = cols;
+  v.channels = 1;
+  v.row_stride = cols;
+  return v;
+}
+
+void test_sample_gray() {
+  const int rows = 40, cols = 50;
+  const auto px = texture(rows, cols, 1);
+  const ImageView v = gray_view(px, rows, cols);
+  // A 1:1 region on whole pixels is the frame itself.
+  const GrayPatch p = sample_gray(v, 25.0, 20.0, 20.0, 10.0, 20, 10);
+  bool same = true;
+  for (int r = 0; r < 10; ++r) {
+    for (int c = 0; c < 20; ++c) {
+      same = same && std::abs(p.pixels[r * 20 + c] * 255.0f - px[(15 + r) * cols + 15 + c]) < 1e-3f;
+    }
+  }
+  CHECK(same);
+  // Outside the frame: the edge pixel.
+  const GrayPatch corner = sample_gray(v, -10.0, -10.0, 2.0, 2.0, 2, 2);
+  for (float value : corner.pixels) CHECK(std::abs(value * 255.0f - px[0]) < 1e-3f);
+  // Shrinking by 2 averages: a constant frame stays constant.
+  const std::vector<std::uint8_t> flat(static_cast<std::size_t>(rows) * cols, 100);
+  const GrayPatch half = sample_gray(gray_view(flat, rows, cols), 25.0, 20.0, 40.0, 40.0, 20, 20);
+  for (float value : half.pixels) CHECK(std::abs(value - 100.0f / 255.0f) < 1e-5f);
+  // Several scales at once: each the same as its own sample_gray.
+  const std::vector<double> factors = {0.5, 1.0, 1.7, 3.0};
+  const std::vector<GrayPatch> scales = sample_gray_scales(v, 12.3, 30.8, 14.0, 9.0, factors, 7, 5);
+  CHECK(scales.size() == factors.size());
+  for (std::size_t i = 0; i < factors.size(); ++i) {
+    const GrayPatch one = sample_gray(v, 12.3, 30.8, 14.0 * factors[i], 9.0 * factors[i], 7, 5);
+    CHECK(scales[i].pixels == one.pixels);
+  }
+  CHECK(throws_invalid([&] { sample_gray_scales(v, 0.0, 0.0, 5.0, 5.0, {1.0, -1.0}, 5, 5); }));
+  CHECK(throws_invalid([&] { sample_gray(v, 0.0, 0.0, 0.0, 10.0, 5, 5); }));
+  CHECK(throws_invalid([&] { sample_gray(v, NAN, 0.0, 10.0, 10.0, 5, 5); }));
+  CHECK(throws_invalid([&] { sample_gray(v, 0.0, 0.0, 10.0, 10.0, 0, 5); }));
+}
+
+void test_fhog() {
+  const int rows = 40, cols = 48;
+  const auto px = texture(rows, cols, 2);
+  const GrayPatch p = sample_gray(gray_view(px, rows, cols), 24.0, 20.0, 48.0, 40.0, 48, 40);
+  const FeatureMap x = fhog(p, 4);
+  CHECK(x.channels == kFhogChannels && x.rows == 10 && x.cols == 12);
+  CHECK(x.data.size() == static_cast<std::size_t>(31 * 10 * 12));
+  bool bounded = true;
+  for (float v : x.data) bounded = bounded && v >= 0.0f && v <= 0.4f + 1e-6f;
+  CHECK(bounded);  // each value sums four truncated (<= 0.2) terms, times 0.5 (or 0.2357)
+  // Block normalisation: halving the contrast changes the features very little.
+  GrayPatch dim = p;
+  for (auto& v : dim.pixels) v = 0.5f * v + 0.25f;
+  const FeatureMap y = fhog(dim, 4);
+  double diff = 0.0, norm = 0.0;
+  for (std::size_t i = 0; i < x.data.size(); ++i) {
+    diff += std::abs(x.data[i] - y.data[i]);
+    norm += std::abs(x.data[i]);
+  }
+  CHECK(diff < 0.01 * norm);
+  // A flat patch has no gradient: all zero.
+  GrayPatch flat{8, 8, std::vector<float>(64, 0.3f)};
+  const FeatureMap z = fhog(flat, 4);
+  CHECK(std::all_of(z.data.begin(), z.data.end(), [](float v) { return v == 0.0f; }));
+  CHECK(throws_invalid([&] { fhog(flat, 0); }));
+  CHECK(throws_invalid([&] { fhog(flat, 9); }));
+}
+
+// Circularly shifted copy of a feature map: value at (r, c) moves to (r + dr, c + dc).
+FeatureMap roll(const FeatureMap& x, int dr, int dc) {
+  FeatureMap y = x;
+  for (int k = 0; k < x.channels; ++k) {
+    for (int r = 0; r < x.rows; ++r) {
+      for (int c = 0; c < x.cols; ++c) {
+        const int rr = ((r + dr) % x.rows + x.rows) % x.rows;
+        const int cc = ((c + dc) % x.cols + x.cols) % x.cols;
+        y.data[(k * x.rows + rr) * x.cols + cc] = x.data[(k * x.rows + r) * x.cols + c];
+      }
+    }
+  }
+  return y;
+}
+
+void test_translation_filter() {
+  const int rows = 30, cols = 36;
+  const auto px = texture(rows * 4, cols * 4, 3);
+  const GrayPatch p = sample_gray(gray_view(px, rows * 4, cols * 4), cols * 2.0, rows * 2.0,
+                                  cols * 4.0, rows * 4.0, cols * 4, rows * 4);
+  const FeatureMap x = fhog(p, 4);
+  TranslationFilter f(rows, cols, kFhogChannels, 1.5, 1e-3);
+  CHECK(!f.trained());
+  bool logic = false;
+  try {
+    f.respond(x, 5);
+  } catch (const std::logic_error&) {
+    logic = true;
+  }
+  CHECK(logic);
+  f.learn(x, 1.0);
+  CHECK(f.trained());
+  const TranslationResponse same = f.respond(x, 5);
+  CHECK(std::abs(same.row_shift) < 0.05 && std::abs(same.col_shift) < 0.05);
+  CHECK(same.psr > 20.0);
+  // Shifted content: the peak moves with it (away from the window's edge, a small shift).
+  const TranslationResponse moved = f.respond(roll(x, 2, -3), 5);
+  CHECK(std::abs(moved.row_shift - 2.0) < 0.5 && std::abs(moved.col_shift + 3.0) < 0.5);
+  // Unrelated features: a flat response, low PSR.
+  const auto other = texture(rows * 4, cols * 4, 99);
+  const FeatureMap noise = fhog(sample_gray(gray_view(other, rows * 4, cols * 4), cols * 2.0,
+                                            rows * 2.0, cols * 4.0, rows * 4.0, cols * 4, rows * 4),
+                                4);
+  CHECK(f.respond(noise, 5).psr < 0.5 * same.psr);
+  CHECK(throws_invalid([&] { f.learn(x, 0.0); }));
+  CHECK(throws_invalid([&] { f.learn(x, 1.5); }));
+  CHECK(throws_invalid([&] { f.respond(roll(fhog(GrayPatch{8, 8, std::vector<float>(64)}, 4), 0, 0), 5); }));
+  CHECK(throws_invalid([&] { f.respond(x, -1); }));
+  CHECK(throws_invalid([&] { TranslationFilter(0, 4, 1, 1.0, 0.0); }));
+  CHECK(throws_invalid([&] { TranslationFilter(4, 4, 1, 0.0, 0.0); }));
+  CHECK(throws_invalid([&] { TranslationFilter(4, 4, 1, 1.0, -1.0); }));
+}
+
+void test_scale_filter() {
+  const int rows = 200, cols = 200;
+  const auto px = texture(rows, cols, 4);
+  const ImageView v = gray_view(px, rows, cols);
+  std::vector<double> factors;
+  for (int k = -16; k <= 16; ++k) factors.push_back(std::pow(1.02, k));
+  const int dims = scale_sample_dims(32, 16, 4);
+  CHECK(dims == 31 * 4 * 8);
+  const std::vector<float> s = scale_samples(v, 100.0, 100.0, 64.0, 32.0, factors, 32, 16, 4);
+  CHECK(s.size() == factors.size() * static_cast<std::size_t>(dims));
+  ScaleFilter f(33, dims, std::sqrt(33.0) / 4.0, 1e-3);
+  f.learn(s, 1.0);
+  const ScaleResponse same = f.respond(s);
+  CHECK(same.best == 16);
+  // The target grew by 1.02^3: the sample that now looks like the learnt one is 3 further.
+  const std::vector<float> grown =
+      scale_samples(v, 100.0, 100.0, 64.0 / std::pow(1.02, 3), 32.0 / std::pow(1.02, 3), factors,
+                    32, 16, 4);
+  CHECK(std::abs(f.respond(grown).best - 19) <= 1);
+  CHECK(throws_invalid([&] { scale_samples(v, 100.0, 100.0, 64.0, 32.0, {}, 32, 16, 4); }));
+  CHECK(throws_invalid([&] { scale_samples(v, 100.0, 100.0, 64.0, 32.0, {0.0}, 32, 16, 4); }));
+  CHECK(throws_invalid([&] { f.respond(std::vector<float>(5)); }));
+  CHECK(throws_invalid([&] { ScaleFilter(2, 4, 1.0, 0.0); }));
+}
+
+}  // namespace
+
+int main() {
+  test_sample_gray();
+  test_fhog();
+  test_translation_filter();
+  test_scale_filter();
+  if (failures) {
+    std::fprintf(stderr, "%d check(s) failed\n", failures);
+    return 1;
+  }
+  std::puts("test_cf: all checks passed");
+  return 0;
+}
