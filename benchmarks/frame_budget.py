@@ -111,6 +111,17 @@ def instrumented(clock: _Clock) -> Iterator[None]:
 
     patches.append((tracker, "_core", tracker._core))
     tracker._core = _TimedModule(tracker._core, clock, CORE_STAGES)  # type: ignore[assignment]
+    try:  # the engine as parts: the core is called from the appearance model and the requests
+        from wmiltrack.engine import appearance, requests, scale
+    except ImportError:  # versions with one Tracker class
+        pass
+    else:
+        for module in (appearance, requests):
+            patches.append((module, "_core", module._core))
+            module._core = _TimedModule(module._core, clock, CORE_STAGES)  # type: ignore[assignment]
+        patch(appearance.HaarAppearance, "compute_integral", "integral")
+        patch(appearance, "milboost_select", "selection")
+        patch(scale.HaarScale, "search", "scale")
     patch(tracker.Tracker, "_compute_integral", "integral")
     patch(tracker, "wmil_select", "selection")
     patch(tracker, "milboost_select", "selection")

@@ -180,7 +180,7 @@ void bind_learn(py::module_& m) {
                                  code_gradient, std::move(extra_neg), std::move(second)};
            }),
            py::arg("ii"), py::arg("bank"), py::arg("xs"), py::arg("ys"), py::arg("n_pos"),
-           py::arg("mu1"), py::arg("sigma1"), py::arg("mu0"), py::arg("sigma0"), py::kw_only(),
+           py::arg("mu1"), py::arg("sigma1"), py::arg("mu0"), py::arg("sigma0"),
            py::arg("lam"), py::arg("first_pos"), py::arg("first_neg"), py::arg("direct_first"),
            py::arg("mil"), py::arg("sigma_floor"), py::arg("guard"), py::arg("select"),
            py::arg("w_pos") = py::none(), py::arg("k") = 0, py::arg("code_gradient") = false,

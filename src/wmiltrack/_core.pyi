@@ -186,7 +186,7 @@ class ColourHistograms:
 class LearnRequest:
     """A learning step's inputs, by name (see _core.learn)."""
     def __init__(self, ii: IntegralImage, bank: FeatureBank, xs: _I32, ys: _I32, n_pos: int,
-                 mu1: _F64, sigma1: _F64, mu0: _F64, sigma0: _F64, *, lam: float, first_pos: bool,
+                 mu1: _F64, sigma1: _F64, mu0: _F64, sigma0: _F64, lam: float, first_pos: bool,
                  first_neg: bool, direct_first: bool, mil: bool, sigma_floor: float, guard: float,
                  select: str, w_pos: _F64 | None = None, k: int = 0, code_gradient: bool = False,
                  extra_neg: _F64 | None = None,

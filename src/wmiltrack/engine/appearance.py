@@ -95,6 +95,7 @@ class HaarAppearance:
         self.pool = GaussianPool(p)
         self.selected = np.arange(p.num_selected, dtype=np.int32)
         self.bags = ()
+        self._bags_for: dict[str, _core.BagRequest] = {}  # the core's draws, by weights
 
     @property
     def k(self) -> int:
@@ -213,15 +214,21 @@ class HaarAppearance:
         exactly as :class:`~wmiltrack.engine.sampling.BagSampler` would) and learns. The same
         draws and state changes as a search then :meth:`learn_steps`; returns the search's
         per-stage results."""
-        p = self.params
         select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
-        weights = p.instance_weights if select == "wmil" else "none"
-        bags = _core.BagRequest(self.rng, *self.track.core_spec(weights))
         request = self._learn_request(frame_box, _NO_CORNERS, 0, select, None, None, None)
-        results, learnt, (xs, ys, n_pos) = yield Step(search, request, bags)
+        results, learnt, (xs, ys, n_pos) = yield Step(search, request, self._bag_request(select))
         self.bags = (xs, ys, n_pos)  # split by corners() when asked
         self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos)
         return results
+
+    def _bag_request(self, select: str) -> _core.BagRequest:
+        """The tracking bags' draw from this model's generator, for the core (made once)."""
+        weights = self.params.instance_weights if select == "wmil" else "none"
+        request = self._bags_for.get(weights)
+        if request is None:
+            request = self._bags_for[weights] = _core.BagRequest(self.rng,
+                                                                 *self.track.core_spec(weights))
+        return request
 
     def corners(self) -> tuple[np.ndarray, np.ndarray]:
         """Top-left corners of the last positive and negative bags learnt from."""
@@ -247,13 +254,12 @@ class HaarAppearance:
         ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives) of ``box``'s size."""
         p = self.params
         pool = self.pool
+        # (in LearnRequest's order, positionally: keywords cost a microsecond a frame here)
         return Learn(self.ii, self.bank(box[2], box[3]), corners[:, 0], corners[:, 1], n_pos,
-                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, lam=p.learning_rate,
-                     first_pos=pool.first(1), first_neg=pool.first(0),
-                     direct_first=p.first_update == "direct", mil=p.classifier == "mil",
-                     sigma_floor=p.sigma_floor, guard=p.guard, select=select, w_pos=w,
-                     k=p.num_selected, code_gradient=p.gradient == "code", extra_neg=extra,
-                     second=second)
+                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.learning_rate,
+                     pool.first(1), pool.first(0), p.first_update == "direct",
+                     p.classifier == "mil", p.sigma_floor, p.guard, select, w, p.num_selected,
+                     p.gradient == "code", extra, second)
 
     def _take_learnt(self, learnt: tuple[Any, ...], n_pos: int, n_neg: int) -> None:
         """Keep the model and the selection that a learning request returned."""
