@@ -41,7 +41,7 @@ from wmiltrack.engine.correlation import (
     CorrelationFilter,
     CorrelationSettings,
     ScaleEstimator,
-    ScaleSettings,
+    ScaleFilterSettings,
 )
 from wmiltrack.eval.metrics import iou, ope_metrics
 from wmiltrack.progress import progress
@@ -66,7 +66,7 @@ def relative(values: np.ndarray) -> np.ndarray:
 
 
 def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettings,
-          scale_settings: ScaleSettings, use_scale: bool,
+          scale_settings: ScaleFilterSettings, use_scale: bool,
           learn_every: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Boxes (n, 4) of the CF-only tracker on ``frames`` from ``box`` on the first, and the
     translation filter's confidences (n, 3: peak, PSR, APCE; NaN on the first frame).
@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--padding", type=float, default=CorrelationSettings.padding)
     ap.add_argument("--cell", type=int, default=CorrelationSettings.cell)
     ap.add_argument("--rate", type=float, default=CorrelationSettings.learning_rate)
-    ap.add_argument("--scales", type=int, default=ScaleSettings.num_scales,
+    ap.add_argument("--scales", type=int, default=ScaleFilterSettings.num_scales,
                     help="scale samples (odd; default 33)")
     ap.add_argument("--learn-every", type=int, default=1, metavar="K",
                     help="learn on every K-th frame only (at the equivalent rate)")
@@ -143,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--learn-every must be >= 1")
     settings = CorrelationSettings(cell=args.cell, padding=args.padding, learning_rate=args.rate,
                                    template_area=args.area)
-    scale_settings = ScaleSettings(num_scales=args.scales)
+    scale_settings = ScaleFilterSettings(num_scales=args.scales)
     root = args.otb if args.otb is not None else default_otb_root()
     names = args.names.split(",") if args.names else None
     seqs = load_dataset(root, names)

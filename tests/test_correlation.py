@@ -15,7 +15,7 @@ from wmiltrack.engine.correlation import (
     CorrelationFilter,
     CorrelationSettings,
     ScaleEstimator,
-    ScaleSettings,
+    ScaleFilterSettings,
     smooth_size,
 )
 
@@ -302,11 +302,11 @@ def test_settings_are_checked() -> None:
     with pytest.raises(ValueError, match="padding"):
         CorrelationSettings(padding=-1.0)
     with pytest.raises(ValueError, match="num_scales"):
-        ScaleSettings(num_scales=32)
+        ScaleFilterSettings(num_scales=32)
     with pytest.raises(ValueError, match="step"):
-        ScaleSettings(step=1.0)
+        ScaleFilterSettings(step=1.0)
     with pytest.raises(ValueError, match="max_area"):
-        ScaleSettings(max_area=1.0)
+        ScaleFilterSettings(max_area=1.0)
 
 
 def test_bad_calls_raise() -> None:

@@ -232,7 +232,7 @@ int merged_best(const CueMerge& merge, const Rect& box, const std::vector<int>& 
   const double area = static_cast<double>(box.w) * static_cast<double>(box.h);
   const double k = static_cast<double>(std::max(merge.k, 1));
   double total = 0.0;  // the cues' weights
-  for (const BoxMeanTable& cue : merge.cues) total += cue.weight;
+  for (const CueTable& cue : merge.cues) total += cue.weight;
   double reference = 0.0;  // raw scores are read from here: 0, or the grid's best (relative)
   if (merge.relative) {
     reference = -std::numeric_limits<double>::infinity();
@@ -248,9 +248,17 @@ int merged_best(const CueMerge& merge, const Rect& box, const std::vector<int>& 
     ++finite;
     const double conf = 0.5 * (1.0 + std::tanh(0.5 * ((raw[q] - reference) / k - merge.offset)));
     double value = (1.0 - total) * conf;
-    for (const BoxMeanTable& cue : merge.cues) {
+    for (const CueTable& cue : merge.cues) {
       const std::int64_t cx = static_cast<std::int64_t>(box.x) + dx[q] - cue.x0;
       const std::int64_t cy = static_cast<std::int64_t>(box.y) + dy[q] - cue.y0;
+      if (cue.centre) {
+        const std::int64_t px = cx + box.w / 2, py = cy + box.h / 2;
+        if (px < 0 || py < 0 || px >= cue.cols || py >= cue.rows) {
+          throw std::out_of_range("score_grid: a candidate's centre lies outside a cue's map");
+        }
+        value += cue.weight * cue.table[py * cue.cols + px];
+        continue;
+      }
       if (cx < 0 || cy < 0 || cx + box.w > cue.cols || cy + box.h > cue.rows) {
         throw std::out_of_range("score_grid: a candidate box lies outside a cue's table");
       }

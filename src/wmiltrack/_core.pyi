@@ -117,7 +117,7 @@ def template_fit(ii: IntegralImage, bank: FeatureBank, x: int, y: int, mu: npt.A
                  sigma: npt.ArrayLike) -> float:
     """-mean(log1p(z**2)) of the box's features, z = (value - mu) / sigma."""
 
-_Cues = tuple[Sequence[tuple[_F64, int, int, float]], float, bool]
+_Cues = tuple[Sequence[tuple[_F64, int, int, float] | tuple[_F64, int, int, float, bool]], float, bool]
 _Searched = tuple[tuple[int, int, float, int], ...]
 _Learnt = tuple[_F64, _F64, _F64, _F64, npt.NDArray[np.int32] | None, _F64 | None, _F64 | None,
                 _F64 | None]

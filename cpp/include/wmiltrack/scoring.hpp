@@ -48,26 +48,31 @@ struct GridResult {
   int candidates = 0;  // 0: no candidate box fits in the frame; dx = dy = 0 then
 };
 
-// A cue's map over a frame region as an integral image, and its weight in the merge.
-struct BoxMeanTable {
-  const double* table = nullptr;  // (rows + 1) x (cols + 1) integral image, row-major, with a
-  int rows = 0;                   // zero first row and column, over the frame region
-  int cols = 0;                   // [x0, x0 + cols) x [y0, y0 + rows)
+// A cue's map over a frame region [x0, x0 + cols) x [y0, y0 + rows), and its weight in the
+// merge. A box-mean cue (centre = false) gives the integral image of its map, (rows + 1) x
+// (cols + 1) with a zero first row and column, and values a candidate by the map's mean over
+// the box; a centre cue (centre = true) gives the map itself, rows x cols, and values a
+// candidate by the map at the box's centre pixel (x + w / 2, y + h / 2, rounded down).
+struct CueTable {
+  const double* table = nullptr;  // row-major
+  int rows = 0;
+  int cols = 0;
   int x0 = 0;
   int y0 = 0;
   double weight = 0.0;
+  bool centre = false;
 };
 
 // Cues merged into the choice of a search's best candidate (rcwmil-plus's colour likelihood,
 // after Staple, and any other cue): the candidate with the largest
-//   (1 - sum of weights) * logistic(raw / k - offset) + sum of weight * (mean of its map over the box)
+//   (1 - sum of weights) * logistic(raw / k - offset) + sum of weight * (the cue's value of the box)
 // wins (the first such in row-major order), and its raw score is reported; candidates whose
 // raw score is not finite take no part. logistic(z) is computed as 0.5 (1 + tanh(z / 2)).
 // With `relative`, raw is read from the grid's best finite raw score (raw - best for raw): the
 // confidence is then relative to this frame's best candidate, so the classifier's ordering still
 // counts when its absolute confidence has collapsed over the whole grid.
 struct CueMerge {
-  std::vector<BoxMeanTable> cues;  // at least one
+  std::vector<CueTable> cues;  // at least one
   double offset = 0.0;
   int k = 1;  // raw scores are divided by k (the number of selected features)
   bool relative = false;  // see above

@@ -30,7 +30,7 @@ __all__ = [
     "Location",
     "ScaleEstimate",
     "ScaleEstimator",
-    "ScaleSettings",
+    "ScaleFilterSettings",
     "smooth_size",
 ]
 
@@ -140,7 +140,7 @@ class CorrelationSettings:
 
 
 @dataclass(frozen=True)
-class ScaleSettings:
+class ScaleFilterSettings:
     """Settings of the DSST scale filter (defaults: DSST's and Staple's).
 
     Attributes
@@ -316,9 +316,9 @@ class ScaleEstimator:
     ``step**k`` times its size (``k`` from ``-(n-1)/2`` to ``(n-1)/2``), each resampled to
     the same at most ``max_area`` pixels, and a 1-D correlation filter along the scales."""
 
-    def __init__(self, settings: ScaleSettings | None = None) -> None:
+    def __init__(self, settings: ScaleFilterSettings | None = None) -> None:
         """An estimator with these settings (defaults if None); call :meth:`init` first."""
-        self.settings = settings if settings is not None else ScaleSettings()
+        self.settings = settings if settings is not None else ScaleFilterSettings()
         s = self.settings
         half = (s.num_scales - 1) // 2
         self.factors: tuple[float, ...] = tuple(s.step ** (k - half) for k in range(s.num_scales))

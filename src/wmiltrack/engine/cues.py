@@ -31,7 +31,13 @@ frame position ``(x0, y0)``."""
 
 @runtime_checkable
 class Cue(Protocol):
-    """What the tracker asks of a cue."""
+    """What the tracker asks of a cue.
+
+    Two optional attributes: ``at_centre = True`` makes :meth:`table` return the map itself
+    (``rows x cols`` over the clipped region), read at each candidate's centre pixel instead of
+    averaged over the box (a correlation filter's response is such a map); ``learn_above = s``
+    lets the cue learn only from frames whose reported score is at least ``s``.
+    """
 
     #: The cue's weight in the merged score, in [0, 1] (the weights of a tracker's cues add
     #: up to at most 1).

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .frames import IntBox
 from .scale import centred
 from .settings import MotionSettings
@@ -22,8 +24,9 @@ class VelocityMotion:
         self.velocity = (0.0, 0.0)
         self._lost = False
 
-    def origin(self, box: IntBox) -> IntBox:
-        """Where to centre the search for a target last seen at ``box``."""
+    def origin(self, box: IntBox, frame: np.ndarray | None = None) -> IntBox:
+        """Where to centre the search for a target last seen at ``box`` (the frame is not
+        needed: the prediction is from the past frames)."""
         if self._lost:
             return box
         vx, vy = self.velocity

@@ -27,6 +27,7 @@ from .settings import (
     ScaleSettings,
     ScoreSettings,
     SearchSettings,
+    TemplateSettings,
 )
 
 __all__ = ["CONFIDENCE_OFFSET", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_RADIUS", "PARTS",
@@ -34,7 +35,8 @@ __all__ = ["CONFIDENCE_OFFSET", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_
 
 #: The part settings a :class:`Params` is made of, in the order their fields are listed.
 PARTS: tuple[type[Any], ...] = (FeatureSettings, BagSettings, ClassifierSettings, SearchSettings,
-                           ScaleSettings, MotionSettings, ColourSettings, ScoreSettings)
+                           ScaleSettings, MotionSettings, ColourSettings, ScoreSettings,
+                           TemplateSettings)
 
 
 @dataclass(frozen=True)
@@ -43,8 +45,8 @@ class _Named:
 
 
 @dataclass(frozen=True)
-class Params(ScoreSettings, ColourSettings, MotionSettings, ScaleSettings, SearchSettings,
-             ClassifierSettings, BagSettings, FeatureSettings, _Named):
+class Params(TemplateSettings, ScoreSettings, ColourSettings, MotionSettings, ScaleSettings,
+             SearchSettings, ClassifierSettings, BagSettings, FeatureSettings, _Named):
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
 
     Every field belongs to one part, which documents and checks it:
@@ -55,8 +57,9 @@ class Params(ScoreSettings, ColourSettings, MotionSettings, ScaleSettings, Searc
     :class:`~wmiltrack.engine.settings.ScaleSettings` (the scale estimator),
     :class:`~wmiltrack.engine.settings.MotionSettings` (the motion model),
     :class:`~wmiltrack.engine.settings.ColourSettings` (the colour cue) and
-    :class:`~wmiltrack.engine.settings.ScoreSettings` (the reported score and lost state).
-    The defaults of the last four leave their part out, so the paper presets run the paper's
+    :class:`~wmiltrack.engine.settings.ScoreSettings` (the reported score and lost state) and
+    :class:`~wmiltrack.engine.settings.TemplateSettings` (the correlation-filter template).
+    The defaults of the last five leave their part out, so the paper presets run the paper's
     code path.
 
     Attributes
@@ -76,13 +79,16 @@ class Params(ScoreSettings, ColourSettings, MotionSettings, ScaleSettings, Searc
         if self.selection == "none" and self.num_selected != self.num_features:
             raise ValueError("selection='none' scores every feature: num_selected must equal "
                              "num_features")
+        if self.colour_weight + self.template_weight > 1.0 + 1e-12:
+            raise ValueError("colour_weight + template_weight must be <= 1 (the cues' share of the "
+                             f"merged score), got {self.colour_weight} + {self.template_weight}")
 
     # -- derived values ---------------------------------------------------------------------
     @property
     def search_reach(self) -> int:
         """Largest distance in pixels that one update can move the box from the search origin."""
         reach = self.stage_reach
-        if self.scale_steps > 0:
+        if self.scale_steps > 0 and self.scale_model != "dsst":
             reach += self.scale_radius - 1
         return reach
 

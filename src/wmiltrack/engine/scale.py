@@ -71,11 +71,18 @@ class HaarScale:
         mw, mh = min_box_size(p)
         return mw <= w <= self.frame_wh[0] and mh <= h <= self.frame_wh[1] and box_area_ok(w, h)
 
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """(The first frame is learnt with the appearance model's learning step.)"""
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        """(Learnt with the appearance model's learning step: :meth:`learning_extras`.)"""
+
     # -- estimating ----------------------------------------------------------------------------
-    def search(self, model: HaarAppearance, box: IntBox, raw: float,
+    def search(self, model: HaarAppearance, frame: np.ndarray, box: IntBox, raw: float,
                contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
         """The box at the best scale around ``box`` (found with raw score ``raw``) and the
-        raw score to report. ``contrast``: the colour cue's box contrast, if any."""
+        raw score to report. ``contrast``: the colour cue's box contrast, if any. (The
+        features read the appearance model's integral image, not ``frame``.)"""
         self.tried = []
         if self.settings.scale_model == "likelihood":
             return self._by_likelihood(model, box), raw

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 __all__ = ["BagSettings", "ClassifierSettings", "ColourSettings", "FeatureSettings",
-           "MotionSettings", "ScaleSettings", "ScoreSettings", "SearchSettings",
+           "MotionSettings", "ScaleSettings", "ScoreSettings", "SearchSettings", "TemplateSettings",
            "CONFIDENCE_OFFSET", "CHANNELS", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_RADIUS"]
 
 MAX_POS_RADIUS = 100
@@ -340,8 +340,12 @@ class ScaleSettings:
         ``j = -scale_steps..scale_steps`` (0: no scale estimator; the box keeps its first size).
     scale_factor : float
         Ratio between neighbouring scales (> 1).
-    scale_model : {"ratio", "likelihood", "both"}
-        How scales are compared: ``ratio``, the strong classifier's mean log ratio (best of a
+    scale_model : {"ratio", "likelihood", "both", "dsst"}
+        ``dsst``: a separate 1-D correlation filter along 33 scales 1.02 apart on fHOG
+        (DSST; :class:`wmiltrack.engine.template.DSSTScale`), run after the translation
+        search; ``scale_steps`` must be > 0 to switch it on, and the other ``scale_*``
+        settings but ``scale_min``/``scale_max`` do not apply. Otherwise scales are compared
+        by Haar features: ``ratio``, the strong classifier's mean log ratio (best of a
         ``scale_radius`` translation search at each scale); ``likelihood``, how well all M
         features of the box at each scale fit the target's Gaussians: minus the mean of
         ``log(1 + z^2)`` with ``z = (value - mu1) / sigma1`` (a generative template over the
@@ -378,7 +382,7 @@ class ScaleSettings:
 
     scale_steps: int = 0
     scale_factor: float = 1.03
-    scale_model: Literal["ratio", "likelihood", "both"] = "ratio"
+    scale_model: Literal["ratio", "likelihood", "both", "dsst"] = "ratio"
     scale_learning_rate: float = 0.975
     scale_mix: float = 1.0
     scale_penalty: float = 0.0
@@ -393,7 +397,7 @@ class ScaleSettings:
 
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
-        _check_choices(self, {"scale_model": ("ratio", "likelihood", "both")})
+        _check_choices(self, {"scale_model": ("ratio", "likelihood", "both", "dsst")})
         _check_ints(self, "scale_steps", "scale_radius", "scale_negatives")
         _check_numbers(self, "scale_factor", "scale_penalty", "scale_min", "scale_max", "scale_mix",
                        "scale_contrast")
@@ -554,3 +558,50 @@ class ScoreSettings:
         _need(_is_number(self.score_luma) and 0.0 <= self.score_luma <= 1.0
               and self.score_colour + self.score_luma <= 1.0,
               f"score_luma must be in [0, 1 - score_colour], got {self.score_luma!r}")
+
+
+@dataclass(frozen=True)
+class TemplateSettings:
+    """The correlation-filter template (:class:`wmiltrack.engine.template.CorrelationTemplate`):
+    a translation filter on fHOG over a fixed-size template (Staple), merged into the search as
+    a cue read at each candidate's centre, and optionally the motion model.
+
+    Attributes
+    ----------
+    template_weight : float
+        Weight of the filter's response (divided by its peak, clipped to [0, 1]) in the
+        search's merge, beside the colour cue's (0: no template).
+    template_motion : bool
+        Centre the search on the filter's peak (searched over the target plus twice its mean
+        side around the last box) instead of the motion model's prediction.
+    template_area : float
+        Template pixels the search region is resampled to (Staple: 150**2).
+    template_learning_rate : float
+        Weight of each new frame in the filter (Staple: 0.01).
+    template_gate : float
+        The filter learns only from frames whose reported score is at least this (0: every
+        frame), so that an occluder or a drift the score notices stays out of the template.
+    """
+
+    template_weight: float = 0.0
+    template_motion: bool = False
+    template_area: float = 150.0**2
+    template_learning_rate: float = 0.01
+    template_gate: float = 0.0
+
+    def __post_init__(self) -> None:
+        TemplateSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        _check_numbers(self, "template_weight", "template_area", "template_learning_rate",
+                       "template_gate")
+        _need(0.0 <= self.template_weight <= 1.0,
+              f"template_weight must be in [0, 1], got {self.template_weight}")
+        _need(isinstance(self.template_motion, bool),
+              f"template_motion must be True or False, got {self.template_motion!r}")
+        _need(self.template_area >= 32.0**2, f"template_area must be >= 1024, got {self.template_area}")
+        _need(0.0 < self.template_learning_rate <= 1.0,
+              f"template_learning_rate must be in (0, 1], got {self.template_learning_rate}")
+        _need(0.0 <= self.template_gate <= 1.0,
+              f"template_gate must be in [0, 1], got {self.template_gate}")

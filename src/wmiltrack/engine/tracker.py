@@ -32,6 +32,7 @@ from .requests import Steps, drive, run_batches
 from .result import TrackResult
 from .sampling import core_draws_match_numpy
 from .scale import HaarScale
+from .template import CorrelationTemplate, DSSTScale
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "compose", "confidence", "update_many"]
 
@@ -64,8 +65,8 @@ class Parts:
 
     appearance: HaarAppearance
     cues: list[Cue]
-    scale: HaarScale | None
-    motion: VelocityMotion | None
+    scale: HaarScale | DSSTScale | None
+    motion: VelocityMotion | CorrelationTemplate | None
     policy: UpdatePolicy
 
     @property
@@ -85,10 +86,22 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
     if ColourCue.wanted(params, frame):
         colour = ColourCue(params, intensity=not ColourModel.usable(frame))
         all_cues.append(colour)
+    template = None
+    if params.template_weight > 0 or params.template_motion:
+        template = CorrelationTemplate(params)
+        if params.template_weight > 0:
+            all_cues.append(template)
     all_cues.extend(cues)
     fw, fh = frame_size(frame)
-    scale = HaarScale(params, (box[2], box[3]), (fw, fh)) if params.scale_steps > 0 else None
-    motion = VelocityMotion(params) if params.motion == "velocity" else None
+    scale: HaarScale | DSSTScale | None = None
+    if params.scale_steps > 0:
+        kind = DSSTScale if params.scale_model == "dsst" else HaarScale
+        scale = kind(params, (box[2], box[3]), (fw, fh))
+    motion: VelocityMotion | CorrelationTemplate | None = None
+    if params.template_motion:
+        motion = template
+    elif params.motion == "velocity":
+        motion = VelocityMotion(params)
     report = None
     if (params.score_colour > 0 and colour is not None) or params.score_luma > 0:
         report = ContrastScore(params, colour.model if colour is not None else None, None)
@@ -208,6 +221,12 @@ class Tracker:
         model.start(img, b)
         for cue in parts.cues:
             cue.start(img, b)
+        if parts.motion is not None and parts.motion not in parts.cues:
+            start = getattr(parts.motion, "start", None)
+            if start is not None:
+                start(img, b)
+        if parts.scale is not None:
+            parts.scale.start(img, b)
         if parts.policy.report is not None:
             _start_report(parts.policy.report, self._params, img, b)
         self._parts = parts
@@ -308,7 +327,7 @@ class Tracker:
         parts, p, wh = self._parts, self._params, self._frame_wh
         model = parts.appearance
         previous = self._box
-        origin = self._origin()
+        origin = self._origin(img)
         roi = roi_around(origin, self._margin())
         own = model.ii
         shared = integral is not None and model.covered_by(integral, roi, wh)
@@ -334,13 +353,16 @@ class Tracker:
             if parts.scale is not None:
                 parts.scale.tried = []
             if parts.scale is not None and math.isfinite(raw):
-                self._box, raw = parts.scale.search(model, self._box, raw, self._contrast())
+                self._box, raw = parts.scale.search(model, img, self._box, raw, self._contrast())
             conf = confidence(raw, model.k, p.confidence_offset)
             score = parts.policy.score(conf, img, self._box)
             if not self._fused or not (direct or shared):
                 yield from self._learn_steps(model.track)
             for cue in parts.cues:
-                cue.learn(img, self._box)
+                if score >= getattr(cue, "learn_above", 0.0):
+                    cue.learn(img, self._box)
+            if parts.scale is not None:
+                parts.scale.learn(img, self._box)
             tracked = parts.policy.tracked(conf)
             if parts.motion is not None:
                 parts.motion.follow(previous, self._box, tracked)
@@ -351,10 +373,11 @@ class Tracker:
         return TrackResult((float(x), float(y), float(w), float(h)), score,
                            parts.policy.tracked(score))
 
-    def _origin(self) -> IntBox:
-        """Where the next search is centred."""
+    def _origin(self, frame: np.ndarray | None = None) -> IntBox:
+        """Where the search on ``frame`` is centred (without the frame: the motion model's
+        guess before seeing it)."""
         motion = self._parts.motion
-        return self._box if motion is None else motion.origin(self._box)
+        return self._box if motion is None else motion.origin(self._box, frame)
 
     def _margin(self) -> int:
         """The integral image's margin around the search origin."""
@@ -370,7 +393,7 @@ class Tracker:
         x, y, w, h = origin
         m = self._params.search_reach + 1
         region = (x - m, y - m, x + w + m, y + h + m)
-        tables = [(*c.table(img, region), c.weight) for c in cues]
+        tables = [(*c.table(img, region), c.weight, getattr(c, "at_centre", False)) for c in cues]
         rel = self._params.colour_relative
         offset = self._params.confidence_offset if rel is None else -rel
         return tables, offset, rel is not None

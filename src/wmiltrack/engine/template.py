@@ -1,0 +1,165 @@
+"""The correlation-filter template as tracker parts: a cue (and optionally the motion model) from
+a translation filter on fHOG, and DSST's 1-D scale filter as the scale estimator.
+
+Haar features on luma and colour histograms say little about a target whose lighting changes
+(a shadow, a tunnel); HOG's block-normalised gradients do (Staple, CSR-DCF, ECO). The filter
+is trained and applied in the Fourier domain by the core (:mod:`wmiltrack.engine.correlation`);
+these classes fit it into the engine of parts.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Callable
+
+import numpy as np
+
+from .correlation import CorrelationFilter, CorrelationSettings, Location, ScaleEstimator
+from .frames import IntBox
+from .scale import centred
+
+if TYPE_CHECKING:
+    from .appearance import HaarAppearance
+    from .params import Params
+
+__all__ = ["CorrelationTemplate", "DSSTScale"]
+
+
+def _centre(box: IntBox) -> tuple[float, float]:
+    return box[0] + box[2] / 2.0, box[1] + box[3] / 2.0
+
+
+class CorrelationTemplate:
+    """A translation correlation filter, as a cue read at each candidate's centre and, with
+    ``template_motion``, as the motion model.
+
+    Each frame the filter searches a region of the target plus twice its mean side around the
+    last box (:meth:`origin`); its response, divided by its peak and clipped to [0, 1], is the
+    cue's map over the search region (:meth:`table`). It learns from frames whose reported score
+    is at least ``template_gate`` (:attr:`learn_above`).
+    """
+
+    #: The core reads this cue's map at each candidate's centre, not its mean over the box.
+    at_centre = True
+
+    def __init__(self, settings: Params) -> None:
+        self.weight = settings.template_weight
+        self.moves = settings.template_motion
+        self.learn_above = settings.template_gate
+        self.filter = CorrelationFilter(CorrelationSettings(
+            template_area=settings.template_area, learning_rate=settings.template_learning_rate))
+        self._searched: tuple[tuple[float, float], Location] | None = None
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        self.filter.init(frame, box)
+
+    # -- motion model ---------------------------------------------------------------------
+    def origin(self, box: IntBox, frame: np.ndarray | None = None) -> IntBox:
+        """Search the filter around ``box``; the box moved to the response's peak with
+        ``template_motion``, else ``box``. Without a frame (asked before the frame is known)
+        the last box."""
+        if frame is None:
+            return box
+        centre = _centre(box)
+        loc = self.filter.locate(frame, centre, (box[2], box[3]))
+        self._searched = (centre, loc)
+        if not self.moves:
+            return box
+        return centred(box, box[2], box[3], loc.dx, loc.dy)
+
+    def follow(self, previous: IntBox, box: IntBox, tracked: bool) -> None:
+        """(Nothing to keep: the filter searches around the last box every frame.)"""
+
+    # -- cue ------------------------------------------------------------------------------
+    def table(self, frame: np.ndarray, region: tuple[int, int, int, int]
+              ) -> tuple[np.ndarray, int, int]:
+        """The filter's response at every pixel of ``region`` taken as a target centre
+        (bilinear between the response's cells; the response wraps around), divided by its
+        peak and clipped to [0, 1]."""
+        if self._searched is None:  # not the motion model: search around the region's centre
+            w, h = self.filter.size
+            cx, cy = (region[0] + region[2]) / 2.0, (region[1] + region[3]) / 2.0
+            self.origin((round(cx - w / 2.0), round(cy - h / 2.0), round(w), round(h)), frame)
+        assert self._searched is not None
+        (cx, cy), loc = self._searched
+        self._searched = None
+        fh, fw = frame.shape[:2]
+        x0, y0 = max(region[0], 0), max(region[1], 0)
+        x1, y1 = min(region[2], fw), min(region[3], fh)
+        r = loc.response.astype(np.float64)
+        rows, cols = r.shape
+        peak = float(r.max())
+        # response [i, j] is the target shifted by (j cell_w, i cell_h), indices modulo the grid
+        u = (np.arange(x0, x1) - cx) / loc.cell[0]
+        v = (np.arange(y0, y1) - cy) / loc.cell[1]
+        j0 = np.floor(u).astype(np.intp)
+        i0 = np.floor(v).astype(np.intp)
+        fu, fv = u - j0, v - i0
+        ja, jb = j0 % cols, (j0 + 1) % cols
+        ia, ib = i0 % rows, (i0 + 1) % rows
+        top = r[ia][:, ja] * (1.0 - fu) + r[ia][:, jb] * fu
+        bottom = r[ib][:, ja] * (1.0 - fu) + r[ib][:, jb] * fu
+        value = top * (1.0 - fv)[:, None] + bottom * fv[:, None]
+        if peak > 0:
+            value /= peak
+        return np.ascontiguousarray(np.clip(value, 0.0, 1.0)), x0, y0
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        self.filter.learn(frame, box)
+
+
+class DSSTScale:
+    """DSST's scale filter as the scale estimator (``scale_model="dsst"``): after the translation
+    search, the best of 33 sizes 1.02 apart by a 1-D correlation filter on fHOG, within
+    ``scale_min``..``scale_max`` of the first box and the frame."""
+
+    def __init__(self, params: Params, base_wh: tuple[int, int], frame_wh: tuple[int, int]) -> None:
+        self.settings = params
+        self.base_wh = base_wh
+        self.frame_wh = frame_wh
+        self.estimator = ScaleEstimator()
+        self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
+        self.tried: list[IntBox] = []
+
+    @property
+    def scale(self) -> float:
+        """The box size relative to the first box."""
+        return math.sqrt(self.size[0] * self.size[1] / (self.base_wh[0] * self.base_wh[1]))
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        self.estimator.init(frame, box)
+
+    def margin(self, box: IntBox) -> int:
+        """Extra integral-image margin for the largest box the filter may choose around
+        ``box`` (the appearance model learns at it)."""
+        s = self.estimator.settings
+        largest = s.step ** ((s.num_scales - 1) // 2)
+        return math.ceil((largest - 1.0) * max(box[2], box[3]) / 2.0) + 1
+
+    def search(self, model: HaarAppearance, frame: np.ndarray, box: IntBox, raw: float,
+               contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
+        """The box at the size the filter prefers, centred where the search put it."""
+        p = self.settings
+        factor = self.estimator.estimate(frame, _centre(box), self.size).factor
+        w, h = self.size[0] * factor, self.size[1] * factor
+        s = math.sqrt(w * h / (self.base_wh[0] * self.base_wh[1]))
+        s_ok = min(max(s, p.scale_min), p.scale_max)
+        w, h = w * s_ok / s, h * s_ok / s
+        min_side = max(p.min_box_size, 4)
+        fw, fh = self.frame_wh
+        shrink = min(1.0, fw / w, fh / h)
+        grow = max(1.0, min_side / (w * shrink), min_side / (h * shrink))
+        self.size = (w * shrink * grow, h * shrink * grow)
+        iw, ih = max(min_side, round(self.size[0])), max(min_side, round(self.size[1]))
+        return centred(box, min(iw, fw), min(ih, fh)), raw
+
+    def learning_extras(self, model: HaarAppearance, box: IntBox) -> tuple[None, int, None]:
+        """(Nothing for the appearance model's learning step.)"""
+        return None, 0, None
+
+    def take_learnt(self, learnt: tuple[Any, Any], n_pos: int) -> None:
+        """(No model in the appearance model's learning step.)"""
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        """Fold in the scale samples around the frame's final box."""
+        self.estimator.learn(frame, _centre(box), self.size)
