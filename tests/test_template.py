@@ -1,0 +1,135 @@
+"""The correlation-filter template as tracker parts: the centre cue, the motion role, DSST scale,
+gated learning and their settings."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+import wmiltrack
+from wmiltrack import _core
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.template import CorrelationTemplate, DSSTScale
+
+
+def _textured(seed: int = 0, size: tuple[int, int] = (160, 200)) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    small = rng.integers(0, 256, (size[0] // 4, size[1] // 4, 3), dtype=np.uint8)
+    return np.kron(small, np.ones((4, 4, 1), dtype=np.uint8))
+
+
+@pytest.mark.parametrize("shift", [(6, 4), (-5, 7), (0, -8)])
+def test_the_centre_map_peaks_where_the_target_moved(shift: tuple[int, int]) -> None:
+    """The map the template gives the search, read at a candidate's centre, is highest for the
+    candidate centred on the target's new place (within a pixel) and lies in [0, 1]."""
+    frame = _textured(1)
+    box = (80, 60, 40, 32)
+    moved = np.roll(frame, shift=(shift[1], shift[0]), axis=(0, 1))
+    part = CorrelationTemplate(wmiltrack.Params.for_variant("rcwmil-plus", template_weight=0.2,
+                                                            colour_weight=0.6))
+    part.start(frame, box)
+    region = (box[0] - 20, box[1] - 20, box[0] + box[2] + 20, box[1] + box[3] + 20)
+    table, x0, y0 = part.table(moved, region)
+    assert table.shape == (region[3] - region[1], region[2] - region[0]) and (x0, y0) == region[:2]
+    assert table.min() >= 0.0 and 0.8 <= table.max() <= 1.0  # the peak cell is rarely a pixel
+    i, j = np.unravel_index(int(np.argmax(table)), table.shape)
+    centre = (box[0] + box[2] / 2.0 + shift[0], box[1] + box[3] / 2.0 + shift[1])
+    assert abs(x0 + j - centre[0]) <= 1.5 and abs(y0 + i - centre[1]) <= 1.5
+
+
+def test_the_core_reads_a_centre_cue_at_the_candidates_centre() -> None:
+    """A centre map that is 1 at one pixel and 0 elsewhere, with all the weight, makes the
+    search pick the candidate centred there; its score is that candidate's raw score."""
+    rng = np.random.default_rng(3)
+    frame = rng.integers(0, 256, (120, 150, 3), dtype=np.uint8)
+    ii = _core.IntegralImage()
+    bank = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 4, 4]], np.int32),
+                             np.array([1.0]))
+    box, stages = (60, 50, 20, 20), [(10, 1)]
+    target = (73, 56)  # a candidate centre inside the radius: (x + 10, y + 10)
+    x0, y0 = 30, 20
+    bump = np.zeros((90, 110))
+    bump[target[1] - y0, target[0] - x0] = 1.0
+    cues = ([(bump, x0, y0, 1.0, True)], 0.0, False)
+    ((dx, dy, _, n),) = _core.search(_core.SearchRequest(
+        ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
+        1e-30, box, stages, (150, 120), frame, (20, 10, 110, 100), cues))
+    assert n > 0 and (box[0] + dx + 10, box[1] + dy + 10) == target
+    small = np.zeros((5, 5))
+    with pytest.raises(IndexError, match="centre"):
+        _core.search(_core.SearchRequest(
+            ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
+            1e-30, box, stages, (150, 120), None, None, ([(small, x0, y0, 1.0, True)], 0.0, False)))
+
+
+def test_a_tracker_composes_the_template_as_asked() -> None:
+    seq = make_sequence(12, size=(160, 200), target_size=(36, 30), seed=2, occlusion=False)
+    frames, box = seq.load(), tuple(seq.groundtruth[0])
+    cue = wmiltrack.Tracker("rcwmil-plus", seed=0, template_weight=0.2, colour_weight=0.6)
+    cue.init(frames[0], box)
+    assert any(isinstance(c, CorrelationTemplate) for c in cue.parts.cues)
+    assert not isinstance(cue.parts.motion, CorrelationTemplate)
+    moving = wmiltrack.Tracker("rcwmil-plus", seed=0, template_weight=0.2, colour_weight=0.6,
+                               template_motion=True, scale_model="dsst")
+    moving.init(frames[0], box)
+    assert isinstance(moving.parts.motion, CorrelationTemplate)
+    assert isinstance(moving.parts.scale, DSSTScale)
+    boxes = moving.track(frames, box)
+    assert np.all(np.isfinite(boxes)) and boxes.shape == (len(frames), 4)
+    assert wmiltrack.Tracker("rcwmil", seed=0).track(frames[:3], box).shape == (3, 4)
+
+
+def test_dsst_follows_a_growing_target() -> None:
+    """On a target that grows by 1 % a frame (a zoom of a textured scene), the DSST scale
+    estimator grows the box with it; the fixed-size tracker cannot."""
+    base = _textured(4, (240, 320))
+    frames = []
+    for k in range(25):
+        s = 1.01**k
+        h, w = base.shape[:2]
+        m = np.array([[s, 0, (1 - s) * w / 2], [0, s, (1 - s) * h / 2]])
+        frames.append(cv2.warpAffine(base, m, (w, h), flags=cv2.INTER_LINEAR))
+    box = (140, 100, 40, 40)
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, scale_model="dsst", template_weight=0.2,
+                          colour_weight=0.6)
+    boxes = t.track(frames, box)
+    grown = boxes[-1, 2] * boxes[-1, 3] / (40 * 40)
+    assert grown == pytest.approx(1.01 ** (2 * 24), rel=0.15), grown
+    assert t.scale == pytest.approx(math.sqrt(grown), rel=0.05)
+
+
+def test_the_template_learns_only_above_its_gate(monkeypatch: pytest.MonkeyPatch) -> None:
+    seq = make_sequence(10, size=(160, 200), target_size=(36, 30), seed=5, occlusion=False)
+    frames, box = seq.load(), tuple(seq.groundtruth[0])
+    calls: list[int] = []
+    real = CorrelationTemplate.learn
+    monkeypatch.setattr(CorrelationTemplate, "learn",
+                        lambda self, frame, b: (calls.append(1), real(self, frame, b))[1])
+    for gate, expect in ((0.0, len(frames) - 1), (1.0, 0)):
+        calls.clear()
+        wmiltrack.Tracker("rcwmil-plus", seed=0, template_weight=0.2, colour_weight=0.6,
+                          template_gate=gate).track(frames, box)
+        assert len(calls) == expect, gate
+
+
+@pytest.mark.parametrize("overrides,match", [
+    ({"template_weight": 0.5}, "colour_weight \\+ template_weight"),  # with colour 0.7
+    ({"template_weight": -0.1}, "template_weight"),
+    ({"template_motion": 1}, "template_motion"),
+    ({"template_area": 100.0}, "template_area"),
+    ({"template_learning_rate": 0.0}, "template_learning_rate"),
+    ({"template_gate": 1.5}, "template_gate"),
+    ({"scale_model": "pyramid"}, "scale_model"),
+])
+def test_template_settings_are_checked(overrides: dict[str, object], match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        wmiltrack.Params.for_variant("rcwmil-plus", **overrides)
+
+
+def test_every_preset_leaves_the_template_out() -> None:
+    for name, p in wmiltrack.variants().items():
+        assert p.template_weight == 0.0 and not p.template_motion, name
+        assert p.scale_model != "dsst", name
