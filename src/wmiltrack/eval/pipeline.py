@@ -489,6 +489,80 @@ def _score_and_write(
     }
 
 
+def _check_eval_arguments(repeats: int, jobs: int, protocol: str, missing: str, resume: bool,
+                          results: str | os.PathLike[str] | None) -> None:
+    """``ValueError`` for arguments :func:`run_eval` cannot honour, before any work."""
+    if repeats < 1:
+        raise ValueError(f"--repeats must be at least 1, got {repeats}")
+    if jobs < 1:
+        raise ValueError(f"-j must be at least 1, got {jobs}")
+    if protocol not in ("ope", "vot"):
+        raise ValueError(f"protocol must be 'ope' or 'vot', not {protocol!r}")
+    if missing not in ("hold", "miss"):
+        raise ValueError(f"missing must be 'hold' or 'miss', not {missing!r}")
+    if resume and (protocol != "ope" or results is not None):
+        raise ValueError(
+            "--resume reads OPE box files back; the VOT protocol's figures need the run itself"
+            if results is None
+            else "--resume is for running trackers, not with --results"
+        )
+    if results is not None and protocol == "vot":
+        raise ValueError(
+            "--results scores box files with the OPE protocol; the VOT protocol "
+            "re-initialises the tracker, so it has to run it"
+        )
+
+
+def _run_trackers(ds: Any, tracker_names: list[str], seeds: tuple[int, ...], protocol: Protocol,
+                  skip: int, burnin: int, missing: Missing, ex: Executor, box_root: Path,
+                  resume: bool, show_progress: bool, notes: list[str],
+                  say: Callable[[str], None]) -> tuple[list[RunOutcome], int, int]:
+    """Run every (tracker, sequence, seed) task on ``ex``, writing each box file as its task
+    ends (or, with ``resume``, reading back those already written); the runs in task order,
+    how many were read back, and how many failed on sequences that are not scored."""
+    # absolute paths: the workers of a cluster may run in other folders
+    if ds.layout == "otb":
+        tasks = make_tasks(
+            [p.resolve() for p in ds.paths], tracker_names, seeds, protocol, skip, burnin
+        )
+    else:
+        tasks = make_tasks(
+            ds.paths, tracker_names, seeds, protocol, skip, burnin,
+            layout=ds.layout, dataset=str(ds.root.resolve()),
+        )
+    all_tasks = list(tasks)
+    lengths = {name: gt.shape[0] for name, gt in ds.gts.items()}
+    resumed: list[RunOutcome] = []
+    if resume:
+        tasks, resumed = _split_resumable(tasks, box_root, lengths, missing)
+        if resumed:
+            notes.append(
+                f"resumed: {len(resumed)} of {len(tasks) + len(resumed)} runs read back from "
+                f"their box files in {box_root} (untimed: no FPS; the mean rows' FPS is over the "
+                "runs made now)"
+            )
+            say(notes[-1])
+    new = run_tasks(
+        tasks,
+        ex,
+        _box_writer(box_root, protocol, missing, say, lengths),
+        show_progress,
+    ) if tasks else []
+    order = {(t, s, r): i for i, (t, s, r) in enumerate(
+        (t.tracker, Path(t.sequence).name, t.repeat) for t in all_tasks
+    )}
+    runs = sorted(
+        [_full_length(r, lengths) for r in new] + resumed,
+        key=lambda r: order.get((r.tracker, r.sequence, r.repeat), len(order)),
+    )
+    unscored_errors = 0
+    for r in runs:
+        if ds.metas[r.sequence].get("first_frame_only") and r.error is not None:
+            unscored_errors += 1
+            notes.append(f"{r.tracker} on {r.sequence} (seed {r.seed}, not scored): {r.error}")
+    return runs, len(resumed), unscored_errors
+
+
 def run_eval(
     dataset: str | os.PathLike[str],
     out: str | os.PathLike[str],
@@ -586,25 +660,7 @@ def run_eval(
         Passed on after the box files of every finished task are written.
     """
     say = log if log is not None else (lambda s: print(s, file=sys.stderr))
-    if repeats < 1:
-        raise ValueError(f"--repeats must be at least 1, got {repeats}")
-    if jobs < 1:
-        raise ValueError(f"-j must be at least 1, got {jobs}")
-    if protocol not in ("ope", "vot"):
-        raise ValueError(f"protocol must be 'ope' or 'vot', not {protocol!r}")
-    if missing not in ("hold", "miss"):
-        raise ValueError(f"missing must be 'hold' or 'miss', not {missing!r}")
-    if resume and (protocol != "ope" or results is not None):
-        raise ValueError(
-            "--resume reads OPE box files back; the VOT protocol's figures need the run itself"
-            if results is None
-            else "--resume is for running trackers, not with --results"
-        )
-    if results is not None and protocol == "vot":
-        raise ValueError(
-            "--results scores box files with the OPE protocol; the VOT protocol "
-            "re-initialises the tracker, so it has to run it"
-        )
+    _check_eval_arguments(repeats, jobs, protocol, missing, resume, results)
     want_plots = plots and protocol == "ope"
     if want_plots:
         from .plots import require_matplotlib
@@ -613,10 +669,9 @@ def run_eval(
     dataset_p = Path(dataset)
     out_p = Path(out)
     ds = _open_dataset(dataset_p, layout, sequences)
-    paths, all_gts = ds.paths, ds.gts
     notes: list[str] = []
-    first_only = [n for n in all_gts if ds.metas[n].get("first_frame_only")]
-    gts = {n: g for n, g in all_gts.items() if n not in first_only}
+    first_only = [n for n in ds.gts if ds.metas[n].get("first_frame_only")]
+    gts = {n: g for n, g in ds.gts.items() if n not in first_only}
     if first_only:
         notes.append(
             f"not scored: {len(first_only)} sequence(s) annotated on the first frame only "
@@ -643,48 +698,11 @@ def run_eval(
             raise ValueError("no tracker left to run")
         box_root = out_p / ("boxes" if protocol == "ope" else "boxes_vot")
         files["boxes"] = str(box_root)
-        # absolute paths: the workers of a cluster may run in other folders
-        if ds.layout == "otb":
-            tasks = make_tasks(
-                [p.resolve() for p in paths], tracker_names, seeds, protocol, skip, burnin
-            )
-        else:
-            tasks = make_tasks(
-                paths, tracker_names, seeds, protocol, skip, burnin,
-                layout=ds.layout, dataset=str(ds.root.resolve()),
-            )
-        all_tasks = list(tasks)
         ex = _executor(executor, jobs, cv_threads, scheduler, say)
-        lengths = {name: gt.shape[0] for name, gt in all_gts.items()}
-        resumed: list[RunOutcome] = []
-        if resume:
-            tasks, resumed = _split_resumable(tasks, box_root, lengths, missing)
-            if resumed:
-                notes.append(
-                    f"resumed: {len(resumed)} of {len(tasks) + len(resumed)} runs read back from "
-                    f"their box files in {box_root} (untimed: no FPS; the mean rows' FPS is over the "
-                    "runs made now)"
-                )
-                say(notes[-1])
-        new = run_tasks(
-            tasks,
-            ex,
-            _box_writer(box_root, protocol, missing, say, lengths),
-            show_progress,
-        ) if tasks else []
-        order = {(t, s, r): i for i, (t, s, r) in enumerate(
-            (t.tracker, Path(t.sequence).name, t.repeat) for t in all_tasks
-        )}
-        runs = sorted(
-            [_full_length(r, lengths) for r in new] + resumed,
-            key=lambda r: order.get((r.tracker, r.sequence, r.repeat), len(order)),
-        )
-        for r in runs:
-            if r.sequence not in gts and r.error is not None:
-                unscored_errors += 1
-                notes.append(f"{r.tracker} on {r.sequence} (seed {r.seed}, not scored): {r.error}")
+        runs, n_resumed, unscored_errors = _run_trackers(
+            ds, tracker_names, seeds, protocol, skip, burnin, missing, ex, box_root, resume,
+            show_progress, notes, say)
         runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
-        n_resumed = len(resumed)
         timed = True
         n_repeats = repeats
     wall = time.perf_counter() - t_start
