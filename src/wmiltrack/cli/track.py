@@ -189,15 +189,7 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     several = args.boxes is not None
     tracker: Any = tracker_from_args(args, several=several)
     seq = open_frames(args.input, has_box=args.box is not None or several)
-    starts: list[tuple[float, ...]]
-    if several:
-        starts = _read_start_boxes(args.boxes)
-    elif args.box is not None:
-        starts = [tuple(args.box)]
-    elif seq.groundtruth is not None:
-        starts = [tuple(seq.init_box)]
-    else:
-        raise UsageError(f"{args.input} has no ground truth; give the first box with --box x,y,w,h")
+    starts = _start_boxes(args, seq)
     box = starts[0]
     ids: list[int] = []
     reader = TolerantFrames(seq)
@@ -276,6 +268,25 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
         except OSError as exc:
             error = error or f"cannot write the boxes: {exc}"
 
+    return _close_run(args, stop, reader, error, frames_done, len(starts) if several else 0,
+                      out.count, times, skipped)
+
+
+def _start_boxes(args: argparse.Namespace, seq: Any) -> list[tuple[float, ...]]:
+    """The first box of each target: --boxes, --box, or the sequence's ground truth."""
+    if args.boxes is not None:
+        return _read_start_boxes(args.boxes)
+    if args.box is not None:
+        return [tuple(args.box)]
+    if seq.groundtruth is not None:
+        return [tuple(seq.init_box)]
+    raise UsageError(f"{args.input} has no ground truth; give the first box with --box x,y,w,h")
+
+
+def _close_run(args: argparse.Namespace, stop: _StopRequest, reader: Any, error: str | None,
+               frames_done: int, targets: int, lines: int, times: list[float],
+               skipped: int) -> int:
+    """Print the run's one-line summary (and its error); the exit status."""
     if error is None and stop.signum is None and reader.ended_early is not None:
         if args.strict:
             error = f"{reader.ended_early} (--strict)"
@@ -283,8 +294,8 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
             print(f"wmiltrack: warning: {reader.ended_early}", file=sys.stderr)
     where = "" if args.output is None else f", boxes in {args.output}"
     summary = [f"{frames_done} frame{'' if frames_done == 1 else 's'}{where}"]
-    if several:
-        summary.append(f"{len(starts)} targets, {out.count} lines")
+    if targets:
+        summary.append(f"{targets} targets, {lines} lines")
     if times:
         summary.append(f"{len(times) / sum(times):.0f} frames/s (update only)")
     if skipped:
