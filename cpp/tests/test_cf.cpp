@@ -11,15 +11,9 @@
 #include "wmiltrack/correlation.hpp"
 #include "wmiltrack/fhog.hpp"
 
+#include "check.hpp"
+
 namespace {
-int failures = 0;
-#define CHECK(cond)                                                                  \
-  do {                                                                               \
-    if (!(cond)) {                                                                   \
-      std::fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-      ++failures;                                                                    \
-    }                                                                                \
-  } while (0)
 
 using namespace wmiltrack;
 using namespace wmiltrack::cf;
@@ -223,8 +217,8 @@ int main() {
   test_fhog();
   test_translation_filter();
   test_scale_filter();
-  if (failures) {
-    std::fprintf(stderr, "%d check(s) failed\n", failures);
+  if (wmiltrack_test::failures) {
+    std::fprintf(stderr, "%d check(s) failed\n", wmiltrack_test::failures);
     return 1;
   }
   std::puts("test_cf: all checks passed");

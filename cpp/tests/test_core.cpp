@@ -17,15 +17,9 @@
 #include "wmiltrack/scoring.hpp"
 #include "wmiltrack/vmath.hpp"
 
+#include "check.hpp"
+
 namespace {
-int failures = 0;
-#define CHECK(cond)                                                            \
-  do {                                                                         \
-    if (!(cond)) {                                                             \
-      std::fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-      ++failures;                                                              \
-    }                                                                          \
-  } while (0)
 
 using namespace wmiltrack;
 
@@ -805,10 +799,10 @@ int main() {
   test_hardening(rng);
   test_learning(rng);
   test_vmath(rng);
-  if (failures == 0) {
+  if (wmiltrack_test::failures == 0) {
     std::printf("test_core: all checks passed\n");
     return EXIT_SUCCESS;
   }
-  std::printf("test_core: %d checks failed\n", failures);
+  std::printf("test_core: %d checks failed\n", wmiltrack_test::failures);
   return EXIT_FAILURE;
 }
