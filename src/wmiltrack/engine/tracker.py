@@ -166,6 +166,10 @@ class Tracker:
         if params.colour_weight + sum(c.weight for c in cues) > 1.0 + 1e-12:
             raise ValueError("the cues' weights (with colour_weight) add up to more than 1")
         self._params = params
+        # the search's (radius, step) stages: the coarse grid, then the fine one if any
+        self._stages = [(params.coarse_radius, params.coarse_step)]
+        if params.fine_radius > 0:
+            self._stages.append((params.fine_radius, params.fine_step))
         self._seed = int(seed)
         self._extra_cues = tuple(cues)
         self._busy = threading.Lock()
@@ -340,9 +344,7 @@ class Tracker:
         elif not direct:
             model.compute_integral(img, origin, self._margin())
         try:
-            stages = [(p.coarse_radius, p.coarse_step)]
-            if p.fine_radius > 0:
-                stages.append((p.fine_radius, p.fine_step))
+            stages = self._stages
             search = model.search_request(origin, stages, wh, img if direct else None,
                                           roi if direct else None, self._cue_merge(img, origin))
             if self._fused and (direct or shared):  # search, bags and learning in one core call
