@@ -60,6 +60,10 @@ class HaarAppearance:
         self.params = params
         self.seed = seed
         self.ii = _core.IntegralImage()
+        # the learning step's fixed settings, in LearnRequest's order
+        self._rule = (params.learning_rate, params.first_update == "direct",
+                      params.classifier == "mil", params.sigma_floor, params.guard,
+                      params.num_selected, params.gradient == "code")
         self.first = BagSampler(params, first_frame=True)
         self.track = BagSampler(params)
         self.bags: tuple[Any, ...] = ()
@@ -252,14 +256,12 @@ class HaarAppearance:
                        second: tuple[Any, ...] | None) -> Learn:
         """``_core.learn``'s arguments for the bags with these top-left ``corners`` (the
         ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives) of ``box``'s size."""
-        p = self.params
         pool = self.pool
+        lam, direct, mil, floor, guard, k, code = self._rule
         # (in LearnRequest's order, positionally: keywords cost a microsecond a frame here)
         return Learn(self.ii, self.bank(box[2], box[3]), corners[:, 0], corners[:, 1], n_pos,
-                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, p.learning_rate,
-                     pool.first(1), pool.first(0), p.first_update == "direct",
-                     p.classifier == "mil", p.sigma_floor, p.guard, select, w, p.num_selected,
-                     p.gradient == "code", extra, second)
+                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, lam, pool.first(1),
+                     pool.first(0), direct, mil, floor, guard, select, w, k, code, extra, second)
 
     def _take_learnt(self, learnt: tuple[Any, ...], n_pos: int, n_neg: int) -> None:
         """Keep the model and the selection that a learning request returned."""

@@ -241,6 +241,7 @@ class Tracker:
         self._search_log = []
         self._score = 1.0
         self._fused = parts.appearance_only and model.can_fuse and core_draws_match_numpy()
+        self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
 
     reinit = init
@@ -347,33 +348,42 @@ class Tracker:
             stages = self._stages
             search = model.search_request(origin, stages, wh, img if direct else None,
                                           roi if direct else None, self._cue_merge(img, origin))
-            if self._fused and (direct or shared):  # search, bags and learning in one core call
+            if self._fused and (direct or shared):
+                # The appearance model alone: search, bags and learning in one core call, and
+                # no other part to consult.
                 results = yield from model.fused_step(search, origin)
-                raw = self._move(origin, stages, results)
+                score = confidence(self._move(origin, stages, results), model.k,
+                                   p.confidence_offset)
             else:
-                raw = self._move(origin, stages, (yield search))
-            if parts.scale is not None:
-                parts.scale.tried = []
-            if parts.scale is not None and math.isfinite(raw):
-                self._box, raw = parts.scale.search(model, img, self._box, raw, self._contrast())
-            conf = confidence(raw, model.k, p.confidence_offset)
-            score = parts.policy.score(conf, img, self._box)
-            if not self._fused or not (direct or shared):
-                yield from self._learn_steps(model.track)
-            for cue in parts.cues:
-                if score >= getattr(cue, "learn_above", 0.0):
-                    cue.learn(img, self._box)
-            if parts.scale is not None:
-                parts.scale.learn(img, self._box)
-            tracked = parts.policy.tracked(conf)
-            if parts.motion is not None:
-                parts.motion.follow(previous, self._box, tracked)
+                score = yield from self._composed_steps(img, search, origin, previous)
             self._score = score
         finally:
             model.ii = own  # a shared table is only borrowed for this frame
         x, y, w, h = self._box
         return TrackResult((float(x), float(y), float(w), float(h)), score,
                            parts.policy.tracked(score))
+
+    def _composed_steps(self, img: np.ndarray, search: Any, origin: IntBox,
+                        previous: IntBox) -> Steps:
+        """The rest of a frame for a tracker of several parts: the search, the scale
+        estimator, the policy's score, the learning of every part; returns the score."""
+        parts, model = self._parts, self._parts.appearance
+        raw = self._move(origin, self._stages, (yield search))
+        if parts.scale is not None:
+            parts.scale.tried = []
+            if math.isfinite(raw):
+                self._box, raw = parts.scale.search(model, img, self._box, raw, self._contrast())
+        conf = confidence(raw, model.k, self._params.confidence_offset)
+        score = parts.policy.score(conf, img, self._box)
+        yield from self._learn_steps(model.track)
+        for cue in parts.cues:
+            if score >= getattr(cue, "learn_above", 0.0):
+                cue.learn(img, self._box)
+        if parts.scale is not None:
+            parts.scale.learn(img, self._box)
+        if parts.motion is not None:
+            parts.motion.follow(previous, self._box, parts.policy.tracked(conf))
+        return score
 
     def _origin(self, frame: np.ndarray | None = None) -> IntBox:
         """Where the search on ``frame`` is centred (without the frame: the motion model's
@@ -384,8 +394,9 @@ class Tracker:
     def _margin(self) -> int:
         """The integral image's margin around the search origin."""
         scale = self._parts.scale
-        return (self._params.search_reach + self._parts.appearance.reach
-                + (scale.margin(self._box) if scale is not None else 0))
+        if scale is None:
+            return self._reach
+        return self._reach + scale.margin(self._box)
 
     def _cue_merge(self, img: np.ndarray, origin: IntBox) -> tuple[Any, ...] | None:
         """The cues' merged table for the core's search, or None without cues."""
