@@ -9,9 +9,7 @@ from .options import Subparsers
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from ..data.synthetic import make_preset
-    from ..eval.metrics import ope_metrics
-    from ..eval.runner import run_sequence
-    from ..eval.scoring import scored_boxes
+    from .eval import score_runs  # the demo's scores are the eval command's
 
     seq = make_preset("all", seed=args.seed, n_frames=args.frames)
     frames = seq.load()
@@ -20,13 +18,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     print(f"built-in sequence: {len(frames)} frames of {frames[0].shape[1]}x{frames[0].shape[0]}, "
           "moving textured target with partial occlusion, illumination change and clutter")
     print(f"{'tracker':<10} {'AUC':>6} {'SR@0.5':>7} {'P@20':>6} {'fps':>8}")
-    for name in args.trackers.split(","):
-        run = run_sequence(name.strip(), frames, gt[0], seed=args.seed)
-        if run.error:
-            print(f"{name:<10} failed: {run.error}")
+    for name, scores, error in score_runs(args.trackers.split(","), frames, gt, args.seed):
+        if error:
+            print(f"{name:<10} failed: {error}")
             continue
-        m = ope_metrics(scored_boxes(run.boxes, run.oks), gt)  # hold the last box, as eval
-        print(f"{name:<10} {m.auc:6.3f} {m.success_50:7.3f} {m.precision_20:6.3f} {run.fps:8.0f}")
+        auc, success_50, precision_20, fps = scores
+        print(f"{name:<10} {auc:6.3f} {success_50:7.3f} {precision_20:6.3f} {fps:8.0f}")
     return 0
 
 

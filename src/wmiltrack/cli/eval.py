@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import math
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from ..data.layouts import LAYOUTS
 from .options import Subparsers, UsageError, add_executor_options
@@ -49,6 +52,23 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     errors = sum(s.get("errors", 0) for s in doc["summary"].values())
     errors += doc.get("unscored_errors", 0)
     return 1 if errors else 0
+
+
+def score_runs(trackers: list[str], frames: list[Any], gt: Any, seed: int
+               ) -> Iterator[tuple[str, tuple[float, float, float, float], str | None]]:
+    """Each tracker run on ``frames`` from ``gt[0]`` and scored as ``eval`` scores it (the last
+    box held): ``(name, (AUC, SR@0.5, P@20, update frames/s), error)`` (for ``demo``)."""
+    from ..eval.metrics import ope_metrics
+    from ..eval.runner import run_sequence
+    from ..eval.scoring import scored_boxes
+
+    for name in (t.strip() for t in trackers):
+        run = run_sequence(name, frames, gt[0], seed=seed)
+        if run.error:
+            yield name, (math.nan,) * 4, run.error
+            continue
+        m = ope_metrics(scored_boxes(run.boxes, run.oks), gt)
+        yield name, (m.auc, m.success_50, m.precision_20, run.fps), None
 
 
 def add_eval(sub: Subparsers) -> None:
