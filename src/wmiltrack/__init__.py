@@ -21,18 +21,20 @@ from .opencv_check import warn_if_opencv_conflict
 warn_if_opencv_conflict()  # two OpenCV wheels share one cv2: say how to fix it
 
 if TYPE_CHECKING:
+    from .engine.cues import Cue
     from .engine.multi import MultiTracker
     from .engine.params import Params, variants
     from .engine.tracker import Tracker
 
 _LAZY = {
+    "Cue": "engine.cues",
     "MultiTracker": "engine.multi",
     "Tracker": "engine.tracker",
     "Params": "engine.params",
     "variants": "engine.params",
 }
 
-__all__ = ["MultiTracker", "Params", "TrackResult", "Tracker", "__version__", "variants"]
+__all__ = ["Cue", "MultiTracker", "Params", "TrackResult", "Tracker", "__version__", "variants"]
 
 
 def __getattr__(name: str) -> Any:
