@@ -133,3 +133,26 @@ def test_every_preset_leaves_the_template_out() -> None:
     for name, p in wmiltrack.variants().items():
         assert p.template_weight == 0.0 and not p.template_motion, name
         assert p.scale_model != "dsst", name
+
+
+def test_dsst_votes_inside_the_haar_scale_search(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``scale_dsst``: the Haar scale search adds DSST's response at each tried size to its
+    value (a vote that prefers a larger box makes the box grow); 0 leaves DSST out."""
+    from wmiltrack.engine.correlation import ScaleEstimate, ScaleEstimator
+
+    seq = make_sequence(8, size=(160, 200), target_size=(36, 30), seed=6, occlusion=False)
+    frames, box = seq.load(), tuple(seq.groundtruth[0])
+    factors = ScaleEstimator().factors
+    bigger = np.array(factors, dtype=np.float32)  # rising with the size
+    monkeypatch.setattr(ScaleEstimator, "estimate",
+                        lambda self, frame, centre, size: ScaleEstimate(1.0, bigger))
+    grown = wmiltrack.Tracker("rcwmil-plus", seed=0, scale_dsst=50.0)
+    grown.track(frames, box)
+    assert grown.parts.scale is not None and grown.parts.scale.dsst is not None
+    plain = wmiltrack.Tracker("rcwmil-plus", seed=0)
+    plain.track(frames, box)
+    assert plain.parts.scale is not None and plain.parts.scale.dsst is None
+    # one step of 1.03 a frame on most frames (the Haar terms still have a say)
+    assert grown.scale >= 1.03 ** 4 and grown.scale > plain.scale * 1.03**3
+    with pytest.raises(ValueError, match="scale_dsst"):
+        wmiltrack.Params.for_variant("rcwmil-plus", scale_dsst=-1.0)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 
 from .classifier import GaussianPool
+from .correlation import ScaleEstimator
 from .features import box_area_ok, min_box_size
 from .frames import IntBox
 
@@ -46,6 +47,8 @@ class HaarScale:
         self.tried: list[IntBox] = []  # the boxes tried at other scales in the last frame
         self.pool = (GaussianPool(params.replace(learning_rate=params.scale_learning_rate))
                      if params.scale_model != "ratio" else None)
+        # DSST's vote on the size (scale_dsst), learnt at every frame's box
+        self.dsst = ScaleEstimator() if params.scale_dsst > 0 else None
 
     @property
     def scale(self) -> float:
@@ -72,10 +75,34 @@ class HaarScale:
         return mw <= w <= self.frame_wh[0] and mh <= h <= self.frame_wh[1] and box_area_ok(w, h)
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
-        """(The first frame is learnt with the appearance model's learning step.)"""
+        """Start DSST's vote, if any (the Haar models learn with the appearance model)."""
+        if self.dsst is not None:
+            self.dsst.init(frame, box)
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
-        """(Learnt with the appearance model's learning step: :meth:`learning_extras`.)"""
+        """Fold the frame's box into DSST's vote, if any (the Haar models learn with the
+        appearance model's learning step: :meth:`learning_extras`)."""
+        if self.dsst is not None:
+            self.dsst.learn(frame, (box[0] + box[2] / 2.0, box[1] + box[3] / 2.0), (box[2], box[3]))
+
+    def _dsst_vote(self, frame: np.ndarray, box: IntBox) -> Callable[[IntBox], float] | None:
+        """DSST's response (divided by its peak) at a tried box's size, around ``box``."""
+        if self.dsst is None:
+            return None
+        est = self.dsst.estimate(frame, (box[0] + box[2] / 2.0, box[1] + box[3] / 2.0),
+                                 (box[2], box[3]))
+        r = est.response.astype(np.float64)
+        peak = float(r.max())
+        r = r / peak if peak > 0 else r
+        half = (r.size - 1) / 2.0
+        log_step = math.log(self.dsst.settings.step)
+        area = box[2] * box[3]
+
+        def vote(tried: IntBox) -> float:
+            k = half + 0.5 * math.log(tried[2] * tried[3] / area) / log_step
+            return float(np.interp(k, np.arange(r.size), r))
+
+        return vote
 
     # -- estimating ----------------------------------------------------------------------------
     def search(self, model: HaarAppearance, frame: np.ndarray, box: IntBox, raw: float,
@@ -86,7 +113,7 @@ class HaarScale:
         self.tried = []
         if self.settings.scale_model == "likelihood":
             return self._by_likelihood(model, box), raw
-        return self._by_ratio(model, box, raw, contrast)
+        return self._by_ratio(model, box, raw, contrast, self._dsst_vote(frame, box))
 
     def _likelihood(self, model: HaarAppearance, box: IntBox) -> float:
         pool = self.pool
@@ -94,7 +121,8 @@ class HaarScale:
         return model.template_fit(box, pool.mu1, pool.sigma1)
 
     def _by_ratio(self, model: HaarAppearance, box: IntBox, best: float,
-                  contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
+                  contrast: Callable[[IntBox], float] | None,
+                  vote: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
         """Try the other scales with the strong classifier; the chosen box and raw score."""
         p = self.settings
         k = model.k
@@ -106,6 +134,8 @@ class HaarScale:
         if cw:
             assert contrast is not None
             best_value += cw * contrast(box)
+        if vote is not None:
+            best_value += p.scale_dsst * vote(box)
         best_index, best_box = self.index, box
         for j in range(-p.scale_steps, p.scale_steps + 1):
             index = self.index + j
@@ -124,6 +154,8 @@ class HaarScale:
             if cw:
                 assert contrast is not None
                 value += cw * contrast(moved)
+            if vote is not None:
+                value += p.scale_dsst * vote(moved)
             if value > best_value:
                 best_value = value
                 best = score

@@ -391,6 +391,7 @@ class ScaleSettings:
     scale_max: float = 5.0
     scale_negatives: int = 0
     scale_contrast: float = 0.0
+    scale_dsst: float = 0.0
 
     def __post_init__(self) -> None:
         ScaleSettings.check(self)
@@ -400,7 +401,8 @@ class ScaleSettings:
         _check_choices(self, {"scale_model": ("ratio", "likelihood", "both", "dsst")})
         _check_ints(self, "scale_steps", "scale_radius", "scale_negatives")
         _check_numbers(self, "scale_factor", "scale_penalty", "scale_min", "scale_max", "scale_mix",
-                       "scale_contrast")
+                       "scale_contrast", "scale_dsst")
+        _need(self.scale_dsst >= 0, f"scale_dsst must be >= 0, got {self.scale_dsst}")
         _need(0 <= self.scale_steps <= 10, f"scale_steps must be in 0..10, got {self.scale_steps}")
         _need(_is_number(self.scale_learning_rate) and 0.0 <= self.scale_learning_rate < 1.0,
               f"scale_learning_rate must be in [0, 1), got {self.scale_learning_rate}")
