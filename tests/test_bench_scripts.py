@@ -138,6 +138,13 @@ def test_ablation_on_a_generated_dataset(tmp_path: Path) -> None:
     assert bad.returncode == 2 and "unknown rows" in bad.stderr
 
 
+def test_hidden_target_check_runs() -> None:
+    r = _run([str(BENCH / "hidden_target.py"), "--trackers", "rcwmil", "--seeds", "0"])
+    assert r.returncode == 0, r.stderr
+    row = next(line for line in r.stdout.splitlines() if line.startswith("rcwmil "))
+    assert row.split()[1] == "0" and row.split()[2].endswith("%"), r.stdout
+
+
 def test_cf_probe_on_a_generated_dataset(tmp_path: Path) -> None:
     data = _tiny_dataset(tmp_path)
     r = _run([str(BENCH / "cf_probe.py"), "--otb", str(data), "--confidence"])

@@ -179,3 +179,30 @@ def test_invalid_arguments() -> None:
         make_sequence(5, max_speed=-1.0)
     with pytest.raises(ValueError):
         make_sequence(5, noise=-1.0)
+
+
+def test_full_occlusion_and_out_of_view_windows() -> None:
+    """A full occlusion hides the whole box (the ground truth keeps it), out of view removes
+    the target (NaN ground truth); both are marked not visible, and the sequence is otherwise
+    the one generated without them."""
+    plain = make_sequence(40, seed=3, occlusion=False)
+    seq = make_sequence(40, seed=3, occlusion=False, full_occlusion=(10, 5), out_of_view=(25, 6))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth)
+    visible = seq.meta["visible"]
+    assert visible.dtype == bool and not visible[10:15].any() and not visible[25:31].any()
+    assert visible[:10].all() and visible[15:25].all() and visible[31:].all()
+    np.testing.assert_array_equal(gt[:25], np.asarray(plain.groundtruth)[:25])
+    assert np.isnan(gt[25:31]).all() and np.isfinite(gt[31:]).all()
+    assert np.all(seq.meta["occlusion"][10:15] == 1.0)
+    base = plain.load()
+    for i in (0, 9, 15, 24, 31, 39):  # untouched frames are the same pixels
+        np.testing.assert_array_equal(frames[i], base[i])
+    x, y, w, h = (int(v) for v in gt[12])
+    assert not np.array_equal(frames[12][y:y + h, x:x + w], base[12][y:y + h, x:x + w])
+    for i in (25, 30):  # the target's place differs from the plain sequence: it is not drawn
+        x, y, w, h = (int(v) for v in np.asarray(plain.groundtruth)[i])
+        assert not np.array_equal(frames[i][y:y + h, x:x + w], base[i][y:y + h, x:x + w])
+    with pytest.raises(ValueError, match="overlap"):
+        make_sequence(40, full_occlusion=(10, 10), out_of_view=(15, 5))
+    with pytest.raises(ValueError, match="out_of_view"):
+        make_sequence(40, out_of_view=(0, 5))

@@ -44,7 +44,8 @@ PRESETS: dict[str, dict[str, Any]] = {
 """Keyword arguments of :func:`make_sequence` for named scenarios; ``"all"`` is the demo one."""
 
 _N_DISTRACTORS = 3
-_STREAMS = ("background", "target", "path", "occlusion", "illumination", "clutter", "noise")
+_STREAMS = ("background", "target", "path", "occlusion", "illumination", "clutter", "noise",
+            "hidden")  # (a new stream goes last: the others keep their seeds)
 
 
 # ---------------------------------------------------------------------- textures
@@ -258,6 +259,8 @@ def make_sequence(
     clutter: bool = True,
     max_speed: float = 3.0,
     noise: float = 4.0,
+    full_occlusion: tuple[int, int] | None = None,
+    out_of_view: tuple[int, int] | None = None,
     name: str | None = None,
 ) -> Sequence:
     """Generate a synthetic tracking sequence with exact ground truth.
@@ -285,6 +288,13 @@ def make_sequence(
         Upper bound of the target's displacement per frame, in pixels.
     noise:
         Standard deviation of the per-frame Gaussian pixel noise (0 for none).
+    full_occlusion:
+        ``(first, count)``: frames ``first .. first + count - 1`` (0-based) have the target
+        wholly hidden behind an opaque textured block a quarter larger than its box on every
+        side; the ground truth keeps the target's box there.
+    out_of_view:
+        ``(first, count)``: the target is out of the picture in those frames (not drawn; its
+        ground truth is ``NaN``, an absent frame) and comes back where its path has taken it.
     name:
         Sequence name; default ``"synthetic-s<seed>"``.
 
@@ -292,8 +302,10 @@ def make_sequence(
     -------
     wmiltrack.data.sequences.Sequence
         In-memory BGR ``uint8`` frames, ``groundtruth`` of shape ``(n_frames, 4)`` (float
-        ``x, y, w, h``; the box always lies inside the frame), ``fps`` 30 and ``meta`` with
-        per-frame arrays ``"occlusion"`` (fraction of the target box covered), ``"gain"``
+        ``x, y, w, h``; the box always lies inside the frame; ``NaN`` rows for ``out_of_view``),
+        ``fps`` 30 and ``meta`` with per-frame arrays ``"visible"`` (the target can be seen:
+        False while fully occluded or out of view), ``"occlusion"`` (fraction of the target
+        box covered), ``"gain"``
         (global illumination gain) and ``"distractors"`` (``(n_frames, k, 4)`` boxes), plus
         the generation arguments under ``"params"``.
 
@@ -306,6 +318,7 @@ def make_sequence(
     height, width = (int(v) for v in size)
     tw, th = (int(v) for v in target_size)
     _check_arguments(n_frames, width, height, tw, th, max_speed, noise, target_size)
+    hidden = _hidden_frames(n_frames, full_occlusion, out_of_view)
     streams = dict(
         zip(
             _STREAMS,
@@ -324,6 +337,8 @@ def make_sequence(
     occ_frac, occ_side = _occlusion_schedule(streams["occlusion"], n_frames)
     occ_tex = _occluder_texture(streams["occlusion"], height, width)
     light = _Lighting(streams["illumination"], n_frames, width, illumination)
+    block = (_target_texture(streams["hidden"], height, width) * np.float32(0.5)
+             if full_occlusion is not None else None)  # a texture unlike the target's
 
     frames: list[NDArray[np.uint8]] = []
     covered = np.zeros(n_frames, np.float64)
@@ -332,8 +347,15 @@ def make_sequence(
         for tex, alpha, dpath in distractors:
             _paste(f, tex, alpha, float(dpath[t, 0]), float(dpath[t, 1]))
         x, y = float(path[t, 0]), float(path[t, 1])
-        _paste(f, target, np.ones((th, tw), np.float32), x, y)
-        if occlusion and occ_frac[t] > 0:
+        if hidden[t] != "out":
+            _paste(f, target, np.ones((th, tw), np.float32), x, y)
+        if hidden[t] == "occluded":
+            assert block is not None
+            x0, y0 = max(int(x - 0.25 * tw), 0), max(int(y - 0.25 * th), 0)
+            x1, y1 = min(int(x + 1.25 * tw) + 1, width), min(int(y + 1.25 * th) + 1, height)
+            f[y0:y1, x0:x1] = block[y0:y1, x0:x1]
+            covered[t] = 1.0
+        elif occlusion and occ_frac[t] > 0:
             x0, y0, x1, y1 = _occluder_rect(
                 x, y, tw, th, float(occ_frac[t]), occ_side, width, height
             )
@@ -342,7 +364,9 @@ def make_sequence(
                 covered[t] = _overlap_fraction((x0, y0, x1, y1), (x, y, float(tw), float(th)))
         frames.append(_finish(f, light, t, streams["noise"], noise))
 
+    gt[hidden == "out"] = np.nan
     meta: dict[str, Any] = {
+        "visible": hidden == "",
         "occlusion": covered,
         "gain": np.asarray(light.gain, np.float64),
         "distractors": dboxes,
@@ -356,6 +380,8 @@ def make_sequence(
             "clutter": clutter,
             "max_speed": max_speed,
             "noise": noise,
+            "full_occlusion": full_occlusion,
+            "out_of_view": out_of_view,
         },
     }
     return Sequence(
@@ -377,6 +403,25 @@ def _check_arguments(n_frames: int, width: int, height: int, tw: int, th: int, m
         raise ValueError(f"target {tw}x{th} does not fit a {width}x{height} frame with margin")
     if max_speed < 0 or noise < 0:
         raise ValueError("max_speed and noise must be >= 0")
+
+
+def _hidden_frames(n_frames: int, full_occlusion: tuple[int, int] | None,
+                   out_of_view: tuple[int, int] | None) -> NDArray[np.str_]:
+    """Per frame: ``"occluded"``, ``"out"`` (of view) or ``""`` (visible); ``ValueError`` for a
+    window that is empty, starts on the first frame (the tracker starts there) or overlaps the
+    other."""
+    hidden = np.full(n_frames, "", dtype="<U8")
+    for label, window in (("occluded", full_occlusion), ("out", out_of_view)):
+        if window is None:
+            continue
+        first, count = (int(v) for v in window)
+        if first < 1 or count < 1 or first + count > n_frames:
+            raise ValueError(f"{'full_occlusion' if label == 'occluded' else 'out_of_view'} must be "
+                             f"(first >= 1, count >= 1) within {n_frames} frames, got {window!r}")
+        if np.any(hidden[first:first + count] != ""):
+            raise ValueError("full_occlusion and out_of_view must not overlap")
+        hidden[first:first + count] = label
+    return hidden
 
 
 def _distractors(rng: np.random.Generator, n_frames: int, width: int, height: int, tw: int, th: int,
