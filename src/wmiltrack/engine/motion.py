@@ -24,6 +24,11 @@ class VelocityMotion:
         self.velocity = (0.0, 0.0)
         self._lost = False
 
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """(The target stands still until it is seen to move.)"""
+        self.velocity = (0.0, 0.0)
+        self._lost = False
+
     def origin(self, box: IntBox, frame: np.ndarray | None = None) -> IntBox:
         """Where to centre the search for a target last seen at ``box`` (the frame is not
         needed: the prediction is from the past frames)."""

@@ -75,6 +75,15 @@ class Parts:
         tracker, so that a frame can run as one core call."""
         return not self.cues and self.scale is None and self.motion is None and self.policy.plain
 
+    def others(self) -> list[Any]:
+        """The parts besides the appearance model and the policy, each once (a correlation
+        template may be both a cue and the motion model), in the order they start."""
+        out: list[Any] = []
+        for part in (*self.cues, self.motion, self.scale):
+            if part is not None and not any(part is seen for seen in out):
+                out.append(part)
+        return out
+
 
 def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
             cues: Sequence[Cue] = ()) -> Parts:
@@ -223,14 +232,8 @@ class Tracker:
         parts = compose(self._params, self._seed, img, b, self._extra_cues)
         model = parts.appearance
         model.start(img, b)
-        for cue in parts.cues:
-            cue.start(img, b)
-        if parts.motion is not None and parts.motion not in parts.cues:
-            start = getattr(parts.motion, "start", None)
-            if start is not None:
-                start(img, b)
-        if parts.scale is not None:
-            parts.scale.start(img, b)
+        for part in parts.others():
+            part.start(img, b)
         if parts.policy.report is not None:
             _start_report(parts.policy.report, self._params, img, b)
         self._parts = parts
@@ -333,7 +336,8 @@ class Tracker:
         model = parts.appearance
         previous = self._box
         origin = self._origin(img)
-        roi = roi_around(origin, self._margin())
+        margin = self._margin()
+        roi = roi_around(origin, margin)
         own = model.ii
         shared = integral is not None and model.covered_by(integral, roi, wh)
         # Luma-only models compute their integral image in the search's call to the core;
@@ -343,7 +347,7 @@ class Tracker:
             assert integral is not None
             model.ii = integral
         elif not direct:
-            model.compute_integral(img, origin, self._margin())
+            model.compute_integral(img, origin, margin)
         try:
             stages = self._stages
             search = model.search_request(origin, stages, wh, img if direct else None,
