@@ -24,6 +24,7 @@ from .settings import (
     ColourSettings,
     FeatureSettings,
     MotionSettings,
+    RecoverySettings,
     ScaleSettings,
     ScoreSettings,
     SearchSettings,
@@ -36,7 +37,7 @@ __all__ = ["CONFIDENCE_OFFSET", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_
 #: The part settings a :class:`Params` is made of, in the order their fields are listed.
 PARTS: tuple[type[Any], ...] = (FeatureSettings, BagSettings, ClassifierSettings, SearchSettings,
                            ScaleSettings, MotionSettings, ColourSettings, ScoreSettings,
-                           TemplateSettings)
+                           TemplateSettings, RecoverySettings)
 
 
 @dataclass(frozen=True)
@@ -45,7 +46,7 @@ class _Named:
 
 
 @dataclass(frozen=True)
-class Params(TemplateSettings, ScoreSettings, ColourSettings, MotionSettings, ScaleSettings,
+class Params(RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings, MotionSettings, ScaleSettings,
              SearchSettings, ClassifierSettings, BagSettings, FeatureSettings, _Named):
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
 
@@ -56,10 +57,11 @@ class Params(TemplateSettings, ScoreSettings, ColourSettings, MotionSettings, Sc
     :class:`~wmiltrack.engine.settings.SearchSettings` (the translation search),
     :class:`~wmiltrack.engine.settings.ScaleSettings` (the scale estimator),
     :class:`~wmiltrack.engine.settings.MotionSettings` (the motion model),
-    :class:`~wmiltrack.engine.settings.ColourSettings` (the colour cue) and
-    :class:`~wmiltrack.engine.settings.ScoreSettings` (the reported score and lost state) and
-    :class:`~wmiltrack.engine.settings.TemplateSettings` (the correlation-filter template).
-    The defaults of the last five leave their part out, so the paper presets run the paper's
+    :class:`~wmiltrack.engine.settings.ColourSettings` (the colour cue),
+    :class:`~wmiltrack.engine.settings.ScoreSettings` (the reported score and lost state),
+    :class:`~wmiltrack.engine.settings.TemplateSettings` (the correlation-filter template) and
+    :class:`~wmiltrack.engine.settings.RecoverySettings` (the lost state and re-detection).
+    The defaults of the last six leave their part out, so the paper presets run the paper's
     code path.
 
     Attributes

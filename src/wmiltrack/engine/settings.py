@@ -607,3 +607,59 @@ class TemplateSettings:
               f"template_learning_rate must be in (0, 1], got {self.template_learning_rate}")
         _need(0.0 <= self.template_gate <= 1.0,
               f"template_gate must be in [0, 1], got {self.template_gate}")
+
+
+@dataclass(frozen=True)
+class RecoverySettings:
+    """The lost state and re-detection (:class:`wmiltrack.engine.recovery.Redetector`).
+
+    A target that is hidden (a full occlusion) or gone (out of view) must not be learnt: the
+    classifier, the cues and the scale model would adopt the occluder or the background, and the
+    score would climb back as if the target were there. With ``redetect``, a frame whose
+    classifier confidence drops below ``lost_drop`` times its running mean over tracked frames
+    starts the lost state: the box is held at the last confident one, ``ok`` is False and
+    nothing learns. Each lost frame searches the whole frame for the target's grey template
+    (kept from the tracked frames) by normalised cross-correlation, and takes the best place
+    back once its correlation reaches both ``recover_floor`` and ``recover_ratio`` times the
+    tracked boxes' running correlation (the latter lowered by ``recover_decay`` per lost
+    frame); a fine search there gives the box. A lost frame whose usual search around the
+    held box finds the classifier's confidence back above ``lost_drop`` times its running mean
+    ends the lost state there.
+
+    Attributes
+    ----------
+    redetect : bool
+        Whether a lost target is held, not learnt, and searched for over the whole frame.
+    lost_drop : float
+        A frame counts as lost when its confidence is below this fraction of the running mean
+        confidence of the tracked frames (in (0, 1)).
+    recover_ratio : float
+        A re-detected place is taken when its correlation with the template is at least this
+        fraction of the tracked boxes' running correlation.
+    recover_decay : float
+        ``recover_ratio`` is multiplied by this for every frame lost so far (1: never lowered).
+    recover_floor : float
+        The least correlation a re-detected place needs in any case: people, cars and textures
+        of one kind reach 0.7-0.77 at the wrong place on the shared sequences.
+    """
+
+    redetect: bool = False
+    lost_drop: float = 0.6
+    recover_ratio: float = 0.9
+    recover_decay: float = 1.0
+    recover_floor: float = 0.9
+
+    def __post_init__(self) -> None:
+        RecoverySettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        _need(isinstance(self.redetect, bool), f"redetect must be True or False, got {self.redetect!r}")
+        _check_numbers(self, "lost_drop", "recover_ratio", "recover_decay", "recover_floor")
+        _need(0.0 < self.lost_drop < 1.0, f"lost_drop must be in (0, 1), got {self.lost_drop}")
+        _need(0.0 < self.recover_ratio <= 1.0,
+              f"recover_ratio must be in (0, 1], got {self.recover_ratio}")
+        _need(0.0 < self.recover_decay <= 1.0,
+              f"recover_decay must be in (0, 1], got {self.recover_decay}")
+        _need(-1.0 <= self.recover_floor <= 1.0,
+              f"recover_floor must be in [-1, 1], got {self.recover_floor}")

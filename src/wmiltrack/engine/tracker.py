@@ -28,6 +28,7 @@ from .frames import IntBox, as_frame, clip_box, frame_size
 from .motion import VelocityMotion
 from .params import Params
 from .policy import ContrastScore, UpdatePolicy, confidence
+from .recovery import Redetector
 from .requests import Steps, drive, run_batches
 from .result import TrackResult
 from .sampling import core_draws_match_numpy
@@ -68,18 +69,25 @@ class Parts:
     scale: HaarScale | DSSTScale | None
     motion: VelocityMotion | CorrelationTemplate | None
     policy: UpdatePolicy
+    recovery: Redetector | None = None
 
     @property
     def appearance_only(self) -> bool:
         """Whether nothing but the appearance model (and the paper's policy) makes up the
         tracker, so that a frame can run as one core call."""
-        return not self.cues and self.scale is None and self.motion is None and self.policy.plain
+        return (not self.cues and self.scale is None and self.motion is None
+                and self.recovery is None and self.policy.plain)
+
+    @property
+    def lost(self) -> bool:
+        """Whether the recovery part holds the target for lost (never without one)."""
+        return self.recovery is not None and self.recovery.lost
 
     def others(self) -> list[Any]:
         """The parts besides the appearance model and the policy, each once (a correlation
         template may be both a cue and the motion model), in the order they start."""
         out: list[Any] = []
-        for part in (*self.cues, self.motion, self.scale):
+        for part in (*self.cues, self.motion, self.scale, self.recovery):
             if part is not None and not any(part is seen for seen in out):
                 out.append(part)
         return out
@@ -114,7 +122,8 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
     report = None
     if (params.score_colour > 0 and colour is not None) or params.score_luma > 0:
         report = ContrastScore(params, colour.model if colour is not None else None, None)
-    return Parts(appearance, all_cues, scale, motion, UpdatePolicy(params, report))
+    recovery = Redetector(params) if params.redetect else None
+    return Parts(appearance, all_cues, scale, motion, UpdatePolicy(params, report), recovery)
 
 
 def _start_report(report: ContrastScore, params: Params, frame: np.ndarray, box: IntBox) -> None:
@@ -335,6 +344,9 @@ class Tracker:
         parts, p, wh = self._parts, self._params, self._frame_wh
         model = parts.appearance
         previous = self._box
+        if parts.lost:
+            self._score = yield from self._redetect_steps(img, previous)
+            return self._result()
         origin = self._origin(img)
         margin = self._margin()
         roi = roi_around(origin, margin)
@@ -363,9 +375,13 @@ class Tracker:
             self._score = score
         finally:
             model.ii = own  # a shared table is only borrowed for this frame
+        return self._result()
+
+    def _result(self) -> TrackResult:
+        """The last frame's result: the box, the score, and whether it counts as tracked."""
         x, y, w, h = self._box
-        return TrackResult((float(x), float(y), float(w), float(h)), score,
-                           parts.policy.tracked(score))
+        ok = self._parts.policy.tracked(self._score) and not self._parts.lost
+        return TrackResult((float(x), float(y), float(w), float(h)), self._score, ok)
 
     def _composed_steps(self, img: np.ndarray, search: Any, origin: IntBox,
                         previous: IntBox) -> Steps:
@@ -379,15 +395,77 @@ class Tracker:
                 self._box, raw = parts.scale.search(model, img, self._box, raw, self._contrast())
         conf = confidence(raw, model.k, self._params.confidence_offset)
         score = parts.policy.score(conf, img, self._box)
-        yield from self._learn_steps(model.track)
+        if parts.recovery is not None and parts.recovery.judge(conf, img, self._box):
+            self._hold(previous)  # the target is lost from this frame on
+            return score
+        yield from self._learn_all(img, score)
+        if parts.motion is not None:
+            parts.motion.follow(previous, self._box, parts.policy.tracked(conf))
+        return score
+
+    def _learn_all(self, img: np.ndarray, score: float) -> Steps:
+        """Every part learns from the frame at the current box."""
+        parts = self._parts
+        yield from self._learn_steps(parts.appearance.track)
         for cue in parts.cues:
             if score >= getattr(cue, "learn_above", 0.0):
                 cue.learn(img, self._box)
         if parts.scale is not None:
             parts.scale.learn(img, self._box)
-        if parts.motion is not None:
-            parts.motion.follow(previous, self._box, parts.policy.tracked(conf))
+        if parts.recovery is not None:
+            parts.recovery.learn(img, self._box)
+
+    def _hold(self, box: IntBox) -> None:
+        """A lost frame: the box stays at ``box`` (the last confident one) and nothing
+        learns."""
+        self._box = box
+        self._parts.appearance.skip_learning()
+        if self._parts.motion is not None:
+            self._parts.motion.follow(box, box, False)
+
+    def _redetect_steps(self, img: np.ndarray, previous: IntBox) -> Steps:
+        """A frame of the lost state. First the usual search around the last confident box
+        (the classifier with every cue): if its confidence is back, tracking resumes there.
+        Else the whole frame is searched for the target's template
+        (:meth:`~wmiltrack.engine.recovery.Redetector.find`) and, where it matches well
+        enough, the fine search places the box. Either way every part then learns from the
+        box; if neither finds the target the last confident box is held and nothing learns.
+        Returns the frame's score (0 for a held frame)."""
+        parts, model, p = self._parts, self._parts.appearance, self._params
+        recovery = parts.recovery
+        assert recovery is not None
+        if parts.scale is not None:
+            parts.scale.tried = []
+        raw = yield from self._search_from(img, previous, self._stages)
+        conf = confidence(raw, model.k, p.confidence_offset)
+        if not recovery.back(conf, img, self._box):
+            found = recovery.find(img, (previous[2], previous[3]))
+            if found is None:
+                self._hold(previous)
+                return 0.0
+            stages = [(p.fine_radius, p.fine_step)] if p.fine_radius > 0 else self._stages
+            raw = yield from self._search_from(img, found, stages)
+            conf = confidence(raw, model.k, p.confidence_offset)
+        score = parts.policy.score(conf, img, self._box)
+        yield from self._learn_all(img, score)
+        if parts.motion is not None:  # a jump back is not a velocity
+            parts.motion.follow(self._box, self._box, False)
         return score
+
+    def _search_from(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]]
+                     ) -> Steps:
+        """The classifier's search from ``origin`` over ``stages`` with every cue merged (its
+        own integral image); moves the box and returns the raw score (see :meth:`_move`)."""
+        model = self._parts.appearance
+        margin = self._margin()
+        direct = model.chan_names is None
+        if not direct:
+            model.compute_integral(img, origin, margin)
+        search = model.search_request(origin, stages, self._frame_wh, img if direct else None,
+                                      roi_around(origin, margin) if direct else None,
+                                      self._cue_merge(img, origin))
+        raw: float = self._move(origin, stages, (yield search))
+        return raw
 
     def _origin(self, frame: np.ndarray | None = None) -> IntBox:
         """Where the search on ``frame`` is centred (without the frame: the motion model's
@@ -403,7 +481,8 @@ class Tracker:
         return self._reach + scale.margin(self._box)
 
     def _cue_merge(self, img: np.ndarray, origin: IntBox) -> tuple[Any, ...] | None:
-        """The cues' merged table for the core's search, or None without cues."""
+        """The cues' merged table for the core's search from ``origin``, or None without
+        cues."""
         cues = self._parts.cues
         if not cues:
             return None

@@ -1,0 +1,123 @@
+"""The lost state and re-detection (``Params.redetect``): a hidden or departed target is noticed,
+held, not learnt, and found again over the whole frame when it comes back."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import wmiltrack
+from wmiltrack import Tracker
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.recovery import Redetector
+from wmiltrack.eval.metrics import iou
+
+OCCLUDED = (60, 20)  # frames 60..79 behind a block
+OUT = (110, 30)  # frames 110..139 out of view
+
+
+def _run(spec_overrides: dict[str, object], seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    seq = make_sequence(170, seed=seed, occlusion=False, full_occlusion=OCCLUDED, out_of_view=OUT)
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    t = Tracker("rcwmil-plus", seed=seed, **spec_overrides)
+    t.init(frames[0], tuple(gt[0]))
+    boxes, oks = [gt[0]], [True]
+    for f in frames[1:]:
+        r = t.update(f)
+        boxes.append(np.asarray(r.box))
+        oks.append(r.ok)
+    return np.array(boxes), np.array(oks), gt, seq.meta["visible"]
+
+
+def _back_within(boxes: np.ndarray, gt: np.ndarray, start: int, frames: int) -> bool:
+    ov = iou(boxes[start:start + frames], gt[start:start + frames])
+    return bool(np.any(ov > 0.5))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_hidden_target_is_reported_lost_and_taken_back(seed: int) -> None:
+    """Issue "rcwmil-plus past CSRT", second point: ok is False on at least 80 % of the frames
+    where the target is hidden or gone, and the box is back on it (IoU > 0.5) within 10 frames
+    of its return, after the occlusion and after the return into view."""
+    boxes, ok, gt, visible = _run({"redetect": True}, seed)
+    hidden = ~visible
+    assert np.mean(~ok[hidden]) >= 0.8
+    assert _back_within(boxes, gt, sum(OCCLUDED), 10)
+    assert _back_within(boxes, gt, sum(OUT), 10)
+
+
+def test_without_redetect_the_target_that_left_is_not_found_again() -> None:
+    """The same sequence without the part: the tracker learns the background while the target
+    is away and does not find it again (what the part is for)."""
+    boxes, _, gt, _ = _run({}, 1)
+    assert not _back_within(boxes, gt, sum(OUT), 10)
+
+
+def test_a_lost_tracker_holds_its_last_confident_box_and_learns_nothing() -> None:
+    """While lost the box does not move, ok is False and the classifier's model is frozen."""
+    seq = make_sequence(120, seed=0, occlusion=False, out_of_view=(60, 40))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    t = Tracker("rcwmil-plus", seed=0, redetect=True)
+    t.init(frames[0], tuple(gt[0]))
+    for f in frames[1:62]:
+        t.update(f)
+    assert t.parts.lost
+    held = t.box
+    mu = t.parts.appearance.pool.mu1.copy()
+    for f in frames[62:90]:
+        r = t.update(f)
+        assert not r.ok and r.box == held
+    np.testing.assert_array_equal(t.parts.appearance.pool.mu1, mu)
+
+
+def test_redetect_off_is_the_preset_unchanged() -> None:
+    """redetect=False (the default) gives the preset's boxes bit for bit."""
+    seq = make_sequence(40, seed=3)
+    frames, gt = seq.load(), seq.groundtruth
+    a = Tracker("rcwmil-plus", seed=3).track(frames, gt[0])
+    b = Tracker("rcwmil-plus", seed=3, redetect=False).track(frames, gt[0])
+    np.testing.assert_array_equal(a, b)
+
+
+def test_a_multitracker_carries_the_lost_state() -> None:
+    """Targets stepped together by a MultiTracker (two threads) get the boxes of each alone,
+    the lost state and the re-detection included."""
+    seq = make_sequence(100, seed=2, occlusion=False, out_of_view=(50, 20))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    alone = Tracker("rcwmil-plus", seed=2, redetect=True).track(frames, gt[0])
+    other = (20, 20, 40, 40)
+    alone_other = Tracker("rcwmil-plus", seed=3, redetect=True).track(frames, other)
+    multi = wmiltrack.MultiTracker("rcwmil-plus", seed=2, threads=2, redetect=True)
+    a, b = multi.add(frames[0], tuple(gt[0])), multi.add(frames[0], other)
+    boxes = {a: [alone[0]], b: [alone_other[0]]}
+    lost = []
+    for f in frames[1:]:
+        results = multi.update(f)
+        lost.append(not results[a].ok)
+        for i, r in results.items():
+            boxes[i].append(np.asarray(r.box))
+    assert sum(lost[49:69]) >= 16  # the first target was lost while out of view
+    np.testing.assert_array_equal(np.array(boxes[a]), alone)
+    np.testing.assert_array_equal(np.array(boxes[b]), alone_other)
+
+
+def test_a_target_larger_than_the_frame_is_not_searched_for() -> None:
+    """find() on a frame smaller than the box says 'not found' instead of failing."""
+    part = Redetector(wmiltrack.Params.for_variant("rcwmil-plus", redetect=True))
+    rng = np.random.default_rng(0)
+    frame = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    part.start(frame, (10, 10, 30, 20))
+    assert part.find(frame[:15, :20], (30, 20)) is None
+    assert part.find(frame, (30, 20)) == (10, 10, 30, 20)  # the template's own place
+
+
+@pytest.mark.parametrize("bad", [
+    {"lost_drop": 0.0}, {"lost_drop": 1.0}, {"recover_ratio": 0.0}, {"recover_ratio": 1.5},
+    {"recover_decay": 0.0}, {"recover_floor": 1.5}, {"recover_floor": math.nan},
+    {"redetect": 1},
+])
+def test_bad_recovery_settings_are_refused(bad: dict[str, object]) -> None:
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        wmiltrack.Params.for_variant("rcwmil-plus", **bad)
