@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -188,7 +189,12 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
   const int rows = patch.rows, cols = patch.cols;
   const int cr = rows / cell, cc = cols / cell;
   const std::size_t ncell = static_cast<std::size_t>(cr) * cc;
-  std::vector<float> hist(ncell * kBins, 0.0f);
+  // Histograms with a border of cells around them (one before, two after: the outer half
+  // cells' pixels, and those beyond the last whole cell, vote into it; it is dropped), so that
+  // the voting needs no bounds checks.
+  const int hcols = cc + 3;
+  const std::size_t hrow = static_cast<std::size_t>(hcols) * kBins;
+  std::vector<float> bordered(static_cast<std::size_t>(cr + 3) * hrow, 0.0f);
   // Orientation without std::atan2 (otherwise the costliest step): atan of the smaller over
   // the larger of |gx|, |gy| in [0, 1] by a degree-11 odd minimax polynomial (largest error
   // 1.7e-6 rad, checked against numpy in tests/test_correlation.py), then unfolded into the
@@ -196,15 +202,23 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
   constexpr float kA1 = 0.99997726f, kA3 = -0.33262347f, kA5 = 0.19354346f,
                   kA7 = -0.11643287f, kA9 = 0.05265332f, kA11 = -0.01172120f;
   const float bins_per_radian = static_cast<float>(kBins) / (2.0f * kPi);
-  // Cell coordinate of each column's pixel centre (cells' centres at integers).
+  // Cell coordinate of each column's pixel centre (cells' centres at integers), plus one for
+  // the border.
   const float inv_cell = 1.0f / static_cast<float>(cell);
   std::vector<int> col_cell(static_cast<std::size_t>(cols));
   std::vector<float> col_frac(static_cast<std::size_t>(cols));
   for (int c = 0; c < cols; ++c) {
     const float x = (static_cast<float>(c) + 0.5f) * inv_cell - 0.5f;
-    col_cell[c] = static_cast<int>(std::floor(x));
-    col_frac[c] = x - static_cast<float>(col_cell[c]);
+    const int x0 = static_cast<int>(std::floor(x));
+    col_cell[c] = x0 + 1;
+    col_frac[c] = x - static_cast<float>(x0);
   }
+  // Per row: the gradients' magnitude and orientation bin of every pixel (a branch-free loop
+  // the compiler vectorises), then their votes into the row's cells along x, then the row's
+  // votes into the two cell rows around it.
+  std::vector<float> gx(static_cast<std::size_t>(cols)), gy(gx.size()), mag(gx.size()),
+      frac(gx.size()), row_hist(hrow);
+  std::vector<int> bin(gx.size());
   const float* pix = patch.pixels.data();
   for (int r = 0; r < rows; ++r) {
     const float y = (static_cast<float>(r) + 0.5f) * inv_cell - 0.5f;
@@ -213,89 +227,125 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
     const float* up = pix + static_cast<std::size_t>(std::max(r - 1, 0)) * cols;
     const float* mid = pix + static_cast<std::size_t>(r) * cols;
     const float* down = pix + static_cast<std::size_t>(std::min(r + 1, rows - 1)) * cols;
+    for (int c = 0; c < cols; ++c) gy[c] = down[c] - up[c];
+    gx[0] = mid[std::min(1, cols - 1)] - mid[0];
+    for (int c = 1; c + 1 < cols; ++c) gx[c] = mid[c + 1] - mid[c - 1];
+    if (cols > 1) gx[cols - 1] = mid[cols - 1] - mid[cols - 2];
     for (int c = 0; c < cols; ++c) {
-      const float gx = mid[std::min(c + 1, cols - 1)] - mid[std::max(c - 1, 0)];
-      const float gy = down[c] - up[c];
-      const float mag = std::sqrt(gx * gx + gy * gy);
-      if (mag == 0.0f) continue;
-      const float ax = std::abs(gx), ay = std::abs(gy);
-      const float t = std::min(ax, ay) / std::max(ax, ay), t2 = t * t;
+      const float dx = gx[c], dy = gy[c];
+      const float ax = std::abs(dx), ay = std::abs(dy);
+      const float hi = std::max(ax, ay), lo = std::min(ax, ay);
+      // (a flat pixel, hi = 0, gets t = 0 and votes with magnitude 0)
+      const float t = lo / std::max(hi, std::numeric_limits<float>::min()), t2 = t * t;
       float angle = t * (kA1 + t2 * (kA3 + t2 * (kA5 + t2 * (kA7 + t2 * (kA9 + t2 * kA11)))));
-      if (ay > ax) angle = 0.5f * kPi - angle;
-      if (gx < 0.0f) angle = kPi - angle;
-      if (gy < 0.0f) angle = 2.0f * kPi - angle;
+      // Unfolded with arithmetic instead of branches (s * c exactly 0 or c, (1 - 2 s) exactly
+      // +-1), so that the loop vectorises: pi/2 - a above the diagonal, pi - a for gx < 0,
+      // 2 pi - a for gy < 0.
+      const float s1 = static_cast<float>(ay > ax), s2 = static_cast<float>(dx < 0.0f),
+                  s3 = static_cast<float>(dy < 0.0f);
+      angle = s1 * (0.5f * kPi) + (1.0f - 2.0f * s1) * angle;
+      angle = s2 * kPi + (1.0f - 2.0f * s2) * angle;
+      angle = s3 * (2.0f * kPi) + (1.0f - 2.0f * s3) * angle;
       const float o = angle * bins_per_radian;
-      int o0 = static_cast<int>(o);
-      const float fo = o - static_cast<float>(o0);
-      o0 %= kBins;
-      const int o1 = (o0 + 1) % kBins;
-      const int x0 = col_cell[c];
+      const int o0 = static_cast<int>(o);
+      frac[c] = o - static_cast<float>(o0);
+      bin[c] = o0 >= kBins ? o0 - kBins : o0;
+      mag[c] = std::sqrt(dx * dx + dy * dy);
+    }
+    std::fill(row_hist.begin(), row_hist.end(), 0.0f);
+    for (int c = 0; c < cols; ++c) {
+      const int o0 = bin[c], o1 = o0 + 1 == kBins ? 0 : o0 + 1;
+      const float a = mag[c] * (1.0f - frac[c]), b = mag[c] * frac[c];
       const float fx = col_frac[c];
-      for (int dy = 0; dy < 2; ++dy) {
-        const int yy = y0 + dy;
-        if (yy < 0 || yy >= cr) continue;
-        const float wy = mag * (dy ? fy : 1.0f - fy);
-        for (int dx = 0; dx < 2; ++dx) {
-          const int xx = x0 + dx;
-          if (xx < 0 || xx >= cc) continue;
-          const float w = wy * (dx ? fx : 1.0f - fx);
-          float* h = &hist[(static_cast<std::size_t>(yy) * cc + xx) * kBins];
-          h[o0] += w * (1.0f - fo);
-          h[o1] += w * fo;
-        }
-      }
+      float* h0 = &row_hist[static_cast<std::size_t>(col_cell[c]) * kBins];
+      float* h1 = h0 + kBins;
+      h0[o0] += a * (1.0f - fx);
+      h0[o1] += b * (1.0f - fx);
+      h1[o0] += a * fx;
+      h1[o1] += b * fx;
+    }
+    float* top = &bordered[static_cast<std::size_t>(y0 + 1) * hrow];
+    float* bottom = top + hrow;
+    const float wt = 1.0f - fy;
+    for (std::size_t k = 0; k < hrow; ++k) {
+      top[k] += wt * row_hist[k];
+      bottom[k] += fy * row_hist[k];
+    }
+  }
+  // The cells themselves, without the border, bin-major (plane o holds bin o of every cell),
+  // so that the normalisation below runs over cells, several at a time.
+  const std::size_t plane = ncell;
+  std::vector<float> hist(plane * kBins);
+  for (int r = 0; r < cr; ++r) {
+    const float* src = &bordered[static_cast<std::size_t>(r + 1) * hrow + kBins];
+    for (int c = 0; c < cc; ++c) {
+      const std::size_t at = static_cast<std::size_t>(r) * cc + c;
+      for (int o = 0; o < kBins; ++o) hist[o * plane + at] = src[c * kBins + o];
     }
   }
   // Energy of each cell's unsigned histogram.
-  std::vector<float> energy(ncell);
-  for (std::size_t i = 0; i < ncell; ++i) {
-    const float* h = &hist[i * kBins];
-    float e = 0.0f;
-    for (int o = 0; o < kBins / 2; ++o) e += (h[o] + h[o + kBins / 2]) * (h[o] + h[o + kBins / 2]);
-    energy[i] = e;
+  std::vector<float> energy(ncell, 0.0f);
+  for (int o = 0; o < kBins / 2; ++o) {
+    const float* a = &hist[o * plane];
+    const float* b = &hist[(o + kBins / 2) * plane];
+    for (std::size_t i = 0; i < ncell; ++i) energy[i] += (a[i] + b[i]) * (a[i] + b[i]);
   }
   const auto en = [&](int r, int c) {
     return energy[static_cast<std::size_t>(std::clamp(r, 0, cr - 1)) * cc +
                   std::clamp(c, 0, cc - 1)];
   };
+  // The four block normalisers of every cell (its 2 x 2 blocks of cells, edges replicated).
+  constexpr int kDy[4] = {-1, -1, 1, 1};
+  constexpr int kDx[4] = {-1, 1, -1, 1};
+  std::vector<float> norm(4 * plane);
+  for (int r = 0; r < cr; ++r) {
+    for (int c = 0; c < cc; ++c) {
+      const std::size_t at = static_cast<std::size_t>(r) * cc + c;
+      for (int j = 0; j < 4; ++j) {
+        const float sum = en(r, c) + en(r + kDy[j], c) + en(r, c + kDx[j]) +
+                          en(r + kDy[j], c + kDx[j]);
+        norm[j * plane + at] = 1.0f / std::sqrt(sum + 1e-4f);
+      }
+    }
+  }
   FeatureMap out;
   out.channels = kFhogChannels;
   out.rows = cr;
   out.cols = cc;
   out.data.assign(out.plane_size() * kFhogChannels, 0.0f);
-  const std::size_t plane = out.plane_size();
-  constexpr int kDy[4] = {-1, -1, 1, 1};
-  constexpr int kDx[4] = {-1, 1, -1, 1};
-  for (int r = 0; r < cr; ++r) {
-    for (int c = 0; c < cc; ++c) {
-      float n[4];
-      for (int j = 0; j < 4; ++j) {
-        const float s = en(r, c) + en(r + kDy[j], c) + en(r, c + kDx[j]) +
-                        en(r + kDy[j], c + kDx[j]);
-        n[j] = 1.0f / std::sqrt(s + 1e-4f);
-      }
-      const std::size_t at = static_cast<std::size_t>(r) * cc + c;
-      const float* h = &hist[at * kBins];
-      float texture[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-      for (int o = 0; o < kBins; ++o) {
-        float sum = 0.0f;
-        for (int j = 0; j < 4; ++j) {
-          const float v = std::min(h[o] * n[j], 0.2f);
-          sum += v;
-          texture[j] += v;
-        }
-        out.data[o * plane + at] = 0.5f * sum;
-      }
-      for (int o = 0; o < kBins / 2; ++o) {
-        const float u = h[o] + h[o + kBins / 2];
-        float sum = 0.0f;
-        for (int j = 0; j < 4; ++j) sum += std::min(u * n[j], 0.2f);
-        out.data[(kBins + o) * plane + at] = 0.5f * sum;
-      }
-      for (int j = 0; j < 4; ++j) {
-        out.data[(kBins + kBins / 2 + j) * plane + at] = 0.2357f * texture[j];
-      }
+  const float* n0 = &norm[0];
+  const float* n1 = &norm[plane];
+  const float* n2 = &norm[2 * plane];
+  const float* n3 = &norm[3 * plane];
+  // The texture features sum each normaliser's clipped values over the 18 signed bins (in
+  // bin order); they are accumulated in their output planes and scaled at the end.
+  float* texture[4];
+  for (int j = 0; j < 4; ++j) texture[j] = &out.data[(kBins + kBins / 2 + j) * plane];
+  for (int o = 0; o < kBins; ++o) {
+    const float* h = &hist[o * plane];
+    float* dst = &out.data[o * plane];
+    for (std::size_t i = 0; i < plane; ++i) {
+      const float v0 = std::min(h[i] * n0[i], 0.2f), v1 = std::min(h[i] * n1[i], 0.2f);
+      const float v2 = std::min(h[i] * n2[i], 0.2f), v3 = std::min(h[i] * n3[i], 0.2f);
+      dst[i] = 0.5f * (((v0 + v1) + v2) + v3);
+      texture[0][i] += v0;
+      texture[1][i] += v1;
+      texture[2][i] += v2;
+      texture[3][i] += v3;
     }
+  }
+  for (int o = 0; o < kBins / 2; ++o) {
+    const float* a = &hist[o * plane];
+    const float* b = &hist[(o + kBins / 2) * plane];
+    float* dst = &out.data[(kBins + o) * plane];
+    for (std::size_t i = 0; i < plane; ++i) {
+      const float u = a[i] + b[i];
+      dst[i] = 0.5f * (((std::min(u * n0[i], 0.2f) + std::min(u * n1[i], 0.2f)) +
+                        std::min(u * n2[i], 0.2f)) + std::min(u * n3[i], 0.2f));
+    }
+  }
+  for (int j = 0; j < 4; ++j) {
+    for (std::size_t i = 0; i < plane; ++i) texture[j][i] *= 0.2357f;
   }
   return out;
 }

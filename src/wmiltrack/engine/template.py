@@ -95,14 +95,15 @@ class CorrelationTemplate:
         j0 = np.floor(u).astype(np.intp)
         i0 = np.floor(v).astype(np.intp)
         fu, fv = u - j0, v - i0
-        ja, jb = j0 % cols, (j0 + 1) % cols
-        ia, ib = i0 % rows, (i0 + 1) % rows
-        top = r[ia][:, ja] * (1.0 - fu) + r[ia][:, jb] * fu
-        bottom = r[ib][:, ja] * (1.0 - fu) + r[ib][:, jb] * fu
-        value = top * (1.0 - fv)[:, None] + bottom * fv[:, None]
+        # along the columns for every grid row, then along the rows (the grid is far smaller
+        # than the region, so this is the cheap order)
+        across = r[:, j0 % cols] * (1.0 - fu) + r[:, (j0 + 1) % cols] * fu
+        value = (across[i0 % rows] * (1.0 - fv)[:, None]
+                 + across[(i0 + 1) % rows] * fv[:, None])
         if peak > 0:
             value /= peak
-        return np.ascontiguousarray(np.clip(value, 0.0, 1.0)), x0, y0
+        np.clip(value, 0.0, 1.0, out=value)
+        return value, x0, y0
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
         self.filter.learn(frame, box)
