@@ -9,6 +9,9 @@ Usage::
 
     python benchmarks/hidden_target.py
     python benchmarks/hidden_target.py --trackers rcwmil,rcwmil-plus:template_weight=0.2:colour_weight=0.65
+
+The default runs rcwmil, rcwmil-plus and rcwmil-plus with the lost state and re-detection
+(``redetect=True``).
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ def back_after(boxes: np.ndarray, gt: np.ndarray, start: int, limit: int = 30) -
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--trackers", default="rcwmil,rcwmil-plus")
+    ap.add_argument("--trackers", default="rcwmil,rcwmil-plus,rcwmil-plus:redetect=True")
     ap.add_argument("--seeds", default="0,1,2")
     args = ap.parse_args(argv)
     print(f"{'tracker':<40} {'seed':>4} {'lost while hidden':>17} {'back after occl.':>16} "
