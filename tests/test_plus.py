@@ -77,7 +77,7 @@ PAPER = ("rcwmil", "ct", "fct", "mil", "wmil", "osil")
 #: Each rcwmil-plus component's field and the value that switches it off.
 OFF = {"scale_steps": 0, "scale_negatives": 0, "channels": (), "motion": "none",
        "colour_weight": 0.0, "score_colour": 0.0, "score_colour_model": "current",
-       "score_luma": 0.0, "scale_contrast": 0.0, "gray_colour": False}
+       "score_luma": 0.0, "scale_contrast": 0.0, "gray_colour": False, "redetect": False}
 
 
 @pytest.mark.parametrize("variant", PAPER)
@@ -101,6 +101,7 @@ def test_paper_presets_are_the_appearance_model_alone(variant: str) -> None:
     plus.init(frame, (30, 20, 20, 20))
     parts = plus.parts
     assert parts.cues and parts.scale is not None and parts.motion is not None
+    assert parts.recovery is not None
     assert not parts.policy.plain and not parts.appearance_only
 
 
@@ -116,6 +117,7 @@ def demo() -> tuple[list[np.ndarray], np.ndarray]:
     {"scale_steps": 0, "scale_negatives": 0}, {"scale_model": "ratio"}, {"scale_model": "likelihood"},
     {"scale_negatives": 0}, {"scale_negatives": 4}, {"scale_contrast": 0.0}, {"colour_weight": 0.0}, {"colour_weight": 1.0}, {"channels": ("luma", "grad", "opp_rg", "opp_yb")},
     {"channels": ("luma", "grad")}, {"motion": "none"}, {"score_colour": 0.0, "score_luma": 0.0},
+    {"redetect": False},
 ])
 def test_each_component_switches_and_tracks(demo, overrides: dict[str, object]) -> None:
     frames, gt = demo
@@ -321,7 +323,7 @@ def test_score_colour_changes_the_report_only(demo) -> None:
         # the current colour model's contrast alone (the preset also reads the first frame's
         # histograms: see test_first_frame_scores_change_the_report_only)
         t = wmiltrack.Tracker("rcwmil-plus", seed=0, score_colour_model="current", score_luma=0.0,
-                              **kw)
+                              redetect=False, **kw)  # ok: the score alone, no lost state
         t.init(frames[0], gt[0])
         rs = [t.update(f) for f in frames[1:]]
         return (np.array([r.box for r in rs]), np.array([r.score for r in rs]),
@@ -404,7 +406,7 @@ def test_plus_score_falls_when_the_target_is_hidden(case: str) -> None:
     scores = []
     for model, luma in (("first", p.score_luma), ("current", 0.0)):
         t = wmiltrack.Tracker("rcwmil-plus", seed=0, scale_contrast=0.0, colour_relative=None,
-                              score_colour_model=model, score_luma=luma)
+                              score_colour_model=model, score_luma=luma, redetect=False)
         t.init(frames[0], gt[0])
         scores.append(np.array([t.update(f).score for f in frames[1:hidden.stop]]))
     first, adaptive = (s[hidden.start + 1:hidden.stop - 1] for s in scores)
@@ -417,7 +419,8 @@ def test_first_frame_scores_change_the_report_only(demo) -> None:
     def run(fr: list[np.ndarray] | None = None, **kw: object
             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         fr = frames if fr is None else fr
-        t = wmiltrack.Tracker("rcwmil-plus", seed=0, **kw)
+        # ok from the score alone: without the lost state (its own tests: test_recovery.py)
+        t = wmiltrack.Tracker("rcwmil-plus", seed=0, redetect=False, **kw)
         t.init(fr[0], gt[0])
         rs = [t.update(f) for f in fr[1:]]
         return (np.array([r.box for r in rs]), np.array([r.score for r in rs]),

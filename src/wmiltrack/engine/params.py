@@ -174,6 +174,7 @@ VARIANTS: dict[str, Params] = {
         scale_factor=1.03, scale_model="both", scale_mix=3.0, scale_penalty=0.2,
         scale_negatives=2, scale_contrast=20.0, score_colour=0.33, score_colour_model="first",
         score_luma=0.33, colour_learning_rate=0.02, colour_sample=16384, gray_colour=True,
+        redetect=True,
         description="rcwmil plus what fast CPU trackers add: a colour likelihood merged into the search "
         "(0.7, against the classifier's confidence relative to the grid's best candidate; "
         "histograms updated at 0.02; on gray video a likelihood of the pixels' luma), a "
@@ -182,7 +183,10 @@ VARIANTS: dict[str, Params] = {
         "score plus a slow target likelihood, penalised away from the current scale, plus 20 x "
         "the box's colour contrast; boxes 1.03^+-2 off learnt as negatives); the reported score"
         " also counts the box's colour and intensity contrast under the first frame's "
-        "histograms; the histograms read at most about 16 384 pixels of a region.",
+        "histograms; the histograms read at most about 16 384 pixels of a region; a lost state "
+        "(the classifier's confidence and a grey template's match both fall to 0.6 of their "
+        "running means: the last confident box is held with ok False and nothing learns) that "
+        "looks for the target over the whole frame by normalised cross-correlation.",
     ),
 }
 

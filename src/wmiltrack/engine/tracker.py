@@ -286,7 +286,10 @@ class Tracker:
             :func:`~wmiltrack.engine.policy.confidence`; rcwmil-plus also counts the box's
             contrast under the first frame's colour and intensity histograms,
             ``Params.score_colour`` / ``score_luma``) and ``ok`` (score >= the variant's
-            ``lost_threshold``; False suggests the target is lost or hidden).
+            ``lost_threshold``; False suggests the target is lost or hidden). With
+            ``redetect`` (rcwmil-plus), a frame in the lost state has score 0, ``ok``
+            False and the last confident box (see
+            :class:`~wmiltrack.engine.settings.RecoverySettings`).
         """
         self._require_init()
         img = as_frame(frame)
@@ -397,7 +400,7 @@ class Tracker:
         score = parts.policy.score(conf, img, self._box)
         if parts.recovery is not None and parts.recovery.judge(conf, img, self._box):
             self._hold(previous)  # the target is lost from this frame on
-            return score
+            return 0.0
         yield from self._learn_all(img, score)
         if parts.motion is not None:
             parts.motion.follow(previous, self._box, parts.policy.tracked(conf))
