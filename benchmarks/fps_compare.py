@@ -6,6 +6,7 @@ Usage::
     python benchmarks/fps_compare.py --quick         # 2 x 2, fewer frames, < 1 min
     python benchmarks/fps_compare.py --gray          # the same on one-channel gray frames
     PATH/TO/contrib-venv/bin/python benchmarks/fps_compare.py   # all 7 OpenCV trackers
+    python benchmarks/fps_compare.py --otb           # real sequences: 4 x their first 120 frames
 
 For each frame size (320x240, 640x480, 1280x720) and target size (32, 64, 128 px) a synthetic
 sequence is generated (``wmiltrack.data.synthetic.make_sequence``) and decoded into memory; then
@@ -22,6 +23,12 @@ IoU with the ground truth on those frames (frames without a box hold the last bo
 look fast.  A second table divides the FPS by TrackerMIL's on the same frames.  Trackers the
 installed ``cv2`` lacks are skipped with a note (run the script with the Python of a venv that
 has ``opencv-contrib-python-headless`` and wmiltrack installed to get all seven).
+
+``--otb [ROOT]`` runs on real sequences instead (ROOT: the shared OTB-layout folder, default
+``$WMILTRACK_OTB`` or ``../shared/data/otb``): the first ``--frames`` frames (default 120) of each
+of ``--sequences`` (default Coke, David, MotorRolling, Skiing: 640x480, 320x240 and two 640x360
+clips, boxes from 26 to 125 px), decoded in advance, the same way; the last column, "all",
+is the frames of every sequence over the update time of every sequence (each at its median).
 """
 
 from __future__ import annotations
@@ -96,6 +103,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="run wmiltrack's vectorised kernels in their baseline (SSE2) copy even where the CPU "
         "has AVX2 (the boxes are the same; this measures what AVX2 buys)",
     )
+    ap.add_argument(
+        "--otb", nargs="?", const="", default=None, metavar="ROOT",
+        help="real OTB-layout sequences instead of generated ones (ROOT: default "
+        "$WMILTRACK_OTB or ../shared/data/otb)",
+    )
+    ap.add_argument(
+        "--sequences", default="Coke,David,MotorRolling,Skiing",
+        help="with --otb: comma-separated sequence names (default %(default)s)",
+    )
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
     args = ap.parse_args(argv)
     if args.portable:
@@ -115,7 +131,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from wmiltrack.executors import set_cv_threads
 
     set_cv_threads(args.cv_threads)
-    n_frames = args.frames or (30 if args.quick else 60)
+    n_frames = args.frames or (120 if args.otb is not None else 30 if args.quick else 60)
     repeats = args.repeats or (2 if args.quick else 3)
     sizes_txt = args.sizes or ("320x240,640x480" if args.quick else "320x240,640x480,1280x720")
     boxes_txt = args.boxes or ("32,64" if args.quick else "32,64,128")
@@ -146,21 +162,34 @@ def main(argv: Sequence[str] | None = None) -> int:
         "update-only FPS; every tracker timed in this process"
     )
 
-    combos = [(w, h, b) for (w, h) in sizes for b in box_sizes]
+    if args.otb is not None:
+        from wmiltrack.data.sequences import default_otb_root, load_otb_sequence
+
+        root = Path(args.otb) if args.otb else default_otb_root()
+        names = [n.strip() for n in args.sequences.split(",") if n.strip()]
+        missing = [n for n in names if not (root / n).is_dir()]
+        if missing:
+            ap.error(f"--otb: no sequence {', '.join(missing)} under {root}")
+        clips = [(n, load_otb_sequence(root / n)) for n in names]
+    else:
+        clips = [
+            (f"{w}x{h}/{b}",
+             make_sequence(n_frames, size=(h, w), target_size=(b, b), seed=1,
+                           name=f"synthetic-{w}x{h}/{b}"))
+            for (w, h) in sizes for b in box_sizes
+        ]
     fps: dict[str, dict[str, float]] = {t: {} for t in trackers}
     ious: dict[str, dict[str, float]] = {t: {} for t in trackers}
     runs: dict[str, dict[str, list[float]]] = {t: {} for t in trackers}
+    lengths: dict[str, int] = {}
     t_start = time.perf_counter()
-    for w, h, b in combos:
-        key = f"{w}x{h}/{b}"
-        seq = make_sequence(
-            n_frames, size=(h, w), target_size=(b, b), seed=1, name=f"synthetic-{key}"
-        )
-        frames = seq.load()
+    for key, seq in clips:
+        frames = seq.load()[:n_frames]
+        lengths[key] = len(frames)
         if args.gray:
             frames = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
         assert seq.groundtruth is not None
-        gt = np.asarray(seq.groundtruth, dtype=np.float64)
+        gt = np.asarray(seq.groundtruth, dtype=np.float64)[: len(frames)]
         per: dict[str, list[float]] = {t: [] for t in trackers}
         for r in range(repeats):
             for t in trackers:
@@ -175,11 +204,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             runs[t][key] = per[t]
         print(f"  {key}: done ({time.perf_counter() - t_start:.0f} s)", file=sys.stderr)
 
-    keys = [f"{w}x{h}/{b}" for w, h, b in combos]
+    keys = [key for key, _ in clips]
+    if args.otb is not None:  # every sequence's frames over every sequence's update time
+        frames_total = sum(lengths[k] - 1 for k in keys)
+        for t in trackers:
+            secs = [(lengths[k] - 1) / fps[t][k] for k in keys]
+            fps[t]["all"] = frames_total / sum(secs) if all(x > 0 for x in secs) else math.nan
+            ious[t]["all"] = float(np.mean([ious[t][k] for k in keys]))
+        keys.append("all")
     head = "| Tracker | " + " | ".join(keys) + " |"
     rule = "|---|" + "---:|" * len(keys)
     print("\nUpdate-only FPS (median of runs) and, in brackets, mean IoU on the same frames,")
-    print("by frame size / box size:\n")
+    print("by sequence:\n" if args.otb is not None else "by frame size / box size:\n")
     print(head)
     print(rule)
     for t in trackers:

@@ -104,6 +104,33 @@ def test_fps_compare_tiny() -> None:
     assert "| opencv:MIL | 1.0 |" in r.stdout
 
 
+def test_fps_compare_on_real_layout_sequences(tmp_path: Path) -> None:
+    """--otb: one column per sequence (its first --frames frames) and "all", the frames of
+    every sequence over their update time; a missing sequence is a usage error."""
+    from wmiltrack.data.synthetic import make_sequence
+
+    for name, seed in (("SynA", 3), ("SynB", 4)):
+        seq = make_sequence(10, size=(96, 128), target_size=(24, 20), seed=seed, occlusion=False)
+        d = tmp_path / name / "img"
+        d.mkdir(parents=True)
+        for i, f in enumerate(seq.load()):
+            assert cv2.imwrite(str(d / f"{i + 1:04d}.jpg"), f)
+        rows = np.asarray(seq.groundtruth)
+        (tmp_path / name / "groundtruth_rect.txt").write_text(
+            "\n".join(",".join(repr(float(v)) for v in row) for row in rows) + "\n")
+    args = [str(BENCH / "fps_compare.py"), "--otb", str(tmp_path), "--sequences", "SynA,SynB",
+            "--frames", "6", "--repeats", "1", "--trackers", "rcwmil"]
+    r = _run(args)
+    assert r.returncode == 0, r.stderr
+    assert "| Tracker | SynA | SynB | all |" in r.stdout and "by sequence" in r.stdout
+    row = re.search(r"^\| rcwmil \| (\d+) \(.*\) \| (\d+) \(.*\) \| (\d+) \(.*\) \|$", r.stdout, re.M)
+    assert row is not None, r.stdout
+    a, b, both = (int(v) for v in row.groups())
+    assert min(a, b) <= both <= max(a, b)  # 5 frames each: "all" lies between the two
+    r = _run(args[:4] + ["SynA,Nope"] + args[5:])
+    assert r.returncode == 2 and "no sequence Nope" in r.stderr
+
+
 def test_fps_compare_refuses_an_unknown_tracker() -> None:
     r = _run([str(BENCH / "fps_compare.py"), "--quick", "--trackers", "rcwmil,rcwmil-pls"])
     assert r.returncode == 2 and "unknown tracker(s): rcwmil-pls" in r.stderr
