@@ -32,6 +32,9 @@ __all__ = ["Redetector"]
 
 #: Weight of the old value in the running means (confidence, template match).
 _MEMORY = 0.9
+#: Tracked frames before the first judgement: the first frames' confidence is inflated (the
+#: classifier has just been trained on the first box) and their running mean not yet formed.
+_WARMUP = 10
 #: Weight of each tracked frame's patch in the grey template.
 _TEMPLATE_RATE = 0.05
 #: The template holds at most this many pixels (the box's aspect): a larger target is matched
@@ -76,6 +79,7 @@ class Redetector:
         self.reference: float | None = None
         self.match: float | None = None
         self.frames_lost = 0
+        self.seen = 0  # tracked frames judged since the start or the last re-detection
         self.last = math.nan
         self.template: np.ndarray | None = None
 
@@ -85,6 +89,7 @@ class Redetector:
         self.reference = None
         self.match = None
         self.frames_lost = 0
+        self.seen = 0
         self.last = math.nan
         self.template = None
         self.learn(frame, box)
@@ -125,7 +130,7 @@ class Redetector:
         template fell below ``lost_drop`` times their running means (a target that changes
         its look keeps one of them; one that is hidden or gone loses both)."""
         drop, ref = self.settings.lost_drop, self.reference
-        if ref is None or conf >= drop * ref:  # NaN: dropped
+        if ref is None or self.seen < _WARMUP or conf >= drop * ref:  # NaN: dropped
             return False
         patch = self._patch(frame, box)
         if patch is None or self.template is None or self.match is None:
@@ -142,6 +147,7 @@ class Redetector:
             return True
         ref = self.reference
         self.reference = conf if ref is None else _MEMORY * ref + (1.0 - _MEMORY) * conf
+        self.seen += 1
         return False
 
     def back(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
@@ -193,6 +199,7 @@ class Redetector:
         self.lost = False
         self.frames_lost = 0
         self.reference = None  # the classifier may have fallen behind the target's look
+        self.seen = 0
         bx = min(max(round(x / sx), 0), fw - w)
         by = min(max(round(y / sy), 0), fh - h)
         return int(bx), int(by), w, h
