@@ -112,3 +112,42 @@ def test_a_target_larger_than_the_frame_is_not_searched_for() -> None:
 def test_bad_recovery_settings_are_refused(bad: dict[str, object]) -> None:
     with pytest.raises(ValueError, match=next(iter(bad))):
         wmiltrack.Params.for_variant("rcwmil-plus", **bad)
+
+
+class _Witness:
+    """A cue with no say in the search (weight 0) whose own confidence is fixed."""
+
+    def __init__(self, confidence: float) -> None:
+        self.weight = 0.0
+        self.confidence = confidence
+
+    def start(self, frame: np.ndarray, box: tuple[int, int, int, int]) -> None:
+        pass
+
+    def table(self, frame: np.ndarray, region: tuple[int, int, int, int]):  # type: ignore[no-untyped-def]
+        x0, y0 = max(region[0], 0), max(region[1], 0)
+        x1, y1 = min(region[2], frame.shape[1]), min(region[3], frame.shape[0])
+        return np.zeros((y1 - y0 + 1, x1 - x0 + 1)), x0, y0
+
+    def learn(self, frame: np.ndarray, box: tuple[int, int, int, int]) -> None:
+        pass
+
+
+def test_a_cue_that_still_sees_the_target_keeps_the_lost_state_off() -> None:
+    """A cue's own confidence is one more witness: the lost state needs every witness to
+    fall, so a cue whose confidence stays up keeps the target tracked; one without an opinion
+    (NaN) changes nothing."""
+    seq = make_sequence(100, seed=0, occlusion=False, out_of_view=(60, 30))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+
+    def lost_frames(cue: _Witness) -> int:
+        t = Tracker("rcwmil-plus", seed=0, cues=[cue])
+        t.init(frames[0], tuple(gt[0]))
+        n = 0
+        for f in frames[1:]:
+            t.update(f)
+            n += t.parts.lost
+        return n
+
+    assert lost_frames(_Witness(math.nan)) >= 25
+    assert lost_frames(_Witness(1.0)) == 0

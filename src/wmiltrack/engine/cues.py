@@ -33,10 +33,13 @@ frame position ``(x0, y0)``."""
 class Cue(Protocol):
     """What the tracker asks of a cue.
 
-    Two optional attributes: ``at_centre = True`` makes :meth:`table` return the map itself
+    Three optional attributes: ``at_centre = True`` makes :meth:`table` return the map itself
     (``rows x cols`` over the clipped region), read at each candidate's centre pixel instead of
     averaged over the box (a correlation filter's response is such a map); ``learn_above = s``
-    lets the cue learn only from frames whose reported score is at least ``s``.
+    lets the cue learn only from frames whose reported score is at least ``s``; ``confidence``,
+    a float the cue sets in :meth:`table` saying how well it found the target there (on its own
+    scale, higher is surer, NaN for no opinion), is one more witness the lost state
+    (``redetect``) requires to fall before it calls the target lost.
     """
 
     #: The cue's weight in the merged score, in [0, 1] (the weights of a tracker's cues add

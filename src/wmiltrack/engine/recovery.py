@@ -21,6 +21,7 @@ which runs over a whole frame in a few milliseconds) is indifferent to gain and 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import cv2
 import numpy as np
@@ -79,6 +80,7 @@ class Redetector:
         self.reference: float | None = None
         self.match: float | None = None
         self.frames_lost = 0
+        self.witnesses: list[float] = []  # running means of the cues' own confidences
         self.seen = 0  # tracked frames judged since the start or the last re-detection
         self.last = math.nan
         self.template: np.ndarray | None = None
@@ -89,6 +91,7 @@ class Redetector:
         self.reference = None
         self.match = None
         self.frames_lost = 0
+        self.witnesses = []
         self.seen = 0
         self.last = math.nan
         self.template = None
@@ -125,36 +128,48 @@ class Redetector:
         cv2.addWeighted(self.template, 1.0 - _TEMPLATE_RATE, patch, _TEMPLATE_RATE, 0.0,
                         dst=self.template)
 
-    def _dropped(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
-        """Whether both the classifier's confidence and the box's correlation with the
-        template fell below ``lost_drop`` times their running means (a target that changes
-        its look keeps one of them; one that is hidden or gone loses both)."""
+    def _dropped(self, conf: float, frame: np.ndarray, box: IntBox,
+                 witnesses: Sequence[float]) -> bool:
+        """Whether the classifier's confidence, the box's correlation with the template and
+        every cue's own confidence (``witnesses``, see :class:`~wmiltrack.engine.cues.Cue`)
+        all fell below ``lost_drop`` times their running means (a target that changes its look
+        keeps one of them; one that is hidden or gone loses all)."""
         drop, ref = self.settings.lost_drop, self.reference
         if ref is None or self.seen < _WARMUP or conf >= drop * ref:  # NaN: dropped
             return False
+        for value, mean in zip(witnesses, self.witnesses):
+            if value >= drop * mean:
+                return False
         patch = self._patch(frame, box)
         if patch is None or self.template is None or self.match is None:
             return True
         return not _match(patch, self.template) >= drop * self.match
 
-    def judge(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
+    def judge(self, conf: float, frame: np.ndarray, box: IntBox,
+              witnesses: Sequence[float] = ()) -> bool:
         """Whether a tracked frame whose best box ``box`` has the classifier confidence
-        ``conf`` means the target is lost (then the lost state starts); otherwise ``conf``
-        joins the running mean."""
-        if self._dropped(conf, frame, box):
+        ``conf`` (and the cues' confidences ``witnesses``) means the target is lost (then the
+        lost state starts); otherwise they join their running means."""
+        if self._dropped(conf, frame, box, witnesses):
             self.lost = True
             self.frames_lost = 1
             return True
         ref = self.reference
         self.reference = conf if ref is None else _MEMORY * ref + (1.0 - _MEMORY) * conf
+        if len(self.witnesses) != len(witnesses):
+            self.witnesses = list(witnesses)
+        else:
+            self.witnesses = [_MEMORY * m + (1.0 - _MEMORY) * v
+                              for m, v in zip(self.witnesses, witnesses)]
         self.seen += 1
         return False
 
-    def back(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
+    def back(self, conf: float, frame: np.ndarray, box: IntBox,
+             witnesses: Sequence[float] = ()) -> bool:
         """Whether a lost frame's usual search found the target again at ``box``: its
-        confidence or its correlation with the template is back above ``lost_drop`` times
-        the running mean (then the lost state ends)."""
-        if self._dropped(conf, frame, box):
+        confidence, its correlation with the template or a cue's confidence is back above
+        ``lost_drop`` times the running mean (then the lost state ends)."""
+        if self._dropped(conf, frame, box, witnesses):
             return False
         self.lost = False
         self.frames_lost = 0
@@ -199,6 +214,7 @@ class Redetector:
         self.lost = False
         self.frames_lost = 0
         self.reference = None  # the classifier may have fallen behind the target's look
+        self.witnesses = []
         self.seen = 0
         bx = min(max(round(x / sx), 0), fw - w)
         by = min(max(round(y / sy), 0), fh - h)

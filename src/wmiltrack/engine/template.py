@@ -36,7 +36,9 @@ class CorrelationTemplate:
     Each frame the filter searches a region of the target plus twice its mean side around the
     last box (:meth:`origin`); its response, divided by its peak and clipped to [0, 1], is the
     cue's map over the search region (:meth:`table`). It learns from frames whose reported score
-    is at least ``template_gate`` (:attr:`learn_above`).
+    is at least ``template_gate`` (:attr:`learn_above`). Its ``confidence`` is the last search's
+    response peak: HOG's normalised gradients keep it up under a shadow or a change of light,
+    where the classifier's confidence and a grey template's correlation both fall.
     """
 
     #: The core reads this cue's map at each candidate's centre, not its mean over the box.
@@ -49,6 +51,7 @@ class CorrelationTemplate:
         self.filter = CorrelationFilter(CorrelationSettings(
             template_area=settings.template_area, learning_rate=settings.template_learning_rate))
         self._searched: tuple[tuple[float, float], Location] | None = None
+        self.confidence = math.nan
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
         self.filter.init(frame, box)
@@ -63,6 +66,7 @@ class CorrelationTemplate:
         centre = _centre(box)
         loc = self.filter.locate(frame, centre, (box[2], box[3]))
         self._searched = (centre, loc)
+        self.confidence = loc.peak
         if not self.moves:
             return box
         return centred(box, box[2], box[3], loc.dx, loc.dy)

@@ -398,7 +398,8 @@ class Tracker:
                 self._box, raw = parts.scale.search(model, img, self._box, raw, self._contrast())
         conf = confidence(raw, model.k, self._params.confidence_offset)
         score = parts.policy.score(conf, img, self._box)
-        if parts.recovery is not None and parts.recovery.judge(conf, img, self._box):
+        if parts.recovery is not None and parts.recovery.judge(conf, img, self._box,
+                                                               self._witnesses()):
             self._hold(previous)  # the target is lost from this frame on
             return 0.0
         yield from self._learn_all(img, score)
@@ -441,7 +442,7 @@ class Tracker:
             parts.scale.tried = []
         raw = yield from self._search_from(img, previous, self._stages)
         conf = confidence(raw, model.k, p.confidence_offset)
-        if not recovery.back(conf, img, self._box):
+        if not recovery.back(conf, img, self._box, self._witnesses()):
             found = recovery.find(img, (previous[2], previous[3]))
             if found is None:
                 self._hold(previous)
@@ -454,6 +455,16 @@ class Tracker:
         if parts.motion is not None:  # a jump back is not a velocity
             parts.motion.follow(self._box, self._box, False)
         return score
+
+    def _witnesses(self) -> list[float]:
+        """The cues' own confidences of this frame (those that give one; see
+        :class:`~wmiltrack.engine.cues.Cue`)."""
+        out = []
+        for cue in self._parts.cues:
+            value = getattr(cue, "confidence", math.nan)
+            if math.isfinite(value):
+                out.append(float(value))
+        return out
 
     def _search_from(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]]
                      ) -> Steps:
