@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -67,6 +66,26 @@ void log_sigmoid_and_rest(const double* z, int n, double* out, double* rest, dou
     out[j] = up ? -out[j] : z[j] - out[j];
   }
 }
+
+// sigma(z_j) into sig[j] and 1 - sigma(z_j) into rest[j], j < n, from one e = exp(-|z|):
+// 1 / (1 + e) and e / (1 + e), each exact to a few ulps for any z (no 1 - sigma cancellation).
+void sigmoid_and_rest(const double* z, int n, double* sig, double* rest) {
+  for (int j = 0; j < n; ++j) rest[j] = z[j] >= 0 ? -z[j] : z[j];
+  vmath::exp(rest, rest, n);
+  for (int j = 0; j < n; ++j) {
+    const double e = rest[j];
+    const double big = 1.0 / (1.0 + e);
+    const double small = e * big;
+    const bool up = z[j] >= 0;
+    sig[j] = up ? big : small;
+    rest[j] = up ? small : big;
+  }
+}
+
+// Bag totals (sums of sigma or of w sigma) in [kSafeTotal, kHuge] are normalised directly;
+// others (underflow, NaN, absurd weights) through the log domain.
+constexpr double kSafeTotal = 1e-200;
+constexpr double kHuge = 1e200;
 
 // out[j] = w[j] exp(logv[j]) / sum_m w[m] exp(logv[m]), computed without underflow.
 void normalised(const double* logv, const double* w, double* out, int n) {
@@ -158,37 +177,51 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
                  bool code_gradient, std::int32_t* selected) {
   check_selection(h_pos, h_neg, k);
   const int M = h_pos.rows, P = h_pos.cols, N = h_neg.cols;
-  const std::size_t Mz = static_cast<std::size_t>(M);
   std::vector<double> H_pos(static_cast<std::size_t>(P), 0.0), H_neg(static_cast<std::size_t>(N), 0.0);
   std::vector<double> g(static_cast<std::size_t>(P + N), 0.0);
   std::vector<double> tmp(static_cast<std::size_t>(std::max(P, N))), rest(tmp.size()),
       scratch(tmp.size()), minus_h(static_cast<std::size_t>(N));
   const std::vector<double> ones(static_cast<std::size_t>(std::max(N, 1)), 1.0);
-  std::vector<unsigned char> used(Mz, 0);
-  std::vector<double> score(Mz);
-  // Instance-major copy of the log ratios (row j: every feature's h on instance j, the
-  // positives then the negatives), so that the scoring runs over features: M independent
-  // sums, each adding its terms in the order j = 0, 1, ... as a feature-by-feature loop does
-  // (the same bits), several of them at a time (vmath::weighted_rows).
-  // (Every entry is written below: not cleared first.)
-  const std::unique_ptr<double[]> hT(new double[static_cast<std::size_t>(P + N) * Mz]);
+  std::vector<unsigned char> used(static_cast<std::size_t>(M), 0);
+  // Instance-major float copy of the log ratios (row j: every feature's h on instance j, the
+  // positives then the negatives; rows padded with zeros to a multiple of 64 features), so
+  // that the scoring runs over features: M independent float sums, each adding its terms in
+  // the order j = 0, 1, ..., several features a step (vmath::weighted_rows_f32; the same bits
+  // at any vector width). Float halves the bytes and doubles the lanes; a score only ranks the
+  // features of one round.
+  const int width = (M + 63) / 64 * 64;
+  const std::size_t wz = static_cast<std::size_t>(width);
+  std::vector<float> hT(static_cast<std::size_t>(P + N) * wz, 0.0f), gf(static_cast<std::size_t>(P + N));
+  std::vector<float> score(wz);
   for (int j = 0; j < P; ++j) {
-    for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m)] = h_pos.at(m, j);
+    float* row = hT.data() + static_cast<std::size_t>(j) * wz;
+    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_pos.at(m, j));
   }
   for (int j = 0; j < N; ++j) {
-    for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(P + j) * Mz + static_cast<std::size_t>(m)] = h_neg.at(m, j);
+    float* row = hT.data() + static_cast<std::size_t>(P + j) * wz;
+    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_neg.at(m, j));
   }
   double* g_pos = g.data();
   double* g_neg = g.data() + P;
+  double* sig = tmp.data();
   for (int step = 0; step < k; ++step) {
     // Positive bag: d ln(sum_j w_j sigma_j) / dH_j = w_j sigma_j (1 - sigma_j) / sum w sigma.
+    // sigma and 1 - sigma from one exp(-|H|) each; the log domain (which cannot underflow)
+    // only when sum w sigma is not a normal double far above the smallest.
     if (P > 0) {
-      log_sigmoid_and_rest(H_pos.data(), P, tmp.data(), rest.data(), scratch.data());
-      normalised(tmp.data(), w_pos, g_pos, P);
+      sigmoid_and_rest(H_pos.data(), P, sig, rest.data());
+      double total = 0.0;
+      for (int j = 0; j < P; ++j) total += w_pos[j] * sig[j];
+      if (total >= kSafeTotal && total <= kHuge) {
+        for (int j = 0; j < P; ++j) g_pos[j] = (w_pos[j] * sig[j]) / total;
+      } else {
+        log_sigmoid_and_rest(H_pos.data(), P, tmp.data(), rest.data(), scratch.data());
+        normalised(tmp.data(), w_pos, g_pos, P);
+        vmath::exp(tmp.data(), sig, P);
+      }
       if (code_gradient) {
         // The reference code's w sigma (1 - w sigma) / sum(w sigma) (spec 5, compat).
-        vmath::exp(tmp.data(), tmp.data(), P);
-        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * (1.0 - w_pos[j] * tmp[static_cast<std::size_t>(j)]);
+        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * (1.0 - w_pos[j] * sig[j]);
       } else {
         for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * rest[static_cast<std::size_t>(j)];
       }
@@ -196,16 +229,24 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
     // Negative bag: d ln(sum_j (1 - sigma_j)) / dH_j = -sigma_j (1 - sigma_j) / sum(1 - sigma).
     if (N > 0) {
       for (int j = 0; j < N; ++j) minus_h[static_cast<std::size_t>(j)] = -H_neg[static_cast<std::size_t>(j)];
-      log_sigmoid_and_rest(minus_h.data(), N, tmp.data(), rest.data(), scratch.data());
-      normalised(tmp.data(), ones.data(), g_neg, N);
+      sigmoid_and_rest(minus_h.data(), N, sig, rest.data());
+      double total = 0.0;
+      for (int j = 0; j < N; ++j) total += sig[j];
+      if (total >= kSafeTotal && total <= kHuge) {
+        for (int j = 0; j < N; ++j) g_neg[j] = sig[j] / total;
+      } else {
+        log_sigmoid_and_rest(minus_h.data(), N, tmp.data(), rest.data(), scratch.data());
+        normalised(tmp.data(), ones.data(), g_neg, N);
+      }
       for (int j = 0; j < N; ++j) g_neg[j] = -g_neg[j] * rest[static_cast<std::size_t>(j)];
     }
     // score_m = sum_j h_mj g_j over the positives then the negatives.
-    vmath::weighted_rows(hT.get(), P + N, M, g.data(), score.data());
+    for (int j = 0; j < P + N; ++j) gf[static_cast<std::size_t>(j)] = static_cast<float>(g[static_cast<std::size_t>(j)]);
+    vmath::weighted_rows_f32(hT.data(), P + N, width, gf.data(), score.data());
     int best = -1;
-    double best_score = -std::numeric_limits<double>::infinity();
+    float best_score = -std::numeric_limits<float>::infinity();
     for (int m = 0; m < M; ++m) {
-      const double sc = score[static_cast<std::size_t>(m)];
+      const float sc = score[static_cast<std::size_t>(m)];
       if (used[static_cast<std::size_t>(m)] || std::isnan(sc)) continue;
       if (best < 0 || sc > best_score) {
         best = m;

@@ -52,7 +52,10 @@ constexpr std::uint64_t kTwo52Bits = 0x4330000000000000ULL;
   typedef double D __attribute__((vector_size(8 * N)));               \
   typedef std::uint64_t U __attribute__((vector_size(8 * N)));        \
   typedef std::int64_t M __attribute__((vector_size(8 * N)));         \
+  typedef float F __attribute__((vector_size(8 * N)));                \
   constexpr int kLanes = N;                                           \
+  constexpr int kFloatLanes = 2 * N;                                  \
+  inline F splat_f(float v) { return F{} + v; }                       \
   inline U as_u(D x) { return reinterpret_cast<U>(x); }               \
   inline D as_d(U u) { return reinterpret_cast<D>(u); }               \
   inline D pick(M m, D a, D b) { return m ? a : b; }                  \
@@ -80,7 +83,10 @@ namespace lanes1 {
 typedef double D;
 typedef std::uint64_t U;
 typedef bool M;
+typedef float F;
 constexpr int kLanes = 1;
+constexpr int kFloatLanes = 1;
+inline F splat_f(float v) { return v; }
 inline U as_u(D x) { return bits(x); }
 inline D as_d(U u) { return from_bits(u); }
 inline D pick(M m, D a, D b) { return m ? a : b; }
@@ -103,6 +109,10 @@ namespace detail {
   ATTR void weighted_rows_##SUFFIX(const double* a, int n, int width, const double* g,         \
                                    double* out) {                                              \
     NS::weighted_rows_impl(a, n, width, g, out);                                               \
+  }                                                                                            \
+  ATTR void weighted_rows_f32_##SUFFIX(const float* a, int n, int width, const float* g,       \
+                                       float* out) {                                           \
+    NS::weighted_rows_f32_impl(a, n, width, g, out);                                           \
   }                                                                                            \
   ATTR void exp_##SUFFIX(const double* x, double* y, int n) {                                  \
     NS::apply<NS::exp_lanes>(x, y, n);                                                         \
@@ -173,6 +183,13 @@ void weighted_rows(const double* a, int n, int width, const double* g, double* o
   if (avx2()) return detail::weighted_rows_avx2(a, n, width, g, out);
 #endif
   detail::weighted_rows_base(a, n, width, g, out);
+}
+
+void weighted_rows_f32(const float* a, int n, int width, const float* g, float* out) {
+#ifdef WMILTRACK_AVX2_COPIES
+  if (avx2()) return detail::weighted_rows_f32_avx2(a, n, width, g, out);
+#endif
+  detail::weighted_rows_f32_base(a, n, width, g, out);
 }
 
 const char* isa() {

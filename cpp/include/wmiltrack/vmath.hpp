@@ -51,6 +51,9 @@ void log1p(const double* x, double* y, int n);
 // j = 0, 1, ..., n - 1 from 0.0 (so the bits are those of a plain loop over j), several m at a
 // time. The weighted-MIL selection scores every feature with this in each round.
 void weighted_rows(const double* a, int n, int width, const double* g, double* out);
+// The same in float (products and sums in float, each sum in the order j = 0, 1, ...): twice
+// the values per instruction and half the bytes; the weighted-MIL selection's scores.
+void weighted_rows_f32(const float* a, int n, int width, const float* g, float* out);
 
 // One weak classifier's guarded Gaussian log ratio (scoring.hpp's WeakGaussians, which owns the
 // formula): l_c(x) = lb_c - (x - mu_c)^2 a_c and
