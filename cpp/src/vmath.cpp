@@ -53,6 +53,10 @@ constexpr std::uint64_t kTwo52Bits = 0x4330000000000000ULL;
   typedef std::uint64_t U __attribute__((vector_size(8 * N)));        \
   typedef std::int64_t M __attribute__((vector_size(8 * N)));         \
   typedef float F __attribute__((vector_size(8 * N)));                \
+  typedef std::int32_t I __attribute__((vector_size(8 * N)));         \
+  inline I as_i(F x) { return reinterpret_cast<I>(x); }               \
+  inline F as_f(I u) { return reinterpret_cast<F>(u); }               \
+  inline F to_f(I u) { return __builtin_convertvector(u, F); }        \
   constexpr int kLanes = N;                                           \
   constexpr int kFloatLanes = 2 * N;                                  \
   inline F splat_f(float v) { return F{} + v; }                       \
@@ -84,6 +88,18 @@ typedef double D;
 typedef std::uint64_t U;
 typedef bool M;
 typedef float F;
+typedef std::int32_t I;
+inline I as_i(F x) {
+  I u;
+  std::memcpy(&u, &x, sizeof u);
+  return u;
+}
+inline F as_f(I u) {
+  F x;
+  std::memcpy(&x, &u, sizeof x);
+  return x;
+}
+inline F to_f(I u) { return static_cast<F>(u); }
 constexpr int kLanes = 1;
 constexpr int kFloatLanes = 1;
 inline F splat_f(float v) { return v; }
