@@ -140,7 +140,14 @@ def test_log_ratio_matches_the_guarded_reference_formula(guard: float) -> None:
     s1, s0 = rng.uniform(0.5, 40, k), rng.uniform(0.5, 40, k)
     v = rng.normal(0, 120, (k, n))  # includes values far in the tails, where the guard saturates
     ref = log_ratio_ref(v, mu1, s1, mu0, s0, guard)
-    np.testing.assert_allclose(_core.log_ratio(v, mu1, s1, mu0, s0, guard), ref, rtol=1e-9, atol=1e-9)
+    got = _core.log_ratio(v, mu1, s1, mu0, s0, guard)
+    if guard >= 1e-15:
+        # MILTrack's guard: the guarded ratio's exp and log run in float (issue 28), |h| <= ~12
+        # here, so within a few float ulps of 12 (and the worst case is measured, not assumed).
+        np.testing.assert_allclose(got, ref, rtol=0, atol=4e-6)
+        assert np.abs(got - ref).max() > 1e-9, "the float path was expected here"
+    else:
+        np.testing.assert_allclose(got, ref, rtol=1e-9, atol=1e-9)
 
 
 def grid_scene(seed: int) -> tuple[np.random.Generator, np.ndarray, tuple[np.ndarray, ...],

@@ -1,5 +1,7 @@
 #include "wmiltrack/scoring.hpp"
 
+#include "grid_runs.hpp"
+
 #include "wmiltrack/learning.hpp"
 #include "wmiltrack/vmath.hpp"
 
@@ -22,17 +24,7 @@
 
 namespace wmiltrack {
 
-// A run of candidates: consecutive grid columns of one grid row, equally spaced in the table.
-struct GridRun {
-  int first;            // index of the run's first candidate
-  int count;            // candidates in the run
-  std::ptrdiff_t base;  // table offset of the first candidate's top-left corner
-};
-
 namespace {
-// Largest rectangle whose sum of 0..255 values is below 2^31: the vector loops convert the
-// 32-bit sums to doubles as signed integers.
-constexpr std::int64_t kMaxSignedRectArea = 2147483647LL / 255;
 
 // values[run.first + t] = feature k at candidate t of each run, one candidate at a time (any
 // step; t * step apart in the table).
@@ -52,17 +44,12 @@ namespace detail {
 // values[run.first + t] = the feature with rectangles c[0..n) at candidate t of each run, the
 // candidates of a run consecutive in `table`, 4 a step (SSE2). A run's last step overlaps the
 // one before when the count is not a multiple of 4: it recomputes the same values.
-void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
-                      const CompiledFeatures::Corners* c, int n, double* values) {
-  for (const GridRun& run : runs) {
-    const IntegralImage::Entry* b0 = table + run.base;
-    double* o = values + run.first;
-    if (run.count < 4) {
-      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
-      continue;
-    }
+// One run of at least 4 candidates (inlined into both copies below).
+inline __attribute__((always_inline)) void run_sse2(const IntegralImage::Entry* b0, int count,
+                                                    const CompiledFeatures::Corners* c, int n,
+                                                    double* o) {
     for (int t = 0;; t += 4) {
-      t = std::min(t, run.count - 4);
+      t = std::min(t, count - 4);
       const IntegralImage::Entry* b = b0 + t;
       __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
       for (int r = 0; r < n; ++r) {
@@ -77,8 +64,20 @@ void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridR
       }
       _mm_storeu_pd(o + t, lo);
       _mm_storeu_pd(o + t + 2, hi);
-      if (t == run.count - 4) break;
+      if (t == count - 4) break;
     }
+}
+
+void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                      const CompiledFeatures::Corners* c, int n, double* values) {
+  for (const GridRun& run : runs) {
+    const IntegralImage::Entry* b0 = table + run.base;
+    double* o = values + run.first;
+    if (run.count < 4) {
+      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
+      continue;
+    }
+    run_sse2(b0, run.count, c, n, o);
   }
 }
 
@@ -92,7 +91,11 @@ __attribute__((target("avx2"))) void grid_values_avx2(const IntegralImage::Entry
     const IntegralImage::Entry* b0 = table + run.base;
     double* o = values + run.first;
     if (run.count < 8) {
-      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
+      if (run.count >= 4) {
+        run_sse2(b0, run.count, c, n, o);
+      } else {
+        for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
+      }
       continue;
     }
     for (int t = 0;; t += 8) {
@@ -115,6 +118,7 @@ __attribute__((target("avx2"))) void grid_values_avx2(const IntegralImage::Entry
     }
   }
 }
+
 }  // namespace detail
 
 namespace {
@@ -184,6 +188,27 @@ GridTable decimate(const IntegralImage& ii, const Rect& e, int step, const std::
 }
 }  // namespace
 #endif
+
+void run_values(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                const CompiledFeatures::Corners* c, int n, bool vector, double* values) {
+#ifdef WMILTRACK_GRID_SIMD
+  if (vector && vmath::avx2()) {
+    detail::grid_values_avx2(table, runs, c, n, values);
+    return;
+  }
+  if (vector) {
+    detail::grid_values_sse2(table, runs, c, n, values);
+    return;
+  }
+#else
+  (void)vector;
+#endif
+  for (const GridRun& run : runs) {
+    for (int t = 0; t < run.count; ++t) {
+      values[run.first + t] = CompiledFeatures::value_of(table + run.base + t, c, n);
+    }
+  }
+}
 
 namespace {
 constexpr double kEps = 1e-30;
