@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -210,6 +211,172 @@ void run_values(const IntegralImage::Entry* table, const std::vector<GridRun>& r
   }
 }
 
+// ---- The exhaustive search's fused score (issue 28): candidates outer, features inner ------
+//
+// Where a feature's log ratio takes the exact path (both log densities above the cut, the case
+// for nearly every candidate with CT's guard of 1e-30), the score of a candidate is summed here
+// in one pass: each feature's value in float from the exact 32-bit rectangle sums, then
+// h = C + d (B + A d) with d = value - mu_1 in float, added to the candidate's total in double.
+// Values outside the exact range take the double path of WeakGaussians::log_ratio (the value
+// in double, as CompiledFeatures::value_of gives it). Each candidate's total depends on its own
+// rectangle sums alone, computed by the same float and double operations in the same order
+// whether it is one of 8 lanes (the vector body, compiled for AVX2 and for the SSE2 baseline)
+// or alone (runs of fewer than 8 candidates, and builds without the vector extension): the
+// same bits on every path.
+struct FusedFeature {
+  int r0, r1;                       // its rectangles
+  float mu1, qa, qb, qc, lo, hi;    // LogRatioTerms' quadratic, in float
+  vmath::LogRatioTerms terms;       // the double path
+};
+
+namespace {
+
+float to_float_sum(const IntegralImage::Entry* b, const CompiledFeatures::Corners& c) {
+  const std::uint32_t s = (b[c.br] - b[c.tr]) - (b[c.bl] - b[c.tl]);
+  return static_cast<float>(static_cast<std::int32_t>(s));
+}
+
+// One candidate (top-left table entry b): its total over the features.
+double fused_one(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
+                 const float* wf, const std::vector<FusedFeature>& ff) {
+  double total = 0.0;
+  for (const FusedFeature& f : ff) {
+    float v = 0.0f;
+    for (int r = f.r0; r < f.r1; ++r) v = v + wf[r] * to_float_sum(b, c[r]);
+    const float d = v - f.mu1;
+    double h;
+    if (d > f.lo && d < f.hi) {
+      h = static_cast<double>(f.qc + d * (f.qb + f.qa * d));
+    } else {
+      const double x = CompiledFeatures::value_of(b, c + f.r0, f.r1 - f.r0);
+      vmath::log_ratio(f.terms, &x, 1, &h, false);
+    }
+    total = total + h;
+  }
+  return total;
+}
+
+}  // namespace
+
+#ifdef WMILTRACK_GRID_SIMD
+namespace {
+typedef float V8f __attribute__((vector_size(32)));
+typedef std::int32_t V8i __attribute__((vector_size(32)));
+typedef double V4d __attribute__((vector_size(32)));
+
+// 8 G candidates of a run from table entry b (consecutive): their totals into out[0..8 G), G
+// groups of 8 side by side.
+template <int G>
+WMILTRACK_KERNEL void fused_groups(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
+                                   const float* wf, const std::vector<FusedFeature>& ff,
+                                   double* out) {
+  V4d acc[2 * G];
+  for (V4d& a : acc) a = V4d{} + 0.0;
+  for (const FusedFeature& f : ff) {
+    V8f v[G];
+    for (int g = 0; g < G; ++g) v[g] = V8f{} + 0.0f;
+    for (int r = f.r0; r < f.r1; ++r) {
+      const CompiledFeatures::Corners& q = c[r];
+      for (int g = 0; g < G; ++g) {
+        V8i br, tr, bl, tl;
+        std::memcpy(&br, b + 8 * g + q.br, sizeof br);
+        std::memcpy(&tr, b + 8 * g + q.tr, sizeof tr);
+        std::memcpy(&bl, b + 8 * g + q.bl, sizeof bl);
+        std::memcpy(&tl, b + 8 * g + q.tl, sizeof tl);
+        v[g] = v[g] + wf[r] * __builtin_convertvector((br - tr) - (bl - tl), V8f);
+      }
+    }
+    for (int g = 0; g < G; ++g) {
+      const V8f d = v[g] - f.mu1;
+      const V8f h = f.qc + d * (f.qb + f.qa * d);
+      const auto exact = (d > f.lo) & (d < f.hi);
+      std::uint64_t m[4];
+      std::memcpy(m, &exact, sizeof m);
+      const bool all = ((m[0] & m[1]) & (m[2] & m[3])) == ~std::uint64_t{0};
+      typedef float V4f __attribute__((vector_size(16)));
+      V4f h0, h1;
+      std::memcpy(&h0, &h, sizeof h0);
+      std::memcpy(&h1, reinterpret_cast<const char*>(&h) + sizeof h0, sizeof h1);
+      V4d hd0 = __builtin_convertvector(h0, V4d), hd1 = __builtin_convertvector(h1, V4d);
+      if (!all) {
+        // The double path for the lanes outside the exact range.
+        double hd[8];
+        std::memcpy(hd, &hd0, sizeof hd0);
+        std::memcpy(hd + 4, &hd1, sizeof hd1);
+        for (int q = 0; q < 8; ++q) {
+          if (exact[q] != 0) continue;
+          const double x = CompiledFeatures::value_of(b + 8 * g + q, c + f.r0, f.r1 - f.r0);
+          vmath::log_ratio(f.terms, &x, 1, hd + q, false);
+        }
+        std::memcpy(&hd0, hd, sizeof hd0);
+        std::memcpy(&hd1, hd + 4, sizeof hd1);
+      }
+      acc[2 * g] = acc[2 * g] + hd0;
+      acc[2 * g + 1] = acc[2 * g + 1] + hd1;
+    }
+  }
+  std::memcpy(out, acc, sizeof acc);
+}
+
+WMILTRACK_KERNEL void fused_body(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                                 const CompiledFeatures::Corners* c, const float* wf,
+                                 const std::vector<FusedFeature>& ff, double* total) {
+  for (const GridRun& run : runs) {
+    const IntegralImage::Entry* b0 = table + run.base;
+    double* o = total + run.first;
+    if (run.count < 8) {
+      for (int t = 0; t < run.count; ++t) o[t] = fused_one(b0 + t, c, wf, ff);
+      continue;
+    }
+    // 8 a step, the last step ending the run (recomputing some: the same values). (Two groups
+    // side by side were measured slower: register pressure.)
+    for (int t = 0;; t += 8) {
+      t = std::min(t, run.count - 8);
+      fused_groups<1>(b0 + t, c, wf, ff, o + t);
+      if (t == run.count - 8) break;
+    }
+  }
+}
+}  // namespace
+
+namespace detail {
+void fused_scores_base(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                       const CompiledFeatures::Corners* c, const float* wf,
+                       const std::vector<FusedFeature>& ff, double* total) {
+  fused_body(table, runs, c, wf, ff, total);
+}
+__attribute__((target("avx2"))) void fused_scores_avx2(
+    const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+    const CompiledFeatures::Corners* c, const float* wf, const std::vector<FusedFeature>& ff,
+    double* total) {
+  fused_body(table, runs, c, wf, ff, total);
+}
+}  // namespace detail
+#endif
+
+namespace {
+// total[run.first + t] for every candidate of the runs (see above).
+// (`step`: the table distance of a run's consecutive candidates, 1 on the SIMD builds' tables.)
+void fused_scores(const IntegralImage::Entry* table, const std::vector<GridRun>& runs, int step,
+                  const CompiledFeatures::Corners* c, const float* wf,
+                  const std::vector<FusedFeature>& ff, double* total) {
+#ifdef WMILTRACK_GRID_SIMD
+  (void)step;
+  if (vmath::avx2()) {
+    detail::fused_scores_avx2(table, runs, c, wf, ff, total);
+  } else {
+    detail::fused_scores_base(table, runs, c, wf, ff, total);
+  }
+#else
+  for (const GridRun& run : runs) {
+    for (int t = 0; t < run.count; ++t) {
+      total[run.first + t] = fused_one(table + run.base + static_cast<std::ptrdiff_t>(t) * step, c, wf, ff);
+    }
+  }
+#endif
+}
+}  // namespace
+
 namespace {
 constexpr double kEps = 1e-30;
 }  // namespace
@@ -241,11 +408,14 @@ WeakGaussians::WeakGaussians(const double* mu1, const double* sigma1, const doub
 // Each value chooses the exact or the guarded formula on its own (vmath::log_ratio), so that a
 // value depends on its own inputs only, never on the other samples of the batch or the buffer's
 // alignment. MILTrack's guard (1e-5) sends every value down the guarded path.
+vmath::LogRatioTerms WeakGaussians::terms(int k) const {
+  return vmath::make_log_ratio_terms(mu1_[k], a1_[k], lb1_[k], mu0_[k], a0_[k], lb0_[k], guard_,
+                                     fast_cut_);
+}
+
 void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool accumulate,
                               double* /*scratch*/) const {
-  const vmath::LogRatioTerms t{mu1_[k], a1_[k], lb1_[k], mu0_[k], a0_[k], lb0_[k], guard_,
-                               fast_cut_};
-  vmath::log_ratio(t, x, n, out, accumulate);
+  vmath::log_ratio(terms(k), x, n, out, accumulate);
 }
 
 namespace {
@@ -372,30 +542,66 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
   // candidates of a run a step: consecutive table entries), then the log ratios.
   std::vector<double> values(static_cast<std::size_t>(c)), total(static_cast<std::size_t>(c), 0.0);
   const IntegralImage::Entry* table = ii.data();
-#ifdef WMILTRACK_GRID_SIMD
   const bool vector = compiled.max_rect_area() <= kMaxSignedRectArea &&
                       (step == 1 || ii.num_channels() == 1);
+  // The fused float score where the exact path is the rule (not MILTrack's guard, under which
+  // every value takes the guarded path): the same choice on every build.
+  const bool fused = vector && weak.guard() < 1e-15;
+#ifdef WMILTRACK_GRID_SIMD
   const bool wide = vector && vmath::avx2();
   // A grid of step > 1 reads every step-th entry of a row: the vector loops read it from a
   // copy of the table's rows split by column phase (entry j of phase p is column p + j*step),
   // where a run's candidates are consecutive. The entries are copied exactly.
   GridTable grid{table, runs, compiled};
   if (vector && step > 1) grid = decimate(ii, e, step, runs, compiled);
-#endif
-  for (int k = 0; k < compiled.size(); ++k) {
-#ifdef WMILTRACK_GRID_SIMD
-    const int r0 = compiled.first_rect(k), n_rects = compiled.end_rect(k) - r0;
-    if (wide) {
-      detail::grid_values_avx2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
-    } else if (vector) {
-      detail::grid_values_sse2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
-    } else {
-      grid_values_scalar(table, runs, step, compiled, k, values.data());
-    }
+  const IntegralImage::Entry* fused_table = grid.table;
+  const std::vector<GridRun>& fused_runs = grid.runs;
+  const CompiledFeatures::Corners* fused_corners = compiled.num_rects() > 0 ? grid.corners(0) : nullptr;
+  const int fused_step = 1;
 #else
-    grid_values_scalar(table, runs, step, compiled, k, values.data());
+  const IntegralImage::Entry* fused_table = table;
+  const std::vector<GridRun>& fused_runs = runs;
+  const CompiledFeatures::Corners* fused_corners =
+      compiled.num_rects() > 0 ? &compiled.corners(0) : nullptr;
+  const int fused_step = step;
 #endif
-    weak.log_ratio(k, values.data(), c, total.data(), true, nullptr);
+  if (fused) {
+    std::vector<FusedFeature> ff(static_cast<std::size_t>(compiled.size()));
+    std::vector<float> wf(static_cast<std::size_t>(compiled.num_rects()));
+    for (int r = 0; r < compiled.num_rects(); ++r) {
+      wf[static_cast<std::size_t>(r)] = static_cast<float>(compiled.corners(r).weight);
+    }
+    for (int k = 0; k < compiled.size(); ++k) {
+      const vmath::LogRatioTerms t = weak.terms(k);
+      FusedFeature& f = ff[static_cast<std::size_t>(k)];
+      f.r0 = compiled.first_rect(k);
+      f.r1 = compiled.end_rect(k);
+      f.mu1 = static_cast<float>(t.mu1);
+      f.qa = static_cast<float>(t.qa);
+      f.qb = static_cast<float>(t.qb);
+      f.qc = static_cast<float>(t.qc);
+      // The exact range narrowed to floats strictly inside the double one.
+      f.lo = std::nextafter(static_cast<float>(t.lo), std::numeric_limits<float>::infinity());
+      f.hi = std::nextafter(static_cast<float>(t.hi), -std::numeric_limits<float>::infinity());
+      f.terms = t;
+    }
+    fused_scores(fused_table, fused_runs, fused_step, fused_corners, wf.data(), ff, total.data());
+  } else {
+    for (int k = 0; k < compiled.size(); ++k) {
+#ifdef WMILTRACK_GRID_SIMD
+      const int r0 = compiled.first_rect(k), n_rects = compiled.end_rect(k) - r0;
+      if (wide) {
+        detail::grid_values_avx2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
+      } else if (vector) {
+        detail::grid_values_sse2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
+      } else {
+        grid_values_scalar(table, runs, step, compiled, k, values.data());
+      }
+#else
+      grid_values_scalar(table, runs, step, compiled, k, values.data());
+#endif
+      weak.log_ratio(k, values.data(), c, total.data(), true, nullptr);
+    }
   }
 
   int best = -1;

@@ -1,6 +1,7 @@
 #include "wmiltrack/vmath.hpp"
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -156,6 +157,29 @@ namespace {
 std::atomic<bool> g_portable{false};
 
 }  // namespace
+
+LogRatioTerms make_log_ratio_terms(double mu1, double a1, double lb1, double mu0, double a0,
+                                   double lb0, double guard, double cut) {
+  LogRatioTerms t{mu1, a1, lb1, mu0, a0, lb0, guard, cut};
+  const double delta = mu1 - mu0;
+  t.qa = a0 - a1;
+  t.qb = 2.0 * a0 * delta;
+  t.qc = (lb1 - lb0) + a0 * (delta * delta);
+  // l_1 > cut  <=>  |d| < r_1 = sqrt((lb_1 - cut) / a_1); l_0 > cut  <=>  |d + delta| < r_0.
+  const double inf = __builtin_huge_val();
+  t.lo = inf;
+  t.hi = -inf;  // empty: never exact
+  if (lb1 > cut && lb0 > cut) {
+    const double r1 = std::sqrt((lb1 - cut) / a1), r0 = std::sqrt((lb0 - cut) / a0);
+    const double lo = -r1 > -delta - r0 ? -r1 : -delta - r0;
+    const double hi = r1 < -delta + r0 ? r1 : -delta + r0;
+    if (lo < hi) {
+      t.lo = lo;
+      t.hi = hi;
+    }
+  }
+  return t;
+}
 
 bool avx2() {
 #ifdef WMILTRACK_AVX2_COPIES
