@@ -1,5 +1,6 @@
 #include "wmiltrack/scoring.hpp"
 
+#include "fmath.hpp"
 #include "grid_runs.hpp"
 
 #include "wmiltrack/learning.hpp"
@@ -217,8 +218,8 @@ void run_values(const IntegralImage::Entry* table, const std::vector<GridRun>& r
 // for nearly every candidate with CT's guard of 1e-30), the score of a candidate is summed here
 // in one pass: each feature's value in float from the exact 32-bit rectangle sums, then
 // h = C + d (B + A d) with d = value - mu_1 in float, added to the candidate's total in double.
-// Values outside the exact range take the double path of WeakGaussians::log_ratio (the value
-// in double, as CompiledFeatures::value_of gives it). Each candidate's total depends on its own
+// Values outside the exact range take the guarded formula in float, as
+// log(e^l_1 + guard) - log(e^l_0 + guard) (fmath.hpp). Each candidate's total depends on its own
 // rectangle sums alone, computed by the same float and double operations in the same order
 // whether it is one of 8 lanes (the vector body, compiled for AVX2 and for the SSE2 baseline)
 // or alone (runs of fewer than 8 candidates, and builds without the vector extension): the
@@ -226,7 +227,8 @@ void run_values(const IntegralImage::Entry* table, const std::vector<GridRun>& r
 struct FusedFeature {
   int r0, r1;                       // its rectangles
   float mu1, qa, qb, qc, lo, hi;    // LogRatioTerms' quadratic, in float
-  vmath::LogRatioTerms terms;       // the double path
+  float mu0, a1, lb1, a0, lb0;      // and its log densities l_c = lb_c - (x - mu_c)^2 a_c
+  float ln_guard;
 };
 
 namespace {
@@ -236,6 +238,17 @@ float to_float_sum(const IntegralImage::Entry* b, const CompiledFeatures::Corner
   return static_cast<float>(static_cast<std::int32_t>(s));
 }
 
+// The guarded log ratio in float at value v (d = v - mu_1), for floats or vectors of them.
+template <class F, class I>
+inline __attribute__((always_inline)) F guarded_of(F v, F d, const FusedFeature& f) {
+  const F d0 = v - f.mu0;
+  const F l1 = f.lb1 - (d * d) * f.a1;
+  const F l0 = f.lb0 - (d0 * d0) * f.a0;
+  return fmath::log_exp_plus<F, I>(l1, f.ln_guard) - fmath::log_exp_plus<F, I>(l0, f.ln_guard);
+}
+
+float guarded(float v, float d, const FusedFeature& f) { return guarded_of<float, std::int32_t>(v, d, f); }
+
 // One candidate (top-left table entry b): its total over the features.
 double fused_one(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
                  const float* wf, const std::vector<FusedFeature>& ff) {
@@ -244,14 +257,13 @@ double fused_one(const IntegralImage::Entry* b, const CompiledFeatures::Corners*
     float v = 0.0f;
     for (int r = f.r0; r < f.r1; ++r) v = v + wf[r] * to_float_sum(b, c[r]);
     const float d = v - f.mu1;
-    double h;
+    float h;
     if (d > f.lo && d < f.hi) {
-      h = static_cast<double>(f.qc + d * (f.qb + f.qa * d));
+      h = f.qc + d * (f.qb + f.qa * d);
     } else {
-      const double x = CompiledFeatures::value_of(b, c + f.r0, f.r1 - f.r0);
-      vmath::log_ratio(f.terms, &x, 1, &h, false);
+      h = guarded(v, d, f);
     }
-    total = total + h;
+    total = total + static_cast<double>(h);
   }
   return total;
 }
@@ -293,24 +305,13 @@ WMILTRACK_KERNEL void fused_groups(const IntegralImage::Entry* b, const Compiled
       std::uint64_t m[4];
       std::memcpy(m, &exact, sizeof m);
       const bool all = ((m[0] & m[1]) & (m[2] & m[3])) == ~std::uint64_t{0};
+      // Lanes outside the exact range: the guarded formula in float, lane by lane the same.
+      const V8f hf = all ? h : (exact ? h : guarded_of<V8f, V8i>(v[g], d, f));
       typedef float V4f __attribute__((vector_size(16)));
       V4f h0, h1;
-      std::memcpy(&h0, &h, sizeof h0);
-      std::memcpy(&h1, reinterpret_cast<const char*>(&h) + sizeof h0, sizeof h1);
-      V4d hd0 = __builtin_convertvector(h0, V4d), hd1 = __builtin_convertvector(h1, V4d);
-      if (!all) {
-        // The double path for the lanes outside the exact range.
-        double hd[8];
-        std::memcpy(hd, &hd0, sizeof hd0);
-        std::memcpy(hd + 4, &hd1, sizeof hd1);
-        for (int q = 0; q < 8; ++q) {
-          if (exact[q] != 0) continue;
-          const double x = CompiledFeatures::value_of(b + 8 * g + q, c + f.r0, f.r1 - f.r0);
-          vmath::log_ratio(f.terms, &x, 1, hd + q, false);
-        }
-        std::memcpy(&hd0, hd, sizeof hd0);
-        std::memcpy(&hd1, hd + 4, sizeof hd1);
-      }
+      std::memcpy(&h0, &hf, sizeof h0);
+      std::memcpy(&h1, reinterpret_cast<const char*>(&hf) + sizeof h0, sizeof h1);
+      const V4d hd0 = __builtin_convertvector(h0, V4d), hd1 = __builtin_convertvector(h1, V4d);
       acc[2 * g] = acc[2 * g] + hd0;
       acc[2 * g + 1] = acc[2 * g + 1] + hd1;
     }
@@ -583,7 +584,12 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
       // The exact range narrowed to floats strictly inside the double one.
       f.lo = std::nextafter(static_cast<float>(t.lo), std::numeric_limits<float>::infinity());
       f.hi = std::nextafter(static_cast<float>(t.hi), -std::numeric_limits<float>::infinity());
-      f.terms = t;
+      f.mu0 = static_cast<float>(t.mu0);
+      f.a1 = static_cast<float>(t.a1);
+      f.lb1 = static_cast<float>(t.lb1);
+      f.a0 = static_cast<float>(t.a0);
+      f.lb0 = static_cast<float>(t.lb0);
+      f.ln_guard = static_cast<float>(std::log(weak.guard()));
     }
     fused_scores(fused_table, fused_runs, fused_step, fused_corners, wf.data(), ff, total.data());
   } else {
