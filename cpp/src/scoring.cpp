@@ -217,7 +217,7 @@ void run_values(const IntegralImage::Entry* table, const std::vector<GridRun>& r
 // Where a feature's log ratio takes the exact path (both log densities above the cut, the case
 // for nearly every candidate with CT's guard of 1e-30), the score of a candidate is summed here
 // in one pass: each feature's value in float from the exact 32-bit rectangle sums, then
-// h = C + d (B + A d) with d = value - mu_1 in float, added to the candidate's total in double.
+// h = C + d (B + A d) with d = value - centre in float, added to the candidate's total in double.
 // Values outside the exact range take the guarded formula in float, as
 // log(e^l_1 + guard) - log(e^l_0 + guard) (fmath.hpp). Each candidate's total depends on its own
 // rectangle sums alone, computed by the same float and double operations in the same order
@@ -226,8 +226,8 @@ void run_values(const IntegralImage::Entry* table, const std::vector<GridRun>& r
 // same bits on every path.
 struct FusedFeature {
   int r0, r1;                       // its rectangles
-  float mu1, qa, qb, qc, lo, hi;    // LogRatioTerms' quadratic, in float
-  float mu0, a1, lb1, a0, lb0;      // and its log densities l_c = lb_c - (x - mu_c)^2 a_c
+  float centre, qa, qb, qc, lo, hi;  // LogRatioTerms' quadratic, in float
+  float mu1, mu0, a1, lb1, a0, lb0;  // and its log densities l_c = lb_c - (x - mu_c)^2 a_c
   float ln_guard;
 };
 
@@ -238,16 +238,17 @@ float to_float_sum(const IntegralImage::Entry* b, const CompiledFeatures::Corner
   return static_cast<float>(static_cast<std::int32_t>(s));
 }
 
-// The guarded log ratio in float at value v (d = v - mu_1), for floats or vectors of them.
+// The guarded log ratio in float at value v, for floats or vectors of them.
 template <class F, class I>
-inline __attribute__((always_inline)) F guarded_of(F v, F d, const FusedFeature& f) {
+inline __attribute__((always_inline)) F guarded_of(F v, const FusedFeature& f) {
+  const F d = v - f.mu1;
   const F d0 = v - f.mu0;
   const F l1 = f.lb1 - (d * d) * f.a1;
   const F l0 = f.lb0 - (d0 * d0) * f.a0;
   return fmath::log_exp_plus<F, I>(l1, f.ln_guard) - fmath::log_exp_plus<F, I>(l0, f.ln_guard);
 }
 
-float guarded(float v, float d, const FusedFeature& f) { return guarded_of<float, std::int32_t>(v, d, f); }
+float guarded(float v, const FusedFeature& f) { return guarded_of<float, std::int32_t>(v, f); }
 
 // One candidate (top-left table entry b): its total over the features.
 double fused_one(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
@@ -256,12 +257,12 @@ double fused_one(const IntegralImage::Entry* b, const CompiledFeatures::Corners*
   for (const FusedFeature& f : ff) {
     float v = 0.0f;
     for (int r = f.r0; r < f.r1; ++r) v = v + wf[r] * to_float_sum(b, c[r]);
-    const float d = v - f.mu1;
+    const float d = v - f.centre;
     float h;
     if (d > f.lo && d < f.hi) {
       h = f.qc + d * (f.qb + f.qa * d);
     } else {
-      h = guarded(v, d, f);
+      h = guarded(v, f);
     }
     total = total + static_cast<double>(h);
   }
@@ -299,14 +300,14 @@ WMILTRACK_KERNEL void fused_groups(const IntegralImage::Entry* b, const Compiled
       }
     }
     for (int g = 0; g < G; ++g) {
-      const V8f d = v[g] - f.mu1;
+      const V8f d = v[g] - f.centre;
       const V8f h = f.qc + d * (f.qb + f.qa * d);
       const auto exact = (d > f.lo) & (d < f.hi);
       std::uint64_t m[4];
       std::memcpy(m, &exact, sizeof m);
       const bool all = ((m[0] & m[1]) & (m[2] & m[3])) == ~std::uint64_t{0};
       // Lanes outside the exact range: the guarded formula in float, lane by lane the same.
-      const V8f hf = all ? h : (exact ? h : guarded_of<V8f, V8i>(v[g], d, f));
+      const V8f hf = all ? h : (exact ? h : guarded_of<V8f, V8i>(v[g], f));
       typedef float V4f __attribute__((vector_size(16)));
       V4f h0, h1;
       std::memcpy(&h0, &hf, sizeof h0);
@@ -577,6 +578,7 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
       FusedFeature& f = ff[static_cast<std::size_t>(k)];
       f.r0 = compiled.first_rect(k);
       f.r1 = compiled.end_rect(k);
+      f.centre = static_cast<float>(t.centre);
       f.mu1 = static_cast<float>(t.mu1);
       f.qa = static_cast<float>(t.qa);
       f.qb = static_cast<float>(t.qb);

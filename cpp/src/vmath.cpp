@@ -1,5 +1,6 @@
 #include "wmiltrack/vmath.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -161,22 +162,34 @@ std::atomic<bool> g_portable{false};
 LogRatioTerms make_log_ratio_terms(double mu1, double a1, double lb1, double mu0, double a0,
                                    double lb0, double guard, double cut) {
   LogRatioTerms t{mu1, a1, lb1, mu0, a0, lb0, guard, cut};
+  // Centred on the sharper class (the larger a): the cross terms then carry the smaller a, so
+  // that their rounding stays at the scale of h (centred on the wider class, a tiny sigma's
+  // a (mu_1 - mu_0)^2 would cancel against itself).
   const double delta = mu1 - mu0;
-  t.qa = a0 - a1;
-  t.qb = 2.0 * a0 * delta;
-  t.qc = (lb1 - lb0) + a0 * (delta * delta);
-  // l_1 > cut  <=>  |d| < r_1 = sqrt((lb_1 - cut) / a_1); l_0 > cut  <=>  |d + delta| < r_0.
   const double inf = __builtin_huge_val();
+  double r1 = -inf, r0 = -inf;  // l_c > cut  <=>  |x - mu_c| < r_c (none when lb_c <= cut)
+  if (lb1 > cut) r1 = std::sqrt((lb1 - cut) / a1);
+  if (lb0 > cut) r0 = std::sqrt((lb0 - cut) / a0);
+  double lo, hi;  // the range of d = x - centre where both hold
+  if (a1 >= a0) {
+    t.centre = mu1;
+    t.qb = 2.0 * a0 * delta;
+    t.qc = (lb1 - lb0) + a0 * (delta * delta);
+    lo = std::max(-r1, -delta - r0);
+    hi = std::min(r1, -delta + r0);
+  } else {
+    t.centre = mu0;
+    t.qb = 2.0 * a1 * delta;
+    t.qc = (lb1 - lb0) - a1 * (delta * delta);
+    lo = std::max(-r0, delta - r1);
+    hi = std::min(r0, delta + r1);
+  }
+  t.qa = a0 - a1;
   t.lo = inf;
   t.hi = -inf;  // empty: never exact
-  if (lb1 > cut && lb0 > cut) {
-    const double r1 = std::sqrt((lb1 - cut) / a1), r0 = std::sqrt((lb0 - cut) / a0);
-    const double lo = -r1 > -delta - r0 ? -r1 : -delta - r0;
-    const double hi = r1 < -delta + r0 ? r1 : -delta + r0;
-    if (lo < hi) {
-      t.lo = lo;
-      t.hi = hi;
-    }
+  if (r1 > 0.0 && r0 > 0.0 && lo < hi) {
+    t.lo = lo;
+    t.hi = hi;
   }
   return t;
 }

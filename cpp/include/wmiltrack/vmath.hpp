@@ -60,13 +60,13 @@ void weighted_rows_f32(const float* a, int n, int width, const float* g, float* 
 //   h(x) = l_1 - l_0                                  where both l_c > cut (the guard cannot
 //                                                     change a double there),
 //   h(x) = log((exp(l_1) + guard) / (exp(l_0) + guard)) elsewhere, with this file's exp/log.
-//   Where both l_c > cut, h is computed as C + d (B + A d) with d = x - mu_1 (A = a_0 - a_1,
-//   B = 2 a_0 (mu_1 - mu_0), C = lb_1 - lb_0 + a_0 (mu_1 - mu_0)^2: the same function, 5
-//   operations instead of 9, equal up to rounding at the scale of its terms), and "both l_c > cut" is tested
-//   as lo < d < hi. make_log_ratio_terms fills these.
+//   Where both l_c > cut, h is computed as C + d (B + A d) with d = x - centre, the centre
+//   being the mean of the sharper class (the larger a_c), A = a_0 - a_1 and B, C to match: the
+//   same function in 5 operations instead of 9, equal up to rounding at the scale of h; "both
+//   l_c > cut" is tested as lo < d < hi. make_log_ratio_terms fills these.
 struct LogRatioTerms {
   double mu1, a1, lb1, mu0, a0, lb0, guard, cut;
-  double qa = 0.0, qb = 0.0, qc = 0.0, lo = 0.0, hi = 0.0;
+  double centre = 0.0, qa = 0.0, qb = 0.0, qc = 0.0, lo = 0.0, hi = 0.0;
 };
 LogRatioTerms make_log_ratio_terms(double mu1, double a1, double lb1, double mu0, double a0,
                                    double lb0, double guard, double cut);
