@@ -225,10 +225,12 @@ def test_score_grid_on_planes_matches_project() -> None:
     xs = np.array([box[0] + i for i, _ in offs], dtype=np.int32)
     ys = np.array([box[1] + j for _, j in offs], dtype=np.int32)
     h = _core.log_ratio(_core.project(ii, bank, xs, ys, sel), mu1, s1, mu0, s0, 1e-30).sum(0)
+    # The search sums exact-path log ratios in float (issue 28): float rounding of each term,
+    # and the chosen candidate is the best up to that rounding.
     for (i, j), v in zip(offs, h):
-        assert grid[j + 5, i + 5] == pytest.approx(v, rel=1e-9, abs=1e-9)
-    best = int(np.argmax(h))
-    assert (dx, dy) == offs[best] and score == pytest.approx(h[best], rel=1e-9)
+        assert grid[j + 5, i + 5] == pytest.approx(v, rel=1e-5, abs=1e-4)
+    best = offs.index((dx, dy))
+    assert h[best] == pytest.approx(h.max(), abs=1e-4) and score == pytest.approx(h[best], rel=1e-5, abs=1e-4)
 
 
 def test_plane_errors() -> None:

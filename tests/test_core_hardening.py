@@ -199,8 +199,17 @@ def test_score_grid_and_log_ratio_agree_bit_for_bit() -> None:
         for row in h:  # the core adds the features in order
             total += row
         grid = np.array([scores[j + 8, i + 8] for i, j in offs])
-        np.testing.assert_array_equal(grid, total)
-        assert n == len(offs) and best == total.max()
+        if guard >= 1e-15:
+            np.testing.assert_array_equal(grid, total)
+            assert n == len(offs) and best == total.max()
+            continue
+        # Under CT's guard the search sums the exact-path log ratios in float (issue 28): the
+        # same values up to float rounding, and still each candidate's own (another grid that
+        # holds the same candidates in other runs and batches gives the same bits).
+        np.testing.assert_allclose(grid, total, rtol=1e-6, atol=1e-5)
+        assert n == len(offs) and best == grid.max()
+        *_, wide = _core.score_grid(ii, fb, sel, *weak, guard, box, radius + 3, 1, (80, 60), True)
+        np.testing.assert_array_equal(np.array([wide[j + 11, i + 11] for i, j in offs]), grid)
 
 
 # ---------------------------------------------------------------- 1. shared objects

@@ -260,9 +260,14 @@ def test_log_ratio_finite_and_matches_numpy(g: tuple[np.ndarray, ...], guard: fl
     v, mu1, s1, mu0, s0 = g
     got = _core.log_ratio(v, mu1, s1, mu0, s0, guard)
     assert got.shape == v.shape and np.all(np.isfinite(got))
-    np.testing.assert_allclose(got, naive_log_ratio(v, mu1, s1, mu0, s0, guard), rtol=1e-9, atol=1e-9)
+    # A guard >= 1e-15 (MILTrack's) takes the guarded ratio's exp and log in float (issue 28):
+    # |h| <= ~20 here, so float rounding of that size.
+    tol = 1e-5 if guard >= 1e-15 else 1e-9
+    np.testing.assert_allclose(got, naive_log_ratio(v, mu1, s1, mu0, s0, guard), rtol=tol, atol=tol)
     # swapping the classes negates the ratio; the guard bounds it
-    np.testing.assert_allclose(_core.log_ratio(v, mu0, s0, mu1, s1, guard), -got, rtol=1e-12, atol=1e-12)
+    swap_tol = 1e-5 if guard >= 1e-15 else 1e-12
+    np.testing.assert_allclose(_core.log_ratio(v, mu0, s0, mu1, s1, guard), -got, rtol=swap_tol,
+                               atol=swap_tol)
 
 
 @FAST
@@ -329,7 +334,8 @@ def test_score_grid_candidates_inside_frame_and_best(data: st.DataObject) -> Non
     xs = np.array([x + c[0] for c in cands], np.int32)
     ys = np.array([y + c[1] for c in cands], np.int32)
     h = _core.log_ratio(_core.project(ii, fb, xs, ys), mu1, s1, mu0, s0, 1e-30).sum(0)
-    assert score == pytest.approx(h.max(), rel=1e-9, abs=1e-9)
+    # The search sums exact-path log ratios in float (issue 28): float rounding of each term.
+    assert score == pytest.approx(h.max(), rel=1e-5, abs=1e-4)
 
 
 @FAST

@@ -4,7 +4,7 @@
 // std::chrono; each case is run `reps` times after one warm-up call and reports the minimum
 // and median wall time of one call and a throughput from the minimum.
 //
-//   bench_core [--quick] [--reps N] [--frame-only]
+//   bench_core [--quick] [--reps N] [--frame-only] [--preset rcwmil|mil]
 //
 // The feature bank mimics the tracker's: every feature sums 2..4 random rectangles inside
 // the target box with weights +-1/sqrt(n) (compressive-tracking style).
@@ -267,6 +267,7 @@ struct Preset {
   int neg_count;
   bool milboost;
   double guard;
+  bool select = true;  // false: every feature is scored (CT, FCT), no selection
 };
 
 std::vector<std::array<int, 2>> offsets_between(double inner, double outer) {
@@ -281,10 +282,14 @@ std::vector<std::array<int, 2>> offsets_between(double inner, double outer) {
   return out;
 }
 
-void bench_frame(int reps_cap, bool quick, std::mt19937& rng) {
+void bench_frame(int reps_cap, bool quick, const char* only, std::mt19937& rng) {
   const Preset presets[] = {
       {"rcwmil", 100, 20, 25, 4, 10, 1, 4.0, 8.0, 22.0, 50, false, 1e-30},
       {"mil", 250, 50, 25, 1, 0, 1, 4.0, 9.0, 37.5, 65, true, 1e-5},
+      {"ct", 50, 50, 20, 1, 0, 1, 4.0, 8.0, 30.0, 50, false, 1e-30, false},
+      {"fct", 100, 100, 25, 4, 10, 1, 4.0, 8.0, 30.0, 50, false, 1e-30, false},
+      {"wmil", 150, 15, 25, 1, 0, 1, 4.0, 8.0, 37.5, 50, false, 1e-30},
+      {"osil", 100, 20, 20, 1, 0, 1, 4.0, 8.0, 22.0, 50, false, 1e-30},
   };
   const int fw = 640, fh = 480;
   const int n_frames = quick ? 4 : 20;
@@ -294,6 +299,7 @@ void bench_frame(int reps_cap, bool quick, std::mt19937& rng) {
                                "log ratios", "selection"};
   constexpr int kStages = 6;
   for (const Preset& p : presets) {
+    if (only != nullptr && std::strcmp(only, p.name) != 0) continue;
     for (int bs : {32, 64, 128}) {
       const FeatureBank bank = random_bank(p.features, bs, bs, rng);
       const int M = p.features, K = p.selected;
@@ -382,7 +388,7 @@ void bench_frame(int reps_cap, bool quick, std::mt19937& rng) {
           }
           milboost_select(hpos, hneg, MatrixView{ep.data(), P, M, M, 1},
                           MatrixView{en.data(), N, M, M, 1}, K, p.guard, sel.data());
-        } else {
+        } else if (p.select) {
           wmil_select(hpos, hneg, w.data(), K, false, sel.data());
         }
         const auto t7 = Clock::now();
@@ -424,16 +430,19 @@ void bench_frame(int reps_cap, bool quick, std::mt19937& rng) {
 int main(int argc, char** argv) {
   bool quick = false;
   bool frame_only = false;
+  const char* only = nullptr;
   int reps_cap = 200;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
     } else if (std::strcmp(argv[i], "--frame-only") == 0) {
       frame_only = true;
+    } else if (std::strcmp(argv[i], "--preset") == 0 && i + 1 < argc) {
+      only = argv[++i];
     } else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
       reps_cap = std::max(5, std::atoi(argv[++i]));
     } else {
-      std::fprintf(stderr, "usage: %s [--quick] [--reps N] [--frame-only]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--quick] [--reps N] [--frame-only] [--preset NAME]\n", argv[0]);
       return 2;
     }
   }
@@ -448,7 +457,7 @@ int main(int argc, char** argv) {
     bench_project(reps_cap, budget, rng);
     bench_score(reps_cap, budget, rng);
   }
-  bench_frame(reps_cap, quick, rng);
+  bench_frame(reps_cap, quick, only, rng);
   std::printf("\nintegral: pixels of the ROI converted to luma and summed per second; project: "
               "feature values per second; channels: ROI pixels x planes per second; score: candidate boxes scored per second (each "
               "evaluates K=50 features and their Gaussian log-ratios); frame: one whole frame step of the "

@@ -1,5 +1,7 @@
 #include "wmiltrack/haar.hpp"
 
+#include "grid_runs.hpp"
+
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
@@ -134,19 +136,24 @@ void project(const IntegralImage& ii, const FeatureBank& bank, const std::int32_
     base[static_cast<std::size_t>(n)] = (static_cast<std::ptrdiff_t>(y) - ii.y0()) * s +
                                         (static_cast<std::ptrdiff_t>(x) - ii.x0());
   }
-  // Feature by feature, rectangle by rectangle over all boxes: the boxes of a bag are
-  // neighbours, so one rectangle's corners for all of them share cache lines. Each value
-  // still sums its rectangles in order from 0.0, as CompiledFeatures::value does.
+  // The boxes as runs of consecutive columns of one row (a bag's positives are rows of a
+  // disc), then feature by feature over the runs: several boxes of a run a step, each value
+  // summing its rectangles in order from 0.0, as CompiledFeatures::value does.
+  std::vector<GridRun> runs;
+  for (int n = 0; n < n_boxes; ++n) {
+    const std::size_t i = static_cast<std::size_t>(n);
+    if (n > 0 && base[i] == base[i - 1] + 1 && runs.back().first + runs.back().count == n) {
+      ++runs.back().count;
+    } else {
+      runs.push_back(GridRun{n, 1, base[i]});
+    }
+  }
+  const bool vector = compiled.max_rect_area() <= kMaxSignedRectArea;
   const IntegralImage::Entry* table = ii.data();
   for (int k = 0; k < n_out; ++k) {
-    double* o = out + static_cast<std::ptrdiff_t>(k) * n_boxes;
-    std::fill(o, o + n_boxes, 0.0);
-    for (int r = compiled.first_rect(k); r < compiled.end_rect(k); ++r) {
-      const double weight = compiled.corners(r).weight;
-      for (int n = 0; n < n_boxes; ++n) {
-        o[n] += weight * compiled.rect_sum(table + base[static_cast<std::size_t>(n)], r);
-      }
-    }
+    const int r0 = compiled.first_rect(k);
+    run_values(table, runs, &compiled.corners(r0), compiled.end_rect(k) - r0, vector,
+               out + static_cast<std::ptrdiff_t>(k) * n_boxes);
   }
 }
 

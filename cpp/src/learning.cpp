@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
-#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -67,6 +67,26 @@ void log_sigmoid_and_rest(const double* z, int n, double* out, double* rest, dou
     out[j] = up ? -out[j] : z[j] - out[j];
   }
 }
+
+// sigma(z_j) into sig[j] and 1 - sigma(z_j) into rest[j], j < n, from one e = exp(-|z|):
+// 1 / (1 + e) and e / (1 + e), each exact to a few ulps for any z (no 1 - sigma cancellation).
+void sigmoid_and_rest(const double* z, int n, double* sig, double* rest) {
+  for (int j = 0; j < n; ++j) rest[j] = z[j] >= 0 ? -z[j] : z[j];
+  vmath::exp(rest, rest, n);
+  for (int j = 0; j < n; ++j) {
+    const double e = rest[j];
+    const double big = 1.0 / (1.0 + e);
+    const double small = e * big;
+    const bool up = z[j] >= 0;
+    sig[j] = up ? big : small;
+    rest[j] = up ? small : big;
+  }
+}
+
+// Bag totals (sums of sigma or of w sigma) in [kSafeTotal, kHuge] are normalised directly;
+// others (underflow, NaN, absurd weights) through the log domain.
+constexpr double kSafeTotal = 1e-200;
+constexpr double kHuge = 1e200;
 
 // out[j] = w[j] exp(logv[j]) / sum_m w[m] exp(logv[m]), computed without underflow.
 void normalised(const double* logv, const double* w, double* out, int n) {
@@ -158,37 +178,51 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
                  bool code_gradient, std::int32_t* selected) {
   check_selection(h_pos, h_neg, k);
   const int M = h_pos.rows, P = h_pos.cols, N = h_neg.cols;
-  const std::size_t Mz = static_cast<std::size_t>(M);
   std::vector<double> H_pos(static_cast<std::size_t>(P), 0.0), H_neg(static_cast<std::size_t>(N), 0.0);
   std::vector<double> g(static_cast<std::size_t>(P + N), 0.0);
   std::vector<double> tmp(static_cast<std::size_t>(std::max(P, N))), rest(tmp.size()),
       scratch(tmp.size()), minus_h(static_cast<std::size_t>(N));
   const std::vector<double> ones(static_cast<std::size_t>(std::max(N, 1)), 1.0);
-  std::vector<unsigned char> used(Mz, 0);
-  std::vector<double> score(Mz);
-  // Instance-major copy of the log ratios (row j: every feature's h on instance j, the
-  // positives then the negatives), so that the scoring runs over features: M independent
-  // sums, each adding its terms in the order j = 0, 1, ... as a feature-by-feature loop does
-  // (the same bits), several of them at a time (vmath::weighted_rows).
-  // (Every entry is written below: not cleared first.)
-  const std::unique_ptr<double[]> hT(new double[static_cast<std::size_t>(P + N) * Mz]);
+  std::vector<unsigned char> used(static_cast<std::size_t>(M), 0);
+  // Instance-major float copy of the log ratios (row j: every feature's h on instance j, the
+  // positives then the negatives; rows padded with zeros to a multiple of 64 features), so
+  // that the scoring runs over features: M independent float sums, each adding its terms in
+  // the order j = 0, 1, ..., several features a step (vmath::weighted_rows_f32; the same bits
+  // at any vector width). Float halves the bytes and doubles the lanes; a score only ranks the
+  // features of one round.
+  const int width = (M + 63) / 64 * 64;
+  const std::size_t wz = static_cast<std::size_t>(width);
+  std::vector<float> hT(static_cast<std::size_t>(P + N) * wz, 0.0f), gf(static_cast<std::size_t>(P + N));
+  std::vector<float> score(wz);
   for (int j = 0; j < P; ++j) {
-    for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(j) * Mz + static_cast<std::size_t>(m)] = h_pos.at(m, j);
+    float* row = hT.data() + static_cast<std::size_t>(j) * wz;
+    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_pos.at(m, j));
   }
   for (int j = 0; j < N; ++j) {
-    for (int m = 0; m < M; ++m) hT[static_cast<std::size_t>(P + j) * Mz + static_cast<std::size_t>(m)] = h_neg.at(m, j);
+    float* row = hT.data() + static_cast<std::size_t>(P + j) * wz;
+    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_neg.at(m, j));
   }
   double* g_pos = g.data();
   double* g_neg = g.data() + P;
+  double* sig = tmp.data();
   for (int step = 0; step < k; ++step) {
     // Positive bag: d ln(sum_j w_j sigma_j) / dH_j = w_j sigma_j (1 - sigma_j) / sum w sigma.
+    // sigma and 1 - sigma from one exp(-|H|) each; the log domain (which cannot underflow)
+    // only when sum w sigma is not a normal double far above the smallest.
     if (P > 0) {
-      log_sigmoid_and_rest(H_pos.data(), P, tmp.data(), rest.data(), scratch.data());
-      normalised(tmp.data(), w_pos, g_pos, P);
+      sigmoid_and_rest(H_pos.data(), P, sig, rest.data());
+      double total = 0.0;
+      for (int j = 0; j < P; ++j) total += w_pos[j] * sig[j];
+      if (total >= kSafeTotal && total <= kHuge) {
+        for (int j = 0; j < P; ++j) g_pos[j] = (w_pos[j] * sig[j]) / total;
+      } else {
+        log_sigmoid_and_rest(H_pos.data(), P, tmp.data(), rest.data(), scratch.data());
+        normalised(tmp.data(), w_pos, g_pos, P);
+        vmath::exp(tmp.data(), sig, P);
+      }
       if (code_gradient) {
         // The reference code's w sigma (1 - w sigma) / sum(w sigma) (spec 5, compat).
-        vmath::exp(tmp.data(), tmp.data(), P);
-        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * (1.0 - w_pos[j] * tmp[static_cast<std::size_t>(j)]);
+        for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * (1.0 - w_pos[j] * sig[j]);
       } else {
         for (int j = 0; j < P; ++j) g_pos[j] = g_pos[j] * rest[static_cast<std::size_t>(j)];
       }
@@ -196,16 +230,24 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
     // Negative bag: d ln(sum_j (1 - sigma_j)) / dH_j = -sigma_j (1 - sigma_j) / sum(1 - sigma).
     if (N > 0) {
       for (int j = 0; j < N; ++j) minus_h[static_cast<std::size_t>(j)] = -H_neg[static_cast<std::size_t>(j)];
-      log_sigmoid_and_rest(minus_h.data(), N, tmp.data(), rest.data(), scratch.data());
-      normalised(tmp.data(), ones.data(), g_neg, N);
+      sigmoid_and_rest(minus_h.data(), N, sig, rest.data());
+      double total = 0.0;
+      for (int j = 0; j < N; ++j) total += sig[j];
+      if (total >= kSafeTotal && total <= kHuge) {
+        for (int j = 0; j < N; ++j) g_neg[j] = sig[j] / total;
+      } else {
+        log_sigmoid_and_rest(minus_h.data(), N, tmp.data(), rest.data(), scratch.data());
+        normalised(tmp.data(), ones.data(), g_neg, N);
+      }
       for (int j = 0; j < N; ++j) g_neg[j] = -g_neg[j] * rest[static_cast<std::size_t>(j)];
     }
     // score_m = sum_j h_mj g_j over the positives then the negatives.
-    vmath::weighted_rows(hT.get(), P + N, M, g.data(), score.data());
+    for (int j = 0; j < P + N; ++j) gf[static_cast<std::size_t>(j)] = static_cast<float>(g[static_cast<std::size_t>(j)]);
+    vmath::weighted_rows_f32(hT.data(), P + N, width, gf.data(), score.data());
     int best = -1;
-    double best_score = -std::numeric_limits<double>::infinity();
+    float best_score = -std::numeric_limits<float>::infinity();
     for (int m = 0; m < M; ++m) {
-      const double sc = score[static_cast<std::size_t>(m)];
+      const float sc = score[static_cast<std::size_t>(m)];
       if (used[static_cast<std::size_t>(m)] || std::isnan(sc)) continue;
       if (best < 0 || sc > best_score) {
         best = m;
@@ -217,6 +259,29 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
 }
 
 namespace {
+
+typedef double V4 __attribute__((vector_size(32)));
+
+// prod_q (guard + 1 / (1 + x_q)) for x_q = c_q e_q, as prod (1 + guard (1 + x_q)) / prod (1 + x_q)
+// with x_q capped at 1e30 (NaN stays NaN); for doubles and for vectors of 4 (lane by lane).
+template <class T>
+WMILTRACK_KERNEL T four_factors_of(T x0, T x1, T x2, T x3, double guard) {
+  const T top = T{} + 1e30;
+  const auto cap = [top](T x) { return x > top ? top : x; };
+  const T d0 = 1.0 + cap(x0), d1 = 1.0 + cap(x1), d2 = 1.0 + cap(x2), d3 = 1.0 + cap(x3);
+  const T n0 = 1.0 + guard * d0, n1 = 1.0 + guard * d1, n2 = 1.0 + guard * d2, n3 = 1.0 + guard * d3;
+  return ((n0 * n1) * (n2 * n3)) / ((d0 * d1) * (d2 * d3));
+}
+
+WMILTRACK_KERNEL double four_factors(double e0, double e1, double e2, double e3, double c0,
+                                     double c1, double c2, double c3, double guard) {
+  return four_factors_of<double>(c0 * e0, c1 * e1, c2 * e2, c3 * e3, guard);
+}
+
+WMILTRACK_KERNEL V4 four_factors(const V4* e, double c0, double c1, double c2, double c3,
+                                 double guard) {
+  return four_factors_of<V4>(c0 * e[0], c1 * e[1], c2 * e[2], c3 * e[3], guard);
+}
 
 // The body of milboost_select, inlined into an AVX2 copy and a baseline copy (below): its
 // loops over the features are plain element-wise IEEE arithmetic, which the compiler
@@ -236,6 +301,13 @@ WMILTRACK_KERNEL void milboost_body(const MatrixView& h_pos, const MatrixView& h
   double* lg = logs.data();
   const double inv_p = P > 0 ? 1.0 / P : 0.0;
   const double inv_n = N > 0 ? 1.0 / N : 0.0;
+  std::vector<unsigned char> nan_neg(Mz, 0);  // features with a NaN e^h on a negative
+  for (int j = 0; j < N; ++j) {
+    const double* e = exp_neg.row(j);
+    for (int m = 0; m < M; ++m) {
+      if (std::isnan(e[m])) nan_neg[static_cast<std::size_t>(m)] = 1;
+    }
+  }
   const auto clamp60 = [](double z) { return z > 60.0 ? 60.0 : (z < -60.0 ? -60.0 : z); };
   for (int step = 0; step < k; ++step) {
     for (int m = 0; m < M; ++m) {
@@ -259,21 +331,60 @@ WMILTRACK_KERNEL void milboost_body(const MatrixView& h_pos, const MatrixView& h
       }
     }
     // Negatives: sum_j ln(guard + 1 - sigma), as logs of products of <= 60 factors (each
-    // factor >= guard = 1e-5, so a product stays above 1e-300). The logs of features
+    // factor >= guard = 1e-5, so a product stays above 1e-300; 60 is a multiple of 4). The logs of features
     // already chosen are never used: not added.
+    // Four factors share one division: guard + 1 / (1 + x) = (1 + guard (1 + x)) / (1 + x),
+    // with x = e^H e^h capped at 1e30 (the factor moves by < 1e-30 / guard there), so that
+    // the products of four numerators or denominators stay below 1e130. x is NaN only where
+    // e^H or e^h is: a NaN e^H takes the one-division-a-factor loop, a feature with a NaN e^h
+    // gets a NaN likelihood (as that loop gives it).
+    bool c_nan = false;
+    for (int j = 0; j < N; ++j) c_nan = c_nan || std::isnan(c_neg[static_cast<std::size_t>(j)]);
     int chunk = 0;
-    for (int j = 0; j < N; ++j) {
-      const double c = c_neg[static_cast<std::size_t>(j)];
-      const double* e = exp_neg.row(j);
-      for (int m = 0; m < M; ++m) pp[m] = pp[m] * (guard + 1.0 / (1.0 + c * e[m]));
-      ++chunk;
-      if (chunk == 60 || j == N - 1) {
+    for (int j = 0; j < N;) {
+      const int n4 = c_nan ? 1 : std::min(4, N - j);
+      if (n4 == 4) {
+        const double c0 = c_neg[static_cast<std::size_t>(j)], c1 = c_neg[static_cast<std::size_t>(j + 1)],
+                     c2 = c_neg[static_cast<std::size_t>(j + 2)], c3 = c_neg[static_cast<std::size_t>(j + 3)];
+        const double *e0 = exp_neg.row(j), *e1 = exp_neg.row(j + 1), *e2 = exp_neg.row(j + 2),
+                     *e3 = exp_neg.row(j + 3);
+        // Four features a step in a GCC vector (two SSE2 or one AVX2 register: the same
+        // operations on every lane), the rest one at a time the same way.
+        int m = 0;
+        for (; m + 4 <= M; m += 4) {
+          V4 x[4], pv;
+          std::memcpy(&x[0], e0 + m, sizeof(V4));
+          std::memcpy(&x[1], e1 + m, sizeof(V4));
+          std::memcpy(&x[2], e2 + m, sizeof(V4));
+          std::memcpy(&x[3], e3 + m, sizeof(V4));
+          std::memcpy(&pv, pp + m, sizeof(V4));
+          pv = pv * four_factors(x, c0, c1, c2, c3, guard);
+          std::memcpy(pp + m, &pv, sizeof(V4));
+        }
+        for (; m < M; ++m) {
+          pp[m] = pp[m] * four_factors(e0[m], e1[m], e2[m], e3[m], c0, c1, c2, c3, guard);
+        }
+      } else {
+        for (int q = 0; q < n4; ++q) {
+          const double c = c_neg[static_cast<std::size_t>(j + q)];
+          const double* e = exp_neg.row(j + q);
+          for (int m = 0; m < M; ++m) pp[m] = pp[m] * (guard + 1.0 / (1.0 + c * e[m]));
+        }
+      }
+      j += n4;
+      chunk += n4;
+      if (chunk == 60 || j == N) {
         vmath::log(pp, lg, M);
         for (int m = 0; m < M; ++m) {
           if (!used[static_cast<std::size_t>(m)]) Lp[m] += lg[m];
           pp[m] = 1.0;
         }
         chunk = 0;
+      }
+    }
+    if (!c_nan) {
+      for (int m = 0; m < M; ++m) {
+        if (nan_neg[static_cast<std::size_t>(m)]) Lp[m] = std::numeric_limits<double>::quiet_NaN();
       }
     }
     // -ln(1 - 1/D + guard) for the positive bag's likelihood.

@@ -1,11 +1,15 @@
 #include "wmiltrack/scoring.hpp"
 
+#include "fmath.hpp"
+#include "grid_runs.hpp"
+
 #include "wmiltrack/learning.hpp"
 #include "wmiltrack/vmath.hpp"
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -22,17 +26,7 @@
 
 namespace wmiltrack {
 
-// A run of candidates: consecutive grid columns of one grid row, equally spaced in the table.
-struct GridRun {
-  int first;            // index of the run's first candidate
-  int count;            // candidates in the run
-  std::ptrdiff_t base;  // table offset of the first candidate's top-left corner
-};
-
 namespace {
-// Largest rectangle whose sum of 0..255 values is below 2^31: the vector loops convert the
-// 32-bit sums to doubles as signed integers.
-constexpr std::int64_t kMaxSignedRectArea = 2147483647LL / 255;
 
 // values[run.first + t] = feature k at candidate t of each run, one candidate at a time (any
 // step; t * step apart in the table).
@@ -52,17 +46,12 @@ namespace detail {
 // values[run.first + t] = the feature with rectangles c[0..n) at candidate t of each run, the
 // candidates of a run consecutive in `table`, 4 a step (SSE2). A run's last step overlaps the
 // one before when the count is not a multiple of 4: it recomputes the same values.
-void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
-                      const CompiledFeatures::Corners* c, int n, double* values) {
-  for (const GridRun& run : runs) {
-    const IntegralImage::Entry* b0 = table + run.base;
-    double* o = values + run.first;
-    if (run.count < 4) {
-      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
-      continue;
-    }
+// One run of at least 4 candidates (inlined into both copies below).
+inline __attribute__((always_inline)) void run_sse2(const IntegralImage::Entry* b0, int count,
+                                                    const CompiledFeatures::Corners* c, int n,
+                                                    double* o) {
     for (int t = 0;; t += 4) {
-      t = std::min(t, run.count - 4);
+      t = std::min(t, count - 4);
       const IntegralImage::Entry* b = b0 + t;
       __m128d lo = _mm_setzero_pd(), hi = _mm_setzero_pd();
       for (int r = 0; r < n; ++r) {
@@ -77,8 +66,20 @@ void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridR
       }
       _mm_storeu_pd(o + t, lo);
       _mm_storeu_pd(o + t + 2, hi);
-      if (t == run.count - 4) break;
+      if (t == count - 4) break;
     }
+}
+
+void grid_values_sse2(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                      const CompiledFeatures::Corners* c, int n, double* values) {
+  for (const GridRun& run : runs) {
+    const IntegralImage::Entry* b0 = table + run.base;
+    double* o = values + run.first;
+    if (run.count < 4) {
+      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
+      continue;
+    }
+    run_sse2(b0, run.count, c, n, o);
   }
 }
 
@@ -92,7 +93,11 @@ __attribute__((target("avx2"))) void grid_values_avx2(const IntegralImage::Entry
     const IntegralImage::Entry* b0 = table + run.base;
     double* o = values + run.first;
     if (run.count < 8) {
-      for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
+      if (run.count >= 4) {
+        run_sse2(b0, run.count, c, n, o);
+      } else {
+        for (int t = 0; t < run.count; ++t) o[t] = CompiledFeatures::value_of(b0 + t, c, n);
+      }
       continue;
     }
     for (int t = 0;; t += 8) {
@@ -115,6 +120,7 @@ __attribute__((target("avx2"))) void grid_values_avx2(const IntegralImage::Entry
     }
   }
 }
+
 }  // namespace detail
 
 namespace {
@@ -185,6 +191,194 @@ GridTable decimate(const IntegralImage& ii, const Rect& e, int step, const std::
 }  // namespace
 #endif
 
+void run_values(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                const CompiledFeatures::Corners* c, int n, bool vector, double* values) {
+#ifdef WMILTRACK_GRID_SIMD
+  if (vector && vmath::avx2()) {
+    detail::grid_values_avx2(table, runs, c, n, values);
+    return;
+  }
+  if (vector) {
+    detail::grid_values_sse2(table, runs, c, n, values);
+    return;
+  }
+#else
+  (void)vector;
+#endif
+  for (const GridRun& run : runs) {
+    for (int t = 0; t < run.count; ++t) {
+      values[run.first + t] = CompiledFeatures::value_of(table + run.base + t, c, n);
+    }
+  }
+}
+
+// ---- The exhaustive search's fused score (issue 28): candidates outer, features inner ------
+//
+// Where a feature's log ratio takes the exact path (both log densities above the cut, the case
+// for nearly every candidate with CT's guard of 1e-30), the score of a candidate is summed here
+// in one pass: each feature's value in float from the exact 32-bit rectangle sums, then
+// h = C + d (B + A d) with d = value - centre in float, added to the candidate's total in double.
+// Values outside the exact range take the guarded formula in float, as
+// log(e^l_1 + guard) - log(e^l_0 + guard) (fmath.hpp). Each candidate's total depends on its own
+// rectangle sums alone, computed by the same float and double operations in the same order
+// whether it is one of 8 lanes (the vector body, compiled for AVX2 and for the SSE2 baseline)
+// or alone (runs of fewer than 8 candidates, and builds without the vector extension): the
+// same bits on every path.
+struct FusedFeature {
+  int r0, r1;                       // its rectangles
+  float centre, qa, qb, qc, lo, hi;  // LogRatioTerms' quadratic, in float
+  float mu1, mu0, a1, lb1, a0, lb0;  // and its log densities l_c = lb_c - (x - mu_c)^2 a_c
+  float ln_guard;
+};
+
+namespace {
+
+float to_float_sum(const IntegralImage::Entry* b, const CompiledFeatures::Corners& c) {
+  const std::uint32_t s = (b[c.br] - b[c.tr]) - (b[c.bl] - b[c.tl]);
+  return static_cast<float>(static_cast<std::int32_t>(s));
+}
+
+// The guarded log ratio in float at value v, for floats or vectors of them.
+template <class F, class I>
+inline __attribute__((always_inline)) F guarded_of(F v, const FusedFeature& f) {
+  const F d = v - f.mu1;
+  const F d0 = v - f.mu0;
+  const F l1 = f.lb1 - (d * d) * f.a1;
+  const F l0 = f.lb0 - (d0 * d0) * f.a0;
+  return fmath::log_exp_plus<F, I>(l1, f.ln_guard) - fmath::log_exp_plus<F, I>(l0, f.ln_guard);
+}
+
+float guarded(float v, const FusedFeature& f) { return guarded_of<float, std::int32_t>(v, f); }
+
+// One candidate (top-left table entry b): its total over the features.
+double fused_one(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
+                 const float* wf, const std::vector<FusedFeature>& ff) {
+  double total = 0.0;
+  for (const FusedFeature& f : ff) {
+    float v = 0.0f;
+    for (int r = f.r0; r < f.r1; ++r) v = v + wf[r] * to_float_sum(b, c[r]);
+    const float d = v - f.centre;
+    float h;
+    if (d > f.lo && d < f.hi) {
+      h = f.qc + d * (f.qb + f.qa * d);
+    } else {
+      h = guarded(v, f);
+    }
+    total = total + static_cast<double>(h);
+  }
+  return total;
+}
+
+}  // namespace
+
+#ifdef WMILTRACK_GRID_SIMD
+namespace {
+typedef float V8f __attribute__((vector_size(32)));
+typedef std::int32_t V8i __attribute__((vector_size(32)));
+typedef double V4d __attribute__((vector_size(32)));
+
+// 8 G candidates of a run from table entry b (consecutive): their totals into out[0..8 G), G
+// groups of 8 side by side.
+template <int G>
+WMILTRACK_KERNEL void fused_groups(const IntegralImage::Entry* b, const CompiledFeatures::Corners* c,
+                                   const float* wf, const std::vector<FusedFeature>& ff,
+                                   double* out) {
+  V4d acc[2 * G];
+  for (V4d& a : acc) a = V4d{} + 0.0;
+  for (const FusedFeature& f : ff) {
+    V8f v[G];
+    for (int g = 0; g < G; ++g) v[g] = V8f{} + 0.0f;
+    for (int r = f.r0; r < f.r1; ++r) {
+      const CompiledFeatures::Corners& q = c[r];
+      for (int g = 0; g < G; ++g) {
+        V8i br, tr, bl, tl;
+        std::memcpy(&br, b + 8 * g + q.br, sizeof br);
+        std::memcpy(&tr, b + 8 * g + q.tr, sizeof tr);
+        std::memcpy(&bl, b + 8 * g + q.bl, sizeof bl);
+        std::memcpy(&tl, b + 8 * g + q.tl, sizeof tl);
+        v[g] = v[g] + wf[r] * __builtin_convertvector((br - tr) - (bl - tl), V8f);
+      }
+    }
+    for (int g = 0; g < G; ++g) {
+      const V8f d = v[g] - f.centre;
+      const V8f h = f.qc + d * (f.qb + f.qa * d);
+      const auto exact = (d > f.lo) & (d < f.hi);
+      std::uint64_t m[4];
+      std::memcpy(m, &exact, sizeof m);
+      const bool all = ((m[0] & m[1]) & (m[2] & m[3])) == ~std::uint64_t{0};
+      // Lanes outside the exact range: the guarded formula in float, lane by lane the same.
+      const V8f hf = all ? h : (exact ? h : guarded_of<V8f, V8i>(v[g], f));
+      typedef float V4f __attribute__((vector_size(16)));
+      V4f h0, h1;
+      std::memcpy(&h0, &hf, sizeof h0);
+      std::memcpy(&h1, reinterpret_cast<const char*>(&hf) + sizeof h0, sizeof h1);
+      const V4d hd0 = __builtin_convertvector(h0, V4d), hd1 = __builtin_convertvector(h1, V4d);
+      acc[2 * g] = acc[2 * g] + hd0;
+      acc[2 * g + 1] = acc[2 * g + 1] + hd1;
+    }
+  }
+  std::memcpy(out, acc, sizeof acc);
+}
+
+WMILTRACK_KERNEL void fused_body(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                                 const CompiledFeatures::Corners* c, const float* wf,
+                                 const std::vector<FusedFeature>& ff, double* total) {
+  for (const GridRun& run : runs) {
+    const IntegralImage::Entry* b0 = table + run.base;
+    double* o = total + run.first;
+    if (run.count < 8) {
+      for (int t = 0; t < run.count; ++t) o[t] = fused_one(b0 + t, c, wf, ff);
+      continue;
+    }
+    // 8 a step, the last step ending the run (recomputing some: the same values). (Two groups
+    // side by side were measured slower: register pressure.)
+    for (int t = 0;; t += 8) {
+      t = std::min(t, run.count - 8);
+      fused_groups<1>(b0 + t, c, wf, ff, o + t);
+      if (t == run.count - 8) break;
+    }
+  }
+}
+}  // namespace
+
+namespace detail {
+void fused_scores_base(const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+                       const CompiledFeatures::Corners* c, const float* wf,
+                       const std::vector<FusedFeature>& ff, double* total) {
+  fused_body(table, runs, c, wf, ff, total);
+}
+__attribute__((target("avx2"))) void fused_scores_avx2(
+    const IntegralImage::Entry* table, const std::vector<GridRun>& runs,
+    const CompiledFeatures::Corners* c, const float* wf, const std::vector<FusedFeature>& ff,
+    double* total) {
+  fused_body(table, runs, c, wf, ff, total);
+}
+}  // namespace detail
+#endif
+
+namespace {
+// total[run.first + t] for every candidate of the runs (see above).
+// (`step`: the table distance of a run's consecutive candidates, 1 on the SIMD builds' tables.)
+void fused_scores(const IntegralImage::Entry* table, const std::vector<GridRun>& runs, int step,
+                  const CompiledFeatures::Corners* c, const float* wf,
+                  const std::vector<FusedFeature>& ff, double* total) {
+#ifdef WMILTRACK_GRID_SIMD
+  (void)step;
+  if (vmath::avx2()) {
+    detail::fused_scores_avx2(table, runs, c, wf, ff, total);
+  } else {
+    detail::fused_scores_base(table, runs, c, wf, ff, total);
+  }
+#else
+  for (const GridRun& run : runs) {
+    for (int t = 0; t < run.count; ++t) {
+      total[run.first + t] = fused_one(table + run.base + static_cast<std::ptrdiff_t>(t) * step, c, wf, ff);
+    }
+  }
+#endif
+}
+}  // namespace
+
 namespace {
 constexpr double kEps = 1e-30;
 }  // namespace
@@ -216,11 +410,14 @@ WeakGaussians::WeakGaussians(const double* mu1, const double* sigma1, const doub
 // Each value chooses the exact or the guarded formula on its own (vmath::log_ratio), so that a
 // value depends on its own inputs only, never on the other samples of the batch or the buffer's
 // alignment. MILTrack's guard (1e-5) sends every value down the guarded path.
+vmath::LogRatioTerms WeakGaussians::terms(int k) const {
+  return vmath::make_log_ratio_terms(mu1_[k], a1_[k], lb1_[k], mu0_[k], a0_[k], lb0_[k], guard_,
+                                     fast_cut_);
+}
+
 void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool accumulate,
                               double* /*scratch*/) const {
-  const vmath::LogRatioTerms t{mu1_[k], a1_[k], lb1_[k], mu0_[k], a0_[k], lb0_[k], guard_,
-                               fast_cut_};
-  vmath::log_ratio(t, x, n, out, accumulate);
+  vmath::log_ratio(terms(k), x, n, out, accumulate);
 }
 
 namespace {
@@ -347,30 +544,73 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
   // candidates of a run a step: consecutive table entries), then the log ratios.
   std::vector<double> values(static_cast<std::size_t>(c)), total(static_cast<std::size_t>(c), 0.0);
   const IntegralImage::Entry* table = ii.data();
-#ifdef WMILTRACK_GRID_SIMD
   const bool vector = compiled.max_rect_area() <= kMaxSignedRectArea &&
                       (step == 1 || ii.num_channels() == 1);
+  // The fused float score where the exact path is the rule (not MILTrack's guard, under which
+  // every value takes the guarded path) on step-1 grids (a coarse grid's short runs of the
+  // phase-split copy measured slower fused: fct 0.95x): the same choice on every build.
+  const bool fused = vector && weak.guard() < 1e-15 && step == 1;
+#ifdef WMILTRACK_GRID_SIMD
   const bool wide = vector && vmath::avx2();
   // A grid of step > 1 reads every step-th entry of a row: the vector loops read it from a
   // copy of the table's rows split by column phase (entry j of phase p is column p + j*step),
   // where a run's candidates are consecutive. The entries are copied exactly.
   GridTable grid{table, runs, compiled};
   if (vector && step > 1) grid = decimate(ii, e, step, runs, compiled);
-#endif
-  for (int k = 0; k < compiled.size(); ++k) {
-#ifdef WMILTRACK_GRID_SIMD
-    const int r0 = compiled.first_rect(k), n_rects = compiled.end_rect(k) - r0;
-    if (wide) {
-      detail::grid_values_avx2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
-    } else if (vector) {
-      detail::grid_values_sse2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
-    } else {
-      grid_values_scalar(table, runs, step, compiled, k, values.data());
-    }
+  const IntegralImage::Entry* fused_table = grid.table;
+  const std::vector<GridRun>& fused_runs = grid.runs;
+  const CompiledFeatures::Corners* fused_corners = compiled.num_rects() > 0 ? grid.corners(0) : nullptr;
+  const int fused_step = 1;
 #else
-    grid_values_scalar(table, runs, step, compiled, k, values.data());
+  const IntegralImage::Entry* fused_table = table;
+  const std::vector<GridRun>& fused_runs = runs;
+  const CompiledFeatures::Corners* fused_corners =
+      compiled.num_rects() > 0 ? &compiled.corners(0) : nullptr;
+  const int fused_step = step;
 #endif
-    weak.log_ratio(k, values.data(), c, total.data(), true, nullptr);
+  if (fused) {
+    std::vector<FusedFeature> ff(static_cast<std::size_t>(compiled.size()));
+    std::vector<float> wf(static_cast<std::size_t>(compiled.num_rects()));
+    for (int r = 0; r < compiled.num_rects(); ++r) {
+      wf[static_cast<std::size_t>(r)] = static_cast<float>(compiled.corners(r).weight);
+    }
+    for (int k = 0; k < compiled.size(); ++k) {
+      const vmath::LogRatioTerms t = weak.terms(k);
+      FusedFeature& f = ff[static_cast<std::size_t>(k)];
+      f.r0 = compiled.first_rect(k);
+      f.r1 = compiled.end_rect(k);
+      f.centre = static_cast<float>(t.centre);
+      f.mu1 = static_cast<float>(t.mu1);
+      f.qa = static_cast<float>(t.qa);
+      f.qb = static_cast<float>(t.qb);
+      f.qc = static_cast<float>(t.qc);
+      // The exact range narrowed to floats strictly inside the double one.
+      f.lo = std::nextafter(static_cast<float>(t.lo), std::numeric_limits<float>::infinity());
+      f.hi = std::nextafter(static_cast<float>(t.hi), -std::numeric_limits<float>::infinity());
+      f.mu0 = static_cast<float>(t.mu0);
+      f.a1 = static_cast<float>(t.a1);
+      f.lb1 = static_cast<float>(t.lb1);
+      f.a0 = static_cast<float>(t.a0);
+      f.lb0 = static_cast<float>(t.lb0);
+      f.ln_guard = static_cast<float>(std::log(weak.guard()));
+    }
+    fused_scores(fused_table, fused_runs, fused_step, fused_corners, wf.data(), ff, total.data());
+  } else {
+    for (int k = 0; k < compiled.size(); ++k) {
+#ifdef WMILTRACK_GRID_SIMD
+      const int r0 = compiled.first_rect(k), n_rects = compiled.end_rect(k) - r0;
+      if (wide) {
+        detail::grid_values_avx2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
+      } else if (vector) {
+        detail::grid_values_sse2(grid.table, grid.runs, grid.corners(r0), n_rects, values.data());
+      } else {
+        grid_values_scalar(table, runs, step, compiled, k, values.data());
+      }
+#else
+      grid_values_scalar(table, runs, step, compiled, k, values.data());
+#endif
+      weak.log_ratio(k, values.data(), c, total.data(), true, nullptr);
+    }
   }
 
   int best = -1;

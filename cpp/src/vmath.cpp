@@ -1,6 +1,8 @@
 #include "wmiltrack/vmath.hpp"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -52,7 +54,14 @@ constexpr std::uint64_t kTwo52Bits = 0x4330000000000000ULL;
   typedef double D __attribute__((vector_size(8 * N)));               \
   typedef std::uint64_t U __attribute__((vector_size(8 * N)));        \
   typedef std::int64_t M __attribute__((vector_size(8 * N)));         \
+  typedef float F __attribute__((vector_size(8 * N)));                \
+  typedef std::int32_t I __attribute__((vector_size(8 * N)));         \
+  inline I as_i(F x) { return reinterpret_cast<I>(x); }               \
+  inline F as_f(I u) { return reinterpret_cast<F>(u); }               \
+  inline F to_f(I u) { return __builtin_convertvector(u, F); }        \
   constexpr int kLanes = N;                                           \
+  constexpr int kFloatLanes = 2 * N;                                  \
+  inline F splat_f(float v) { return F{} + v; }                       \
   inline U as_u(D x) { return reinterpret_cast<U>(x); }               \
   inline D as_d(U u) { return reinterpret_cast<D>(u); }               \
   inline D pick(M m, D a, D b) { return m ? a : b; }                  \
@@ -80,7 +89,22 @@ namespace lanes1 {
 typedef double D;
 typedef std::uint64_t U;
 typedef bool M;
+typedef float F;
+typedef std::int32_t I;
+inline I as_i(F x) {
+  I u;
+  std::memcpy(&u, &x, sizeof u);
+  return u;
+}
+inline F as_f(I u) {
+  F x;
+  std::memcpy(&x, &u, sizeof x);
+  return x;
+}
+inline F to_f(I u) { return static_cast<F>(u); }
 constexpr int kLanes = 1;
+constexpr int kFloatLanes = 1;
+inline F splat_f(float v) { return v; }
 inline U as_u(D x) { return bits(x); }
 inline D as_d(U u) { return from_bits(u); }
 inline D pick(M m, D a, D b) { return m ? a : b; }
@@ -103,6 +127,10 @@ namespace detail {
   ATTR void weighted_rows_##SUFFIX(const double* a, int n, int width, const double* g,         \
                                    double* out) {                                              \
     NS::weighted_rows_impl(a, n, width, g, out);                                               \
+  }                                                                                            \
+  ATTR void weighted_rows_f32_##SUFFIX(const float* a, int n, int width, const float* g,       \
+                                       float* out) {                                           \
+    NS::weighted_rows_f32_impl(a, n, width, g, out);                                           \
   }                                                                                            \
   ATTR void exp_##SUFFIX(const double* x, double* y, int n) {                                  \
     NS::apply<NS::exp_lanes>(x, y, n);                                                         \
@@ -130,6 +158,41 @@ namespace {
 std::atomic<bool> g_portable{false};
 
 }  // namespace
+
+LogRatioTerms make_log_ratio_terms(double mu1, double a1, double lb1, double mu0, double a0,
+                                   double lb0, double guard, double cut) {
+  LogRatioTerms t{mu1, a1, lb1, mu0, a0, lb0, guard, cut};
+  // Centred on the sharper class (the larger a): the cross terms then carry the smaller a, so
+  // that their rounding stays at the scale of h (centred on the wider class, a tiny sigma's
+  // a (mu_1 - mu_0)^2 would cancel against itself).
+  const double delta = mu1 - mu0;
+  const double inf = __builtin_huge_val();
+  double r1 = -inf, r0 = -inf;  // l_c > cut  <=>  |x - mu_c| < r_c (none when lb_c <= cut)
+  if (lb1 > cut) r1 = std::sqrt((lb1 - cut) / a1);
+  if (lb0 > cut) r0 = std::sqrt((lb0 - cut) / a0);
+  double lo, hi;  // the range of d = x - centre where both hold
+  if (a1 >= a0) {
+    t.centre = mu1;
+    t.qb = 2.0 * a0 * delta;
+    t.qc = (lb1 - lb0) + a0 * (delta * delta);
+    lo = std::max(-r1, -delta - r0);
+    hi = std::min(r1, -delta + r0);
+  } else {
+    t.centre = mu0;
+    t.qb = 2.0 * a1 * delta;
+    t.qc = (lb1 - lb0) - a1 * (delta * delta);
+    lo = std::max(-r0, delta - r1);
+    hi = std::min(r0, delta + r1);
+  }
+  t.qa = a0 - a1;
+  t.lo = inf;
+  t.hi = -inf;  // empty: never exact
+  if (r1 > 0.0 && r0 > 0.0 && lo < hi) {
+    t.lo = lo;
+    t.hi = hi;
+  }
+  return t;
+}
 
 bool avx2() {
 #ifdef WMILTRACK_AVX2_COPIES
@@ -173,6 +236,13 @@ void weighted_rows(const double* a, int n, int width, const double* g, double* o
   if (avx2()) return detail::weighted_rows_avx2(a, n, width, g, out);
 #endif
   detail::weighted_rows_base(a, n, width, g, out);
+}
+
+void weighted_rows_f32(const float* a, int n, int width, const float* g, float* out) {
+#ifdef WMILTRACK_AVX2_COPIES
+  if (avx2()) return detail::weighted_rows_f32_avx2(a, n, width, g, out);
+#endif
+  detail::weighted_rows_f32_base(a, n, width, g, out);
 }
 
 const char* isa() {

@@ -1,6 +1,8 @@
 // Gaussian naive-Bayes weak classifiers and candidate scoring over a search grid.
 #pragma once
 
+#include "wmiltrack/vmath.hpp"
+
 #include <Eigen/Core>
 #include <cstdint>
 #include <vector>
@@ -26,6 +28,9 @@ class WeakGaussians {
   // score_grid. `scratch` is unused (kept for the signature).
   void log_ratio(int k, const double* x, int n, double* out, bool accumulate,
                  double* scratch) const;
+  // Feature k's terms of the log ratio (vmath::LogRatioTerms, with the exact path's quadratic).
+  vmath::LogRatioTerms terms(int k) const;
+  double guard() const { return guard_; }
 
  private:
   Eigen::ArrayXd mu1_, a1_, lb1_, mu0_, a0_, lb0_;  // per feature (see the constructor)
