@@ -7,8 +7,11 @@ frames and the reported score climbs back, so the tracker never says it lost any
 never looks further than its local search. This part reads the classifier's confidence against
 its own recent history instead of a fixed level (confidences differ a lot between videos): a
 target that disappears takes it down by half from one frame to the next, while lighting and
-pose change it over tens of frames. While the target is lost nothing learns, and every frame is
-searched whole for the target's last confident look.
+pose change it over tens of frames. Other witnesses must agree before a frame counts as lost:
+the box's correlation with a grey template of the target, and the own confidence of any cue
+that gives one (the correlation filter's peak, which HOG keeps up under a shadow). While the
+target is lost nothing learns, and every frame is searched whole for the target's last
+confident look.
 
 That search does not use the classifier: Haar sums on raw intensities, frozen while the target
 is away, stop recognising it as soon as the lighting changes (on the generated sequences its
