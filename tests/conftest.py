@@ -27,6 +27,25 @@ EXTRA_OF = {"got10k": "integrations", "six": "integrations", "trax": "integratio
             "distributed": "cluster", "dask": "cluster"}
 
 
+def write_generated_otb(root: Path, name: str, *, seed: int, n: int) -> None:
+    """A tiny OTB-layout sequence ``root/name`` (``img/0001.jpg`` ..., ``groundtruth_rect.txt``)
+    from ``n`` generated 128x96 frames with a 24x20 target, for tests of code that reads the
+    layout."""
+    import cv2
+    import numpy as np
+
+    from wmiltrack.data.synthetic import make_sequence
+
+    seq = make_sequence(n, size=(96, 128), target_size=(24, 20), seed=seed, occlusion=False)
+    d = root / name / "img"
+    d.mkdir(parents=True)
+    for i, f in enumerate(seq.load()):
+        assert cv2.imwrite(str(d / f"{i + 1:04d}.jpg"), f)
+    rows = np.asarray(seq.groundtruth)
+    (root / name / "groundtruth_rect.txt").write_text(
+        "\n".join(",".join(repr(float(v)) for v in row) for row in rows) + "\n")
+
+
 def extras_required() -> bool:
     """True when a missing extra must fail the test instead of skipping it."""
     return os.environ.get(REQUIRE_EXTRAS_ENV, "").strip() not in ("", "0")

@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from conftest import skip_or_fail
+from conftest import skip_or_fail, write_generated_otb
 
 from wmiltrack.cli import main
 from wmiltrack.data.synthetic import make_sequence
@@ -107,17 +107,8 @@ def test_fps_compare_tiny() -> None:
 def test_fps_compare_on_real_layout_sequences(tmp_path: Path) -> None:
     """--otb: one column per sequence (its first --frames frames) and "all", the frames of
     every sequence over their update time; a missing sequence is a usage error."""
-    from wmiltrack.data.synthetic import make_sequence
-
     for name, seed in (("SynA", 3), ("SynB", 4)):
-        seq = make_sequence(10, size=(96, 128), target_size=(24, 20), seed=seed, occlusion=False)
-        d = tmp_path / name / "img"
-        d.mkdir(parents=True)
-        for i, f in enumerate(seq.load()):
-            assert cv2.imwrite(str(d / f"{i + 1:04d}.jpg"), f)
-        rows = np.asarray(seq.groundtruth)
-        (tmp_path / name / "groundtruth_rect.txt").write_text(
-            "\n".join(",".join(repr(float(v)) for v in row) for row in rows) + "\n")
+        write_generated_otb(tmp_path, name, seed=seed, n=10)
     args = [str(BENCH / "fps_compare.py"), "--otb", str(tmp_path), "--sequences", "SynA,SynB",
             "--frames", "6", "--repeats", "1", "--trackers", "rcwmil"]
     r = _run(args)

@@ -11,6 +11,7 @@ from typing import Any
 import cv2
 import numpy as np
 import pytest
+from conftest import write_generated_otb
 
 from wmiltrack.cli import main
 from wmiltrack.data.boxes import read_boxes
@@ -22,15 +23,7 @@ N = 20
 
 
 def _write_seq(root: Path, name: str, *, seed: int, n: int = N) -> None:
-    seq = make_sequence(n, size=(96, 128), target_size=(24, 20), seed=seed, occlusion=False)
-    d = root / name / "img"
-    d.mkdir(parents=True)
-    for i, f in enumerate(seq.load()):
-        assert cv2.imwrite(str(d / f"{i + 1:04d}.jpg"), f)
-    gt = np.asarray(seq.groundtruth)
-    (root / name / "groundtruth_rect.txt").write_text(
-        "\n".join(",".join(repr(float(v)) for v in row) for row in gt) + "\n"
-    )
+    write_generated_otb(root, name, seed=seed, n=n)
 
 
 @pytest.fixture(scope="module")
