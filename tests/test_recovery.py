@@ -151,3 +151,26 @@ def test_a_cue_that_still_sees_the_target_keeps_the_lost_state_off() -> None:
 
     assert lost_frames(_Witness(math.nan)) >= 25
     assert lost_frames(_Witness(1.0)) == 0
+
+
+@pytest.mark.parametrize("kind", ["gray", "gray3d", "bgra"])
+def test_gray_and_bgra_frames_are_found_again(kind: str) -> None:
+    """The template and the whole-frame search read every frame layout the tracker accepts."""
+    import cv2
+
+    seq = make_sequence(120, seed=0, occlusion=False, out_of_view=(60, 30))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    if kind == "bgra":
+        frames = [cv2.cvtColor(f, cv2.COLOR_BGR2BGRA) for f in frames]
+    else:
+        frames = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
+        if kind == "gray3d":
+            frames = [f[:, :, None] for f in frames]
+    t = Tracker("rcwmil-plus", seed=0)
+    t.init(frames[0], tuple(gt[0]))
+    boxes, lost = [gt[0]], 0
+    for f in frames[1:]:
+        boxes.append(np.asarray(t.update(f).box))
+        lost += t.parts.lost
+    assert lost >= 24  # most of the 30 frames out of view
+    assert _back_within(np.array(boxes), gt, 90, 10)
