@@ -156,3 +156,37 @@ def test_dsst_votes_inside_the_haar_scale_search(monkeypatch: pytest.MonkeyPatch
     assert grown.scale >= 1.03 ** 4 and grown.scale > plain.scale * 1.03**3
     with pytest.raises(ValueError, match="scale_dsst"):
         wmiltrack.Params.for_variant("rcwmil-plus", scale_dsst=-1.0)
+
+
+def test_template_every_learns_the_filters_on_every_nth_frame() -> None:
+    """template_every=3: the translation filter and DSST's learn on one frame in three, at the
+    rate 1 - (1 - r)^3 that keeps the same memory; bad values are refused."""
+    from wmiltrack.engine.correlation import SparseUpdates
+
+    u = SparseUpdates(0.01, 3)
+    assert [u.due() for _ in range(7)] == [False, False, True, False, False, True, False]
+    assert u.rate == pytest.approx(1.0 - 0.99**3)
+    seq = make_sequence(14, seed=2)
+    frames, gt = seq.load(), seq.groundtruth
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, template_weight=0.2, colour_weight=0.6,
+                          scale_model="dsst", template_every=3)
+    t.init(frames[0], tuple(gt[0]))
+    template = next(c for c in t.parts.cues if isinstance(c, CorrelationTemplate))
+    scale = t.parts.scale
+    assert isinstance(scale, DSSTScale)
+    calls = {"filter": 0, "scale": 0}
+    learn_filter, learn_scale = template.filter.learn, scale.estimator.learn
+
+    def count(name: str, fn):  # type: ignore[no-untyped-def]
+        def wrapped(*a, **k):  # type: ignore[no-untyped-def]
+            calls[name] += 1
+            return fn(*a, **k)
+        return wrapped
+
+    template.filter.learn = count("filter", learn_filter)  # type: ignore[method-assign]
+    scale.estimator.learn = count("scale", learn_scale)  # type: ignore[method-assign]
+    for f in frames[1:13]:  # 12 frames
+        t.update(f)
+    assert calls == {"filter": 4, "scale": 4}
+    with pytest.raises(ValueError, match="template_every"):
+        wmiltrack.Params.for_variant("rcwmil-plus", template_every=0)

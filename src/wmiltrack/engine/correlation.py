@@ -32,6 +32,7 @@ __all__ = [
     "ScaleEstimator",
     "ScaleFilterSettings",
     "smooth_size",
+    "SparseUpdates",
 ]
 
 Box = tuple[float, float, float, float]
@@ -57,6 +58,26 @@ def smooth_size(n: int) -> int:
         if n - d >= 1 and smooth(n - d):
             return n - d
     return n  # pragma: no cover - 1 is smooth
+
+
+class SparseUpdates:
+    """Learning every ``every``-th frame (ECO's sparse updates: each learning step of a filter
+    costs a feature extraction and a transform per channel) at a rate raised to
+    ``1 - (1 - rate) ** every``, so that the model keeps the same memory as learning every
+    frame at ``rate``."""
+
+    def __init__(self, rate: float, every: int) -> None:
+        self.every = every
+        self.rate = 1.0 - (1.0 - rate) ** every
+        self._count = 0
+
+    def due(self) -> bool:
+        """Whether this frame's learning step is one to take (counts the call)."""
+        self._count += 1
+        if self._count >= self.every:
+            self._count = 0
+            return True
+        return False
 
 
 def _need(ok: bool, message: str) -> None:

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 
 from .classifier import GaussianPool
-from .correlation import ScaleEstimator
+from .correlation import ScaleEstimator, ScaleFilterSettings, SparseUpdates
 from .features import box_area_ok, min_box_size
 from .frames import IntBox
 
@@ -47,8 +47,10 @@ class HaarScale:
         self.tried: list[IntBox] = []  # the boxes tried at other scales in the last frame
         self.pool = (GaussianPool(params.replace(learning_rate=params.scale_learning_rate))
                      if params.scale_model != "ratio" else None)
-        # DSST's vote on the size (scale_dsst), learnt at every frame's box
-        self.dsst = ScaleEstimator() if params.scale_dsst > 0 else None
+        # DSST's vote on the size (scale_dsst), learnt at every template_every-th frame's box
+        self.dsst_updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
+        self.dsst = (ScaleEstimator(ScaleFilterSettings(learning_rate=self.dsst_updates.rate))
+                     if params.scale_dsst > 0 else None)
 
     @property
     def scale(self) -> float:
@@ -82,7 +84,7 @@ class HaarScale:
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
         """Fold the frame's box into DSST's vote, if any (the Haar models learn with the
         appearance model's learning step: :meth:`learning_extras`)."""
-        if self.dsst is not None:
+        if self.dsst is not None and self.dsst_updates.due():
             self.dsst.learn(frame, (box[0] + box[2] / 2.0, box[1] + box[3] / 2.0), (box[2], box[3]))
 
     def _dsst_vote(self, frame: np.ndarray, box: IntBox) -> Callable[[IntBox], float] | None:

@@ -583,6 +583,11 @@ class TemplateSettings:
     template_gate : float
         The filter learns only from frames whose reported score is at least this (0: every
         frame), so that an occluder or a drift the score notices stays out of the template.
+    template_every : int
+        The correlation filters (the template and DSST's scale filter) learn from every
+        ``template_every``-th frame they may learn from (ECO's sparse updates: each learning
+        step costs a feature extraction and a transform per channel), their rates raised to
+        keep the same memory.
     """
 
     template_weight: float = 0.0
@@ -590,6 +595,7 @@ class TemplateSettings:
     template_area: float = 150.0**2
     template_learning_rate: float = 0.01
     template_gate: float = 0.0
+    template_every: int = 1
 
     def __post_init__(self) -> None:
         TemplateSettings.check(self)
@@ -607,6 +613,8 @@ class TemplateSettings:
               f"template_learning_rate must be in (0, 1], got {self.template_learning_rate}")
         _need(0.0 <= self.template_gate <= 1.0,
               f"template_gate must be in [0, 1], got {self.template_gate}")
+        _need(_is_int(self.template_every) and 1 <= self.template_every <= 100,
+              f"template_every must be an int in 1..100, got {self.template_every!r}")
 
 
 @dataclass(frozen=True)

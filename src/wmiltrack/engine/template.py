@@ -14,7 +14,14 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-from .correlation import CorrelationFilter, CorrelationSettings, Location, ScaleEstimator
+from .correlation import (
+    CorrelationFilter,
+    CorrelationSettings,
+    Location,
+    ScaleEstimator,
+    ScaleFilterSettings,
+    SparseUpdates,
+)
 from .frames import IntBox
 from .scale import centred
 
@@ -48,8 +55,9 @@ class CorrelationTemplate:
         self.weight = settings.template_weight
         self.moves = settings.template_motion
         self.learn_above = settings.template_gate
+        self.updates = SparseUpdates(settings.template_learning_rate, settings.template_every)
         self.filter = CorrelationFilter(CorrelationSettings(
-            template_area=settings.template_area, learning_rate=settings.template_learning_rate))
+            template_area=settings.template_area, learning_rate=self.updates.rate))
         self._searched: tuple[tuple[float, float], Location] | None = None
         self.confidence = math.nan
 
@@ -110,7 +118,8 @@ class CorrelationTemplate:
         return value, x0, y0
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
-        self.filter.learn(frame, box)
+        if self.updates.due():
+            self.filter.learn(frame, box)
 
 
 class DSSTScale:
@@ -122,7 +131,8 @@ class DSSTScale:
         self.settings = params
         self.base_wh = base_wh
         self.frame_wh = frame_wh
-        self.estimator = ScaleEstimator()
+        self.updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
+        self.estimator = ScaleEstimator(ScaleFilterSettings(learning_rate=self.updates.rate))
         self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
         self.tried: list[IntBox] = []
 
@@ -166,5 +176,7 @@ class DSSTScale:
         """(No model in the appearance model's learning step.)"""
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
-        """Fold in the scale samples around the frame's final box."""
-        self.estimator.learn(frame, _centre(box), self.size)
+        """Fold in the scale samples around the frame's final box (every ``template_every``-th
+        frame)."""
+        if self.updates.due():
+            self.estimator.learn(frame, _centre(box), self.size)
