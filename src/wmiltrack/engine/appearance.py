@@ -10,7 +10,7 @@ made of nothing but this model runs all of that in one call to the core
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -166,6 +166,21 @@ class HaarAppearance:
         return Search(self.ii, self.bank(box[2], box[3]), self.selected, pool.mu1, pool.sigma1,
                       pool.mu0, pool.sigma0, self.params.guard, box, stages, frame_wh, img, roi,
                       cue)
+
+    def search_on(self, img: np.ndarray | None, box: IntBox, margin: int,
+                  stages: list[tuple[int, int]], frame_wh: tuple[int, int],
+                  cues: Callable[[], tuple[Any, ...] | None]) -> Search:
+        """The search from ``box`` on a frame whose integral image covers ``margin`` pixels
+        around it: a luma model's is computed by the core in the search's own call, a
+        several-channel model's here first (before ``cues`` makes the cues' merged table,
+        so that a frame the model cannot read is refused first); ``img=None`` searches the
+        integral image this model holds (one shared by several trackers)."""
+        if img is None:
+            return self.search_request(box, stages, frame_wh, None, None, cues())
+        if self.chan_names is not None:
+            self.compute_integral(img, box, margin)
+            return self.search_request(box, stages, frame_wh, None, None, cues())
+        return self.search_request(box, stages, frame_wh, img, roi_around(box, margin), cues())
 
     def grid(self, box: IntBox, radius: int, frame_wh: tuple[int, int]) -> tuple[int, int, float, int]:
         """Best offset, its raw score and the candidate count of the step-1 grid of

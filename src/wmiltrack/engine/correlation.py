@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -234,7 +234,24 @@ class ScaleEstimate:
     response: npt.NDArray[np.float32]
 
 
-class CorrelationFilter:
+_CoreFilter = TypeVar("_CoreFilter", _core.TranslationFilter, _core.ScaleFilter)
+
+
+class _Trained(Generic[_CoreFilter]):
+    """What both filters share: the compiled filter, made by ``init``."""
+
+    _filter: _CoreFilter | None = None
+
+    def _require(self) -> _CoreFilter:
+        if self._filter is None:
+            raise RuntimeError("call init() first")
+        return self._filter
+
+    def _filter_copy(self) -> _CoreFilter | None:
+        return None if self._filter is None else self._filter.copy()
+
+
+class CorrelationFilter(_Trained[_core.TranslationFilter]):
     """A translation correlation filter on fHOG over a fixed-size template (Staple/DSST).
 
     :meth:`init` fixes the template: the search region (the target plus padding) is mapped to
@@ -246,7 +263,7 @@ class CorrelationFilter:
     def __init__(self, settings: CorrelationSettings | None = None) -> None:
         """A filter with these settings (defaults if None); call :meth:`init` before use."""
         self.settings = settings if settings is not None else CorrelationSettings()
-        self._filter: _core.TranslationFilter | None = None
+        self._filter = None
         self._base_size = (0.0, 0.0)  # the target's size at init
         self._base_region = (0.0, 0.0)  # the search region's size at init (frame pixels)
         self._out_size = (0, 0)  # template pixels (w, h)
@@ -272,15 +289,10 @@ class CorrelationFilter:
         """An independent copy (template geometry and model as they are now), e.g. to keep
         the last model a tracker trusted."""
         out = CorrelationFilter(self.settings)
-        out._filter = None if self._filter is None else self._filter.copy()
+        out._filter = self._filter_copy()
         out._base_size, out._base_region = self._base_size, self._base_region
         out._out_size, out._size = self._out_size, self._size
         return out
-
-    def _require(self) -> _core.TranslationFilter:
-        if self._filter is None:
-            raise RuntimeError("call init() first")
-        return self._filter
 
     def init(self, frame: Any, box: Any) -> None:
         """Fix the template for a target ``box = (x, y, w, h)`` and learn it (rate 1)."""
@@ -332,7 +344,7 @@ class CorrelationFilter:
         self._size = (w, h)
 
 
-class ScaleEstimator:
+class ScaleEstimator(_Trained[_core.ScaleFilter]):
     """DSST's scale filter: fHOG of ``num_scales`` resampled regions around the target, sizes
     ``step**k`` times its size (``k`` from ``-(n-1)/2`` to ``(n-1)/2``), each resampled to
     the same at most ``max_area`` pixels, and a 1-D correlation filter along the scales."""
@@ -343,20 +355,15 @@ class ScaleEstimator:
         s = self.settings
         half = (s.num_scales - 1) // 2
         self.factors: tuple[float, ...] = tuple(s.step ** (k - half) for k in range(s.num_scales))
-        self._filter: _core.ScaleFilter | None = None
+        self._filter = None
         self._model_size = (0, 0)
 
     def copy(self) -> ScaleEstimator:
         """An independent copy (sample size and model as they are now)."""
         out = ScaleEstimator(self.settings)
-        out._filter = None if self._filter is None else self._filter.copy()
+        out._filter = self._filter_copy()
         out._model_size = self._model_size
         return out
-
-    def _require(self) -> _core.ScaleFilter:
-        if self._filter is None:
-            raise RuntimeError("call init() first")
-        return self._filter
 
     def init(self, frame: Any, box: Any) -> None:
         """Fix the sample size for a target ``box = (x, y, w, h)`` and learn it (rate 1)."""

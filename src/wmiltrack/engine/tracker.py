@@ -355,19 +355,14 @@ class Tracker:
         roi = roi_around(origin, margin)
         own = model.ii
         shared = integral is not None and model.covered_by(integral, roi, wh)
-        # Luma-only models compute their integral image in the search's call to the core;
-        # several channels are computed here first.
-        direct = model.chan_names is None and not shared
         if shared:
             assert integral is not None
             model.ii = integral
-        elif not direct:
-            model.compute_integral(img, origin, margin)
         try:
             stages = self._stages
-            search = model.search_request(origin, stages, wh, img if direct else None,
-                                          roi if direct else None, self._cue_merge(img, origin))
-            if self._fused and (direct or shared):
+            search = model.search_on(None if shared else img, origin, margin, stages, wh,
+                                     lambda: self._cue_merge(img, origin))
+            if self._fused:  # (a fused model reads luma only)
                 # The appearance model alone: search, bags and learning in one core call, and
                 # no other part to consult.
                 results = yield from model.fused_step(search, origin)
@@ -470,14 +465,9 @@ class Tracker:
                      ) -> Steps:
         """The classifier's search from ``origin`` over ``stages`` with every cue merged (its
         own integral image); moves the box and returns the raw score (see :meth:`_move`)."""
-        model = self._parts.appearance
-        margin = self._margin()
-        direct = model.chan_names is None
-        if not direct:
-            model.compute_integral(img, origin, margin)
-        search = model.search_request(origin, stages, self._frame_wh, img if direct else None,
-                                      roi_around(origin, margin) if direct else None,
-                                      self._cue_merge(img, origin))
+        search = self._parts.appearance.search_on(img, origin, self._margin(), stages,
+                                                  self._frame_wh,
+                                                  lambda: self._cue_merge(img, origin))
         raw: float = self._move(origin, stages, (yield search))
         return raw
 
