@@ -72,8 +72,8 @@ GrayPatch sample(const ImageView& view, Pair centre, Pair size, Size out_size) {
 struct LockedTranslation {
   cf::TranslationFilter filter;
   std::mutex lock;
-  LockedTranslation(int rows, int cols, int channels, double sigma, double lambda)
-      : filter(rows, cols, channels, sigma, lambda) {}
+  LockedTranslation(int rows, int cols, int channels, double sigma, double lambda, int compressed)
+      : filter(rows, cols, channels, sigma, lambda, compressed) {}
   explicit LockedTranslation(const cf::TranslationFilter& f) : filter(f) {}
 };
 
@@ -191,7 +191,40 @@ void bind_cf(py::module_& m) {
       .def_readonly("psr", &cf::TranslationResponse::psr,
                     "Peak-to-sidelobe ratio: (peak - mean) / std outside the peak's window.")
       .def_readonly("apce", &cf::TranslationResponse::apce,
-                    "Average peak-to-correlation energy: (max - min)^2 / mean((v - min)^2).");
+                    "Average peak-to-correlation energy: (max - min)^2 / mean((v - min)^2).")
+      .def(
+          "map",
+          [](const cf::TranslationResponse& r, Pair centre, Pair cell,
+             std::tuple<int, int, int, int> region) {
+            const auto [cx, cy] = centre;
+            const auto [cw, ch] = cell;
+            const auto [x0, y0, x1, y1] = region;
+            require(std::isfinite(cx) && std::isfinite(cy), "centre must be finite");
+            require(std::isfinite(cw) && std::isfinite(ch) && cw > 0 && ch > 0,
+                    "cell must be positive and finite");
+            require(x1 > x0 && y1 > y0, "region must be (x0, y0, x1, y1) with x1 > x0, y1 > y0");
+            std::vector<double> v;
+            {
+              py::gil_scoped_release release;
+              v = cf::response_map(r, cx, cy, cw, ch, x0, y0, x1, y1);
+            }
+            py::array_t<double> out({static_cast<py::ssize_t>(y1 - y0), static_cast<py::ssize_t>(x1 - x0)});
+            std::copy(v.begin(), v.end(), out.mutable_data());
+            return out;
+          },
+          py::arg("centre"), py::arg("cell"), py::arg("region"),
+          "The response at every pixel of region = (x0, y0, x1, y1) taken as the target's\n"
+          "centre, for a search centred at centre = (cx, cy) with cells of cell = (w, h) frame\n"
+          "pixels: bilinear between cells (wrapping around), divided by the peak when it is\n"
+          "positive, clipped to [0, 1]; float64 (y1 - y0, x1 - x0).");
+
+  py::class_<cf::Spectrum>(
+      m, "Spectrum",
+      "A sample as one translation filter takes it (its windowed, possibly compressed\n"
+      "features' half spectra), from TranslationFilter.sample or .transform.")
+      .def_readonly("channels", &cf::Spectrum::channels)
+      .def_readonly("rows", &cf::Spectrum::rows)
+      .def_readonly("cols", &cf::Spectrum::cols);
 
   py::class_<LockedTranslation>(
       m, "TranslationFilter",
@@ -199,15 +232,20 @@ void bind_cf(py::module_& m) {
       "in the Fourier domain: a Hann window on every plane, a Gaussian label (sigma cells)\n"
       "peaked at shift (0, 0), numerator conj(Y) X_k / N and denominator sum |X_k|^2 / N kept\n"
       "as running averages, response real(ifft2(sum conj(A_k) Z_k / (B + lam)))).")
-      .def(py::init([](int rows, int cols, int channels, double sigma, double lam) {
+      .def(py::init([](int rows, int cols, int channels, double sigma, double lam,
+                       int compressed) {
              require(rows >= 1 && cols >= 1 && channels >= 1,
                      "rows, cols and channels must be at least 1");
              require(std::isfinite(sigma) && sigma > 0.0, "sigma must be positive");
              require(std::isfinite(lam) && lam >= 0.0, "lam must be non-negative");
-             return std::make_unique<LockedTranslation>(rows, cols, channels, sigma, lam);
+             require(compressed >= 0, "compressed must be >= 0");
+             return std::make_unique<LockedTranslation>(rows, cols, channels, sigma, lam,
+                                                        compressed);
            }),
            py::arg("rows"), py::arg("cols"), py::arg("channels"), py::arg("sigma"),
-           py::arg("lam"))
+           py::arg("lam"), py::arg("compressed") = 0,
+           "compressed in 1 .. channels - 1 projects the features onto that many channels, the\n"
+           "principal axes of the first learnt sample (ECO), fixed from then on.")
       .def(
           "copy",
           [](LockedTranslation& t) {
@@ -219,6 +257,87 @@ void bind_cf(py::module_& m) {
       .def_property_readonly("cols", [](const LockedTranslation& t) { return t.filter.cols(); })
       .def_property_readonly("channels",
                              [](const LockedTranslation& t) { return t.filter.channels(); })
+      .def_property_readonly(
+          "filter_channels", [](const LockedTranslation& t) { return t.filter.filter_channels(); },
+          "Channels of the filter itself: compressed, or channels without a projection.")
+      .def_property_readonly(
+          "projection",
+          [](LockedTranslation& t) {
+            std::lock_guard<std::mutex> guard(t.lock);
+            const auto& p = t.filter.projection();
+            const py::ssize_t k = p.empty() ? 0 : t.filter.filter_channels();
+            return to_array(p, {k, t.filter.channels()});
+          },
+          "The projection (filter_channels x channels; 0 rows without one or before learn).")
+      .def(
+          "sample",
+          [](LockedTranslation& t, const py::array& frame, Pair centre, Pair size, Size out_size,
+             int cell) {
+            const ImageView view = image_view(frame);
+            check_region(centre, size);
+            require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
+            const auto [ow, oh] = out_size;
+            require(ow / cell == t.filter.cols() && oh / cell == t.filter.rows(),
+                    "out_size / cell must be the filter's (cols, rows)");
+            py::gil_scoped_release release;
+            FeatureMap x = cf::fhog(sample(view, centre, size, out_size), cell);
+            std::lock_guard<std::mutex> guard(t.lock);
+            if (t.filter.filter_channels() < t.filter.channels() && t.filter.projection().empty()) {
+              throw py::value_error("a compressed filter learns before it samples");
+            }
+            return t.filter.transform(x);
+          },
+          py::arg("frame"), py::arg("centre"), py::arg("size"), py::arg("out_size"),
+          py::arg("cell") = 4,
+          "transform(fhog_region(frame, centre, size, out_size, cell)) in one call.")
+      .def(
+          "transform",
+          [](LockedTranslation& t, const py::array& features) {
+            const FeatureMap x = feature_map(features);
+            require(x.channels == t.filter.channels() && x.rows == t.filter.rows() &&
+                        x.cols == t.filter.cols(),
+                    "features must have shape (channels, rows, cols) of the filter");
+            py::gil_scoped_release release;
+            std::lock_guard<std::mutex> guard(t.lock);
+            if (t.filter.filter_channels() < t.filter.channels() && t.filter.projection().empty()) {
+              throw py::value_error("a compressed filter learns before it transforms");
+            }
+            return t.filter.transform(x);
+          },
+          py::arg("features"),
+          "The sample as this filter takes it (features x window, projected, half spectra).")
+      .def(
+          "learn_spectrum",
+          [](LockedTranslation& t, const cf::Spectrum& s, double rate, Pair shift) {
+            check_rate(rate);
+            const auto [rs, cs] = shift;
+            require(std::isfinite(rs) && std::isfinite(cs), "shift must be finite");
+            require(s.channels == t.filter.filter_channels() && s.rows == t.filter.rows() &&
+                        s.cols == t.filter.cols(),
+                    "the spectrum is not of this filter's shape");
+            py::gil_scoped_release release;
+            std::lock_guard<std::mutex> guard(t.lock);
+            if (!t.filter.trained()) throw py::value_error("the first learn() takes features");
+            t.filter.learn(s, rate, rs, cs);
+          },
+          py::arg("spectrum"), py::arg("rate"), py::arg("shift") = Pair{0.0, 0.0},
+          "Fold in a transformed sample whose target sits shift = (rows, cols) cells from its\n"
+          "centre (moved circularly so that the target is centred, as ECO trains on its search\n"
+          "sample).")
+      .def(
+          "respond_spectrum",
+          [](LockedTranslation& t, const cf::Spectrum& s, int exclusion) {
+            require(exclusion >= 0, "exclusion must be >= 0");
+            require(s.channels == t.filter.filter_channels() && s.rows == t.filter.rows() &&
+                        s.cols == t.filter.cols(),
+                    "the spectrum is not of this filter's shape");
+            py::gil_scoped_release release;
+            std::lock_guard<std::mutex> guard(t.lock);
+            if (!t.filter.trained()) throw py::value_error("call learn() before respond()");
+            return t.filter.respond(s, exclusion);
+          },
+          py::arg("spectrum"), py::arg("exclusion") = 5,
+          "respond() to a transformed sample.")
       .def_property_readonly("trained", [](LockedTranslation& t) {
         std::lock_guard<std::mutex> guard(t.lock);
         return t.filter.trained();
@@ -326,7 +445,56 @@ void bind_cf(py::module_& m) {
             if (!s.filter.trained()) throw py::value_error("call learn() before respond()");
             return s.filter.respond(v);
           },
-          py::arg("samples"), "The response to num_scales x dims samples.");
+          py::arg("samples"), "The response to num_scales x dims samples.")
+      .def(
+          "sample",
+          [](LockedScale& s, const py::array& frame, Pair centre, Pair size,
+             const std::vector<double>& factors, Size model_size, int cell) {
+            const ImageView view = image_view(frame);
+            check_region(centre, size);
+            require(static_cast<int>(factors.size()) == s.filter.num_scales(),
+                    "factors must hold num_scales values");
+            for (double f : factors) {
+              require(std::isfinite(f) && f > 0.0, "factors must be positive and finite");
+            }
+            const auto [mw, mh] = model_size;
+            require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
+            require(mw >= cell && mh >= cell, "model_size must hold at least one cell");
+            require(cf::scale_sample_dims(mw, mh, cell) == s.filter.dims(),
+                    "model_size and cell must give the filter's dims");
+            const auto [cx, cy] = centre;
+            const auto [w, h] = size;
+            py::gil_scoped_release release;
+            const std::vector<float> v = cf::scale_samples(view, cx, cy, w, h, factors, mw, mh, cell);
+            return s.filter.transform(v);
+          },
+          py::arg("frame"), py::arg("centre"), py::arg("size"), py::arg("factors"),
+          py::arg("model_size"), py::arg("cell") = 4,
+          "The scale samples (scale_samples) as this filter takes them, in one call.")
+      .def(
+          "learn_spectrum",
+          [](LockedScale& s, const cf::Spectrum& sp, double rate, double shift) {
+            check_rate(rate);
+            require(std::isfinite(shift), "shift must be finite");
+            require(sp.channels == s.filter.dims() && sp.rows == 1 && sp.cols == s.filter.num_scales(),
+                    "the spectrum is not of this filter's shape");
+            py::gil_scoped_release release;
+            std::lock_guard<std::mutex> guard(s.lock);
+            s.filter.learn(sp, rate, shift);
+          },
+          py::arg("spectrum"), py::arg("rate"), py::arg("shift") = 0.0,
+          "Fold in transformed samples whose target size sits shift samples from the middle.")
+      .def(
+          "respond_spectrum",
+          [](LockedScale& s, const cf::Spectrum& sp) {
+            require(sp.channels == s.filter.dims() && sp.rows == 1 && sp.cols == s.filter.num_scales(),
+                    "the spectrum is not of this filter's shape");
+            py::gil_scoped_release release;
+            std::lock_guard<std::mutex> guard(s.lock);
+            if (!s.filter.trained()) throw py::value_error("call learn() before respond()");
+            return s.filter.respond(sp);
+          },
+          py::arg("spectrum"), "respond() to transformed samples.");
 }
 
 }  // namespace wmiltrack::bindings

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/FFT>
 
 namespace wmiltrack::cf {
@@ -127,11 +129,16 @@ void blend(std::vector<Num>& model, const std::vector<Num>& sample, double rate,
 }  // namespace
 
 // ------------------------------------------------------------------ translation filter
-TranslationFilter::TranslationFilter(int rows, int cols, int channels, double sigma, double lambda)
-    : rows_(rows), cols_(cols), channels_(channels), lambda_(lambda) {
+TranslationFilter::TranslationFilter(int rows, int cols, int channels, double sigma, double lambda,
+                                     int compressed)
+    : rows_(rows), cols_(cols), channels_(channels), kept_(channels), lambda_(lambda) {
   if (rows < 1 || cols < 1 || channels < 1) {
     throw std::invalid_argument("TranslationFilter: rows, cols and channels must be at least 1");
   }
+  if (compressed < 0) {
+    throw std::invalid_argument("TranslationFilter: compressed must be >= 0");
+  }
+  if (compressed > 0 && compressed < channels) kept_ = compressed;
   check_filter_args(sigma, lambda);
   const std::vector<float> wr = hann(rows), wc = hann(cols);
   window_.resize(static_cast<std::size_t>(rows) * cols);
@@ -162,16 +169,69 @@ void TranslationFilter::check(const FeatureMap& x) const {
   }
 }
 
-std::vector<Complex> TranslationFilter::spectra(const FeatureMap& x) const {
+void TranslationFilter::check(const Spectrum& s) const {
+  if (s.channels != kept_ || s.rows != rows_ || s.cols != cols_ ||
+      s.data.size() != label_f_.size() * static_cast<std::size_t>(kept_)) {
+    throw std::invalid_argument("TranslationFilter: a spectrum of (" + std::to_string(s.channels) +
+                                ", " + std::to_string(s.rows) + ", " + std::to_string(s.cols) +
+                                ") for a filter of (" + std::to_string(kept_) + ", " +
+                                std::to_string(rows_) + ", " + std::to_string(cols_) + ")");
+  }
+}
+
+// The principal axes of the sample's cells: eigenvectors of sum over cells of x x^T (the
+// features' second moments, as fDSST takes them), largest eigenvalues first, each signed so
+// that its largest entry is positive (the eigen solver's sign is arbitrary).
+void TranslationFilter::fit_projection(const FeatureMap& x) {
+  const Eigen::Index plane = static_cast<Eigen::Index>(x.plane_size());
+  const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
+      features(x.data.data(), channels_, plane);
+  const Eigen::MatrixXd moments = (features.cast<double>() * features.cast<double>().transpose());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(moments);
+  if (solver.info() != Eigen::Success) {
+    throw std::runtime_error("TranslationFilter: the features' eigen decomposition failed");
+  }
+  projection_.assign(static_cast<std::size_t>(kept_) * channels_, 0.0f);
+  for (int k = 0; k < kept_; ++k) {
+    Eigen::VectorXd axis = solver.eigenvectors().col(channels_ - 1 - k);
+    Eigen::Index big = 0;
+    axis.cwiseAbs().maxCoeff(&big);
+    if (axis(big) < 0.0) axis = -axis;
+    for (int j = 0; j < channels_; ++j) {
+      projection_[static_cast<std::size_t>(k) * channels_ + j] = static_cast<float>(axis(j));
+    }
+  }
+}
+
+Spectrum TranslationFilter::transform(const FeatureMap& x) const {
+  check(x);
+  const bool project = kept_ < channels_;
+  if (project && projection_.empty()) {
+    throw std::logic_error("TranslationFilter: a compressed filter learns before it transforms");
+  }
   const std::size_t plane = x.plane_size();
+  std::vector<float> projected;
+  const float* planes = x.data.data();
+  if (project) {
+    using RowMajor = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    projected.resize(static_cast<std::size_t>(kept_) * plane);
+    Eigen::Map<RowMajor>(projected.data(), kept_, static_cast<Eigen::Index>(plane)).noalias() =
+        Eigen::Map<const RowMajor>(projection_.data(), kept_, channels_) *
+        Eigen::Map<const RowMajor>(x.data.data(), channels_, static_cast<Eigen::Index>(plane));
+    planes = projected.data();
+  }
   Fft2 fft(rows_, cols_);
   const std::size_t half = static_cast<std::size_t>(rows_) * fft.half();
-  std::vector<Complex> out(half * static_cast<std::size_t>(channels_));
+  Spectrum out;
+  out.channels = kept_;
+  out.rows = rows_;
+  out.cols = cols_;
+  out.data.resize(half * static_cast<std::size_t>(kept_));
   std::vector<float> windowed(plane);
-  for (int k = 0; k < channels_; ++k) {
-    const float* src = &x.data[k * plane];
+  for (int k = 0; k < kept_; ++k) {
+    const float* src = &planes[k * plane];
     for (std::size_t i = 0; i < plane; ++i) windowed[i] = src[i] * window_[i];
-    fft.forward_half(windowed.data(), &out[k * half]);
+    fft.forward_half(windowed.data(), &out.data[k * half]);
   }
   return out;
 }
@@ -179,15 +239,51 @@ std::vector<Complex> TranslationFilter::spectra(const FeatureMap& x) const {
 void TranslationFilter::learn(const FeatureMap& x, double rate) {
   check(x);
   check_rate(rate);
-  const float inv_n = 1.0f / static_cast<float>(x.plane_size());
-  std::vector<Complex> num = spectra(x);
+  if (kept_ < channels_ && projection_.empty()) fit_projection(x);
+  learn(transform(x), rate);
+}
+
+void TranslationFilter::learn(const Spectrum& s, double rate, double row_shift,
+                              double col_shift) {
+  check(s);
+  check_rate(rate);
+  if (!std::isfinite(row_shift) || !std::isfinite(col_shift)) {
+    throw std::invalid_argument("TranslationFilter: the shift must be finite");
+  }
+  if (kept_ < channels_ && projection_.empty()) {
+    throw std::logic_error("TranslationFilter: a compressed filter's first learn needs features");
+  }
+  const float inv_n = 1.0f / static_cast<float>(static_cast<std::size_t>(rows_) * cols_);
+  const std::size_t half_cols = static_cast<std::size_t>(cols_ / 2 + 1);
   const std::size_t half = label_f_.size();
+  // conj(Y) times the moved sample: Y's conjugate times e^{2 pi i (u a / rows + v b / cols)}
+  // (u the signed row frequency), one ramp per axis.
+  std::vector<Complex> target(half);
+  const bool moved = row_shift != 0.0 || col_shift != 0.0;
+  std::vector<Complex> ramp_c(half_cols, Complex(1.0f, 0.0f));
+  for (std::size_t v = 0; moved && v < half_cols; ++v) {
+    const double phase = 2.0 * kPi * static_cast<double>(v) * col_shift / cols_;
+    ramp_c[v] = Complex(static_cast<float>(std::cos(phase)), static_cast<float>(std::sin(phase)));
+  }
+  for (int u = 0; u < rows_; ++u) {
+    const int signed_u = u <= rows_ / 2 ? u : u - rows_;
+    const double phase = 2.0 * kPi * signed_u * row_shift / rows_;
+    const Complex ramp_r = moved ? Complex(static_cast<float>(std::cos(phase)),
+                                           static_cast<float>(std::sin(phase)))
+                                 : Complex(1.0f, 0.0f);
+    for (std::size_t v = 0; v < half_cols; ++v) {
+      const std::size_t i = static_cast<std::size_t>(u) * half_cols + v;
+      target[i] = moved ? label_f_[i] * (ramp_r * ramp_c[v]) * inv_n : label_f_[i] * inv_n;
+    }
+  }
+  std::vector<Complex> num(s.data.size());
   std::vector<float> den(half, 0.0f);
-  for (int k = 0; k < channels_; ++k) {
-    Complex* xk = &num[k * half];
+  for (int k = 0; k < kept_; ++k) {
+    const Complex* xk = &s.data[k * half];
+    Complex* nk = &num[k * half];
     for (std::size_t i = 0; i < half; ++i) {
       den[i] += std::norm(xk[i]) * inv_n;
-      xk[i] = label_f_[i] * xk[i] * inv_n;
+      nk[i] = target[i] * xk[i];
     }
   }
   blend(num_, num, rate, !trained_, den_, den);
@@ -196,13 +292,18 @@ void TranslationFilter::learn(const FeatureMap& x, double rate) {
 
 TranslationResponse TranslationFilter::respond(const FeatureMap& z, int exclusion) const {
   if (!trained_) throw std::logic_error("TranslationFilter: learn() before respond()");
-  check(z);
+  return respond(transform(z), exclusion);
+}
+
+TranslationResponse TranslationFilter::respond(const Spectrum& zf_in, int exclusion) const {
+  if (!trained_) throw std::logic_error("TranslationFilter: learn() before respond()");
+  check(zf_in);
   if (exclusion < 0) throw std::invalid_argument("TranslationFilter: exclusion must be >= 0");
-  const std::size_t plane = z.plane_size();
-  const std::vector<Complex> zf = spectra(z);
+  const std::size_t plane = static_cast<std::size_t>(rows_) * cols_;
+  const std::vector<Complex>& zf = zf_in.data;
   const std::size_t half = label_f_.size();
   std::vector<Complex> acc(half, Complex(0.0f, 0.0f));
-  for (int k = 0; k < channels_; ++k) {
+  for (int k = 0; k < kept_; ++k) {
     const Complex* a = &num_[k * half];
     const Complex* zk = &zf[k * half];
     for (std::size_t i = 0; i < half; ++i) acc[i] += std::conj(a[i]) * zk[i];
@@ -257,6 +358,51 @@ TranslationResponse TranslationFilter::respond(const FeatureMap& z, int exclusio
   return out;
 }
 
+std::vector<double> response_map(const TranslationResponse& r, double cx, double cy,
+                                 double cell_w, double cell_h, int x0, int y0, int x1, int y1) {
+  if (x1 <= x0 || y1 <= y0) throw std::invalid_argument("response_map: an empty region");
+  if (!(cell_w > 0.0 && cell_h > 0.0)) {
+    throw std::invalid_argument("response_map: cells must have a positive size");
+  }
+  const int rows = r.rows, cols = r.cols, w = x1 - x0, h = y1 - y0;
+  const auto wrap = [](long i, int n) { return static_cast<int>(((i % n) + n) % n); };
+  // Along the columns for every response row first (the response is far smaller than the
+  // region), then along the rows.
+  std::vector<int> c0(static_cast<std::size_t>(w)), c1(c0.size());
+  std::vector<double> fu(c0.size());
+  for (int x = 0; x < w; ++x) {
+    const double u = (x0 + x - cx) / cell_w;
+    const double f = std::floor(u);
+    c0[x] = wrap(static_cast<long>(f), cols);
+    c1[x] = wrap(static_cast<long>(f) + 1, cols);
+    fu[x] = u - f;
+  }
+  std::vector<double> across(static_cast<std::size_t>(rows) * w);
+  for (int i = 0; i < rows; ++i) {
+    const float* row = &r.values[static_cast<std::size_t>(i) * cols];
+    double* dst = &across[static_cast<std::size_t>(i) * w];
+    for (int x = 0; x < w; ++x) {
+      dst[x] = static_cast<double>(row[c0[x]]) * (1.0 - fu[x]) + static_cast<double>(row[c1[x]]) * fu[x];
+    }
+  }
+  const double peak = r.peak;
+  std::vector<double> out(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y) {
+    const double v = (y0 + y - cy) / cell_h;
+    const double f = std::floor(v);
+    const double fv = v - f;
+    const double* a = &across[static_cast<std::size_t>(wrap(static_cast<long>(f), rows)) * w];
+    const double* b = &across[static_cast<std::size_t>(wrap(static_cast<long>(f) + 1, rows)) * w];
+    double* dst = &out[static_cast<std::size_t>(y) * w];
+    for (int x = 0; x < w; ++x) {
+      double value = a[x] * (1.0 - fv) + b[x] * fv;
+      if (peak > 0.0) value /= peak;
+      dst[x] = std::clamp(value, 0.0, 1.0);
+    }
+  }
+  return out;
+}
+
 // ------------------------------------------------------------------ scale filter
 ScaleFilter::ScaleFilter(int num_scales, int dims, double sigma, double lambda)
     : n_(num_scales), dims_(dims), lambda_(lambda) {
@@ -277,50 +423,75 @@ ScaleFilter::ScaleFilter(int num_scales, int dims, double sigma, double lambda)
   fft.fwd(label_f.data(), label.data(), num_scales);
   label_f_.assign(label_f.begin(), label_f.begin() + half);
   for (auto& v : label_f_) v = std::conj(v);
+  dft_re_.resize(static_cast<std::size_t>(half) * num_scales);
+  dft_im_.resize(dft_re_.size());
+  for (int k = 0; k < half; ++k) {
+    for (int s = 0; s < num_scales; ++s) {
+      // (k s mod n) keeps the angle small, so that cos and sin stay exact to float
+      const double angle = -2.0 * kPi * static_cast<double>((static_cast<long>(k) * s) % num_scales) /
+                           num_scales;
+      const std::size_t at = static_cast<std::size_t>(k) * num_scales + s;
+      dft_re_[at] = static_cast<float>(window_[s] * std::cos(angle));
+      dft_im_[at] = static_cast<float>(window_[s] * std::sin(angle));
+    }
+  }
 }
 
-// Bins 0 .. n / 2 of the FFT along the scales of each windowed feature (dims x (n / 2 + 1)).
-// Two features go through one complex FFT, as real and imaginary part: with Z the FFT of
-// a + i b and Z*(k) = conj(Z(n - k)), A = (Z + Z*) / 2 and B = (Z - Z*) / (2 i).
-std::vector<Complex> ScaleFilter::spectra(const std::vector<float>& samples) const {
+void ScaleFilter::check(const Spectrum& s) const {
+  if (s.channels != dims_ || s.rows != 1 || s.cols != n_ ||
+      s.data.size() != label_f_.size() * static_cast<std::size_t>(dims_)) {
+    throw std::invalid_argument("ScaleFilter: a spectrum of (" + std::to_string(s.channels) + ", " +
+                                std::to_string(s.cols) + ") for a filter of (" +
+                                std::to_string(dims_) + ", " + std::to_string(n_) + ")");
+  }
+}
+
+// Bins 0 .. n / 2 of the windowed samples' transform along the scales, per feature
+// (dims x (n / 2 + 1)): two matrix products (bins x scales times scales x dims), whose
+// column-major results are already feature-major.
+Spectrum ScaleFilter::transform(const std::vector<float>& samples) const {
   if (samples.size() != static_cast<std::size_t>(n_) * dims_) {
     throw std::invalid_argument("ScaleFilter: " + std::to_string(samples.size()) +
                                 " values for " + std::to_string(n_) + " samples of " +
                                 std::to_string(dims_) + " features");
   }
-  const std::size_t half = label_f_.size();
-  std::vector<Complex> out(half * static_cast<std::size_t>(dims_));
-  const std::size_t n = static_cast<std::size_t>(n_);
-  std::vector<Complex> pair(n), spectrum(n);
-  Eigen::FFT<float> fft;
-  for (int d = 0; d < dims_; d += 2) {
-    const bool two = d + 1 < dims_;
-    for (int s = 0; s < n_; ++s) {
-      const float* row = &samples[static_cast<std::size_t>(s) * dims_ + d];
-      pair[s] = Complex(row[0] * window_[s], two ? row[1] * window_[s] : 0.0f);
-    }
-    fft.fwd(spectrum.data(), pair.data(), n_);
-    Complex* a = &out[static_cast<std::size_t>(d) * half];
-    for (std::size_t k = 0; k < half; ++k) {
-      const Complex z = spectrum[k];
-      const Complex mirror = std::conj(spectrum[(n - k) % n]);
-      a[k] = 0.5f * (z + mirror);
-      if (two) a[half + k] = Complex(0.0f, -0.5f) * (z - mirror);
-    }
-  }
+  using RowMajor = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const Eigen::Index half = static_cast<Eigen::Index>(label_f_.size());
+  const Eigen::Map<const RowMajor> x(samples.data(), n_, dims_);
+  const Eigen::MatrixXf re = Eigen::Map<const RowMajor>(dft_re_.data(), half, n_) * x;
+  const Eigen::MatrixXf im = Eigen::Map<const RowMajor>(dft_im_.data(), half, n_) * x;
+  Spectrum out;
+  out.channels = dims_;
+  out.rows = 1;
+  out.cols = n_;
+  out.data.resize(static_cast<std::size_t>(half) * dims_);
+  for (std::size_t i = 0; i < out.data.size(); ++i) out.data[i] = Complex(re.data()[i], im.data()[i]);
   return out;
 }
 
 void ScaleFilter::learn(const std::vector<float>& samples, double rate) {
   check_rate(rate);
-  std::vector<Complex> num = spectra(samples);
+  learn(transform(samples), rate);
+}
+
+void ScaleFilter::learn(const Spectrum& s, double rate, double shift) {
+  check(s);
+  check_rate(rate);
+  if (!std::isfinite(shift)) throw std::invalid_argument("ScaleFilter: the shift must be finite");
   const std::size_t half = label_f_.size();
+  std::vector<Complex> target(label_f_);
+  for (std::size_t k = 0; shift != 0.0 && k < half; ++k) {
+    const double phase = 2.0 * kPi * static_cast<double>(k) * shift / n_;
+    target[k] *= Complex(static_cast<float>(std::cos(phase)), static_cast<float>(std::sin(phase)));
+  }
+  std::vector<Complex> num(s.data.size());
   std::vector<float> den(half, 0.0f);
   for (int d = 0; d < dims_; ++d) {
-    Complex* xd = &num[static_cast<std::size_t>(d) * half];
+    const Complex* xd = &s.data[static_cast<std::size_t>(d) * half];
+    Complex* nd = &num[static_cast<std::size_t>(d) * half];
     for (std::size_t k = 0; k < half; ++k) {
       den[k] += std::norm(xd[k]);
-      xd[k] = label_f_[k] * xd[k];
+      nd[k] = target[k] * xd[k];
     }
   }
   blend(num_, num, rate, !trained_, den_, den);
@@ -329,7 +500,13 @@ void ScaleFilter::learn(const std::vector<float>& samples, double rate) {
 
 ScaleResponse ScaleFilter::respond(const std::vector<float>& samples) const {
   if (!trained_) throw std::logic_error("ScaleFilter: learn() before respond()");
-  const std::vector<Complex> zf = spectra(samples);
+  return respond(transform(samples));
+}
+
+ScaleResponse ScaleFilter::respond(const Spectrum& s) const {
+  if (!trained_) throw std::logic_error("ScaleFilter: learn() before respond()");
+  check(s);
+  const std::vector<Complex>& zf = s.data;
   const std::size_t half = label_f_.size();
   std::vector<Complex> acc(half, Complex(0.0f, 0.0f));
   for (int d = 0; d < dims_; ++d) {

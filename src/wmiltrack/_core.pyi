@@ -290,10 +290,25 @@ class TranslationResponse:
     def psr(self) -> float: ...
     @property
     def apce(self) -> float: ...
+    def map(self, centre: tuple[float, float], cell: tuple[float, float],
+            region: tuple[int, int, int, int]) -> npt.NDArray[np.float64]:
+        """The response at every pixel of region (x0, y0, x1, y1) as the target's centre, for
+        a search centred at centre with cells of cell frame pixels (bilinear, wrapping),
+        divided by a positive peak, clipped to [0, 1]."""
+
+class Spectrum:
+    """A sample as one translation filter takes it (windowed, compressed half spectra)."""
+    @property
+    def channels(self) -> int: ...
+    @property
+    def rows(self) -> int: ...
+    @property
+    def cols(self) -> int: ...
 
 class TranslationFilter:
     """A multi-channel linear correlation filter trained and applied in the Fourier domain."""
-    def __init__(self, rows: int, cols: int, channels: int, sigma: float, lam: float) -> None: ...
+    def __init__(self, rows: int, cols: int, channels: int, sigma: float, lam: float,
+                 compressed: int = 0) -> None: ...
     def copy(self) -> TranslationFilter:
         """An independent copy (the model as it is now)."""
     @property
@@ -312,6 +327,23 @@ class TranslationFilter:
         """Fold in (channels, rows, cols) features (the first call replaces the model)."""
     def respond(self, features: npt.ArrayLike, exclusion: int = 5) -> TranslationResponse:
         """The response to (channels, rows, cols) features (ValueError before learn())."""
+    @property
+    def filter_channels(self) -> int:
+        """Channels of the filter itself (compressed, or channels without a projection)."""
+    @property
+    def projection(self) -> _F32:
+        """(filter_channels, channels); no rows without a projection or before learn()."""
+    def sample(self, frame: npt.NDArray[np.uint8], centre: tuple[float, float],
+               size: tuple[float, float], out_size: tuple[int, int], cell: int = 4) -> Spectrum:
+        """transform(fhog_region(frame, centre, size, out_size, cell)) in one call."""
+    def transform(self, features: npt.ArrayLike) -> Spectrum:
+        """The sample as this filter takes it (window, projection, half spectra)."""
+    def learn_spectrum(self, spectrum: Spectrum, rate: float,
+                       shift: tuple[float, float] = (0.0, 0.0)) -> None:
+        """Fold in a transformed sample whose target sits shift = (rows, cols) cells from its
+        centre (moved so that the target is centred)."""
+    def respond_spectrum(self, spectrum: Spectrum, exclusion: int = 5) -> TranslationResponse:
+        """respond() to a transformed sample."""
 
 class ScaleResponse:
     """A scale filter's response."""
@@ -337,3 +369,11 @@ class ScaleFilter:
         """Fold in (num_scales, dims) samples (the first call replaces the model)."""
     def respond(self, samples: npt.ArrayLike) -> ScaleResponse:
         """The response to (num_scales, dims) samples (ValueError before learn())."""
+    def sample(self, frame: npt.NDArray[np.uint8], centre: tuple[float, float],
+               size: tuple[float, float], factors: Sequence[float], model_size: tuple[int, int],
+               cell: int = 4) -> Spectrum:
+        """scale_samples(...) as this filter takes them, in one call."""
+    def learn_spectrum(self, spectrum: Spectrum, rate: float, shift: float = 0.0) -> None:
+        """Fold in transformed samples whose target size sits shift samples from the middle."""
+    def respond_spectrum(self, spectrum: Spectrum) -> ScaleResponse:
+        """respond() to transformed samples."""

@@ -15,7 +15,7 @@ so the centre of a box ``(x, y, w, h)`` is ``(x + w / 2, y + h / 2)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Generic, TypeVar
 
 import numpy as np
@@ -134,6 +134,9 @@ class CorrelationSettings:
         Default rate of :meth:`CorrelationFilter.learn`.
     exclusion : int
         Half-width (cells) of the window around the peak that PSR leaves out.
+    compressed : int
+        Channels the 31 fHOG channels are projected onto (ECO: the principal axes of the
+        first sample's features, fixed from then on); 0 keeps all of them.
     """
 
     cell: int = 4
@@ -143,12 +146,15 @@ class CorrelationSettings:
     lam: float = 1e-3
     learning_rate: float = 0.01
     exclusion: int = 5
+    compressed: int = 0
 
     def __post_init__(self) -> None:
         """Check every value (ValueError naming the setting)."""
         _need(_is_int(self.cell) and 1 <= self.cell <= 16, f"cell must be an int in 1..16, got {self.cell!r}")
         _need(_is_int(self.exclusion) and self.exclusion >= 0,
               f"exclusion must be an int >= 0, got {self.exclusion!r}")
+        _need(_is_int(self.compressed) and 0 <= self.compressed <= _core.FHOG_CHANNELS,
+              f"compressed must be an int in 0..{_core.FHOG_CHANNELS}, got {self.compressed!r}")
         _need(math.isfinite(self.template_area) and self.template_area >= (4 * self.cell) ** 2,
               f"template_area must be at least (4 cell)**2 = {(4 * self.cell) ** 2}, "
               f"got {self.template_area!r}")
@@ -203,6 +209,21 @@ class ScaleFilterSettings:
         _need(math.isfinite(self.max_area) and self.max_area >= self.cell**2,
               f"max_area must be at least cell**2, got {self.max_area!r}")
 
+    @classmethod
+    def spanning(cls, num_scales: int, learning_rate: float = 0.025) -> ScaleFilterSettings:
+        """Settings with ``num_scales`` samples over DSST's range (33 samples 1.02 apart:
+        sizes 1.02**-16 .. 1.02**16) and a label as wide in log-size as DSST's, so that
+        fewer samples (fDSST's 17) cost less and answer about the same."""
+        _need(_is_int(num_scales) and num_scales >= 3 and num_scales % 2 == 1,
+              f"num_scales must be an odd int >= 3, got {num_scales!r}")
+        base = cls(learning_rate=learning_rate)
+        if num_scales == base.num_scales:
+            return base
+        ratio = (base.num_scales - 1) / (num_scales - 1)  # DSST's steps per new step
+        sigma = math.sqrt(base.num_scales) * base.sigma_factor / ratio  # in new samples
+        return cls(num_scales=num_scales, step=base.step**ratio,
+                   sigma_factor=sigma / math.sqrt(num_scales), learning_rate=learning_rate)
+
 
 @dataclass(frozen=True)
 class Location:
@@ -213,7 +234,7 @@ class Location:
     is surer); ``response``: the response per circular shift of the template grid, entry
     ``[r, c]`` for a shift of ``(c * cell[0], r * cell[1])`` frame pixels (``r``, ``c`` modulo
     the grid's rows and columns), so another cue can read the filter's score of any
-    candidate centre.
+    candidate centre (:meth:`map`); ``centre``: the centre searched at.
     """
 
     dx: float
@@ -223,6 +244,24 @@ class Location:
     apce: float
     response: npt.NDArray[np.float32]
     cell: tuple[float, float]
+    centre: tuple[float, float]
+    raw: _core.TranslationResponse = field(repr=False, compare=False)
+
+    def map(self, region: tuple[int, int, int, int]) -> npt.NDArray[np.float64]:
+        """The response at every pixel of ``region = (x0, y0, x1, y1)`` taken as the target's
+        centre (bilinear between cells, wrapping around), divided by the peak and clipped to
+        [0, 1]: a cue's map over the region."""
+        return self.raw.map(self.centre, self.cell, region)
+
+
+@dataclass(frozen=True)
+class _Searched:
+    """The last search's transformed sample, for :meth:`CorrelationFilter.learn` to reuse."""
+
+    frame: Any
+    spectrum: _core.Spectrum
+    location: Location
+    size: tuple[float, float]
 
 
 @dataclass(frozen=True)
@@ -268,6 +307,8 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         self._base_region = (0.0, 0.0)  # the search region's size at init (frame pixels)
         self._out_size = (0, 0)  # template pixels (w, h)
         self._size = (0.0, 0.0)  # the size last learnt
+        self._searched: _Searched | None = None
+        self.reused = 0  # learning steps that reused their frame's search sample
 
     @property
     def initialised(self) -> bool:
@@ -309,37 +350,64 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         self._base_region = (cols * s.cell / resize, rows * s.cell / resize)
         self._base_size = (w, h)
         sigma = math.sqrt(w * h) * resize * s.sigma_factor / s.cell
-        self._filter = _core.TranslationFilter(rows, cols, _core.FHOG_CHANNELS, sigma, s.lam)
+        self._filter = _core.TranslationFilter(rows, cols, _core.FHOG_CHANNELS, sigma, s.lam,
+                                               s.compressed)
+        self._searched = None
         self.learn(frame, (x, y, w, h), 1.0)
+
+    def _region(self, size: tuple[float, float]) -> tuple[float, float]:
+        scale = math.sqrt(size[0] * size[1] / (self._base_size[0] * self._base_size[1]))
+        return self._base_region[0] * scale, self._base_region[1] * scale
 
     def _features(self, frame: np.ndarray, centre: tuple[float, float],
                   size: tuple[float, float]) -> npt.NDArray[np.float32]:
-        scale = math.sqrt(size[0] * size[1] / (self._base_size[0] * self._base_size[1]))
-        region = (self._base_region[0] * scale, self._base_region[1] * scale)
-        return _core.fhog_region(frame, centre, region, self._out_size, self.settings.cell)
+        return _core.fhog_region(frame, centre, self._region(size), self._out_size,
+                                 self.settings.cell)
 
     def locate(self, frame: Any, centre: Any, size: Any = None) -> Location:
         """Search the region around ``centre = (cx, cy)`` for a target of ``size = (w, h)``
         (default: the size last learnt); returns its shift in frame pixels and the
         confidences."""
         f = self._require()
+        given = frame
         frame = as_frame(frame)
         c = _check_point("centre", centre)
         sz = self._size if size is None else _check_point("size", size)
         _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
-        r = f.respond(self._features(frame, c, sz), self.settings.exclusion)
-        scale = math.sqrt(sz[0] * sz[1] / (self._base_size[0] * self._base_size[1]))
-        cell_w = self._base_region[0] * scale / f.cols  # frame pixels per cell
-        cell_h = self._base_region[1] * scale / f.rows
-        return Location(dx=r.col_shift * cell_w, dy=r.row_shift * cell_h, peak=r.peak,
-                        psr=r.psr, apce=r.apce, response=r.values, cell=(cell_w, cell_h))
+        region = self._region(sz)
+        spectrum = f.sample(frame, c, region, self._out_size, self.settings.cell)
+        r = f.respond_spectrum(spectrum, self.settings.exclusion)
+        cell_w = region[0] / f.cols  # frame pixels per cell
+        cell_h = region[1] / f.rows
+        loc = Location(dx=r.col_shift * cell_w, dy=r.row_shift * cell_h, peak=r.peak,
+                       psr=r.psr, apce=r.apce, response=r.values, cell=(cell_w, cell_h),
+                       centre=c, raw=r)
+        self._searched = _Searched(given, spectrum, loc, sz)
+        return loc
 
-    def learn(self, frame: Any, box: Any, rate: float | None = None) -> None:
-        """Fold in the template around ``box`` at ``rate`` (default: the settings')."""
+    def learn(self, frame: Any, box: Any, rate: float | None = None, *,
+              from_search: bool = False) -> None:
+        """Fold in the template around ``box`` at ``rate`` (default: the settings').
+
+        With ``from_search``, the sample of the last :meth:`locate` on this same frame is
+        moved to ``box`` and learnt instead of a new one (ECO), when ``box``'s centre is
+        within a quarter of the grid of the searched centre and its area within 10% of the
+        searched size's; otherwise a new sample is taken."""
         f = self._require()
-        frame = as_frame(frame)
+        searched, self._searched = self._searched, None
         x, y, w, h = _check_box(box)
         r = self.settings.learning_rate if rate is None else _check_rate(rate)
+        if from_search and searched is not None and searched.frame is frame:
+            loc = searched.location
+            col = (x + w / 2.0 - loc.centre[0]) / loc.cell[0]
+            row = (y + h / 2.0 - loc.centre[1]) / loc.cell[1]
+            ratio = w * h / (searched.size[0] * searched.size[1])
+            if abs(col) <= f.cols / 4 and abs(row) <= f.rows / 4 and 1 / 1.1 <= ratio <= 1.1:
+                f.learn_spectrum(searched.spectrum, r, (row, col))
+                self._size = (w, h)
+                self.reused += 1
+                return
+        frame = as_frame(frame)
         f.learn(self._features(frame, (x + w / 2.0, y + h / 2.0), (w, h)), r)
         self._size = (w, h)
 
@@ -357,6 +425,7 @@ class ScaleEstimator(_Trained[_core.ScaleFilter]):
         self.factors: tuple[float, ...] = tuple(s.step ** (k - half) for k in range(s.num_scales))
         self._filter = None
         self._model_size = (0, 0)
+        self._estimated: tuple[Any, tuple[float, float], tuple[float, float], _core.Spectrum] | None = None
 
     def copy(self) -> ScaleEstimator:
         """An independent copy (sample size and model as they are now)."""
@@ -388,14 +457,37 @@ class ScaleEstimator(_Trained[_core.ScaleFilter]):
         """By which factor the target of ``size = (w, h)`` at ``centre`` changed size (the
         best sample, refined by a parabola through its neighbours)."""
         f = self._require()
-        r = f.respond(self._samples(as_frame(frame), centre, size))
+        given = frame
+        c = _check_point("centre", centre)
+        sz = _check_point("size", size)
+        _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
+        spectrum = f.sample(as_frame(frame), c, sz, list(self.factors), self._model_size,
+                            self.settings.cell)
+        r = f.respond_spectrum(spectrum)
+        self._estimated = (given, c, sz, spectrum)
         half = (self.settings.num_scales - 1) // 2
         factor = self.settings.step ** (r.best + r.offset - half)
         return ScaleEstimate(factor=float(factor), response=r.values)
 
-    def learn(self, frame: Any, centre: Any, size: Any, rate: float | None = None) -> None:
+    def learn(self, frame: Any, centre: Any, size: Any, rate: float | None = None, *,
+              from_estimate: bool = False) -> None:
         """Fold in the scale samples around ``centre`` for a target of ``size`` at ``rate``
-        (default: the settings')."""
+        (default: the settings').
+
+        With ``from_estimate``, the samples of the last :meth:`estimate` on this same frame
+        and centre are learnt with their label moved to ``size`` instead of new ones, when
+        ``size`` lies within the samples' scales; otherwise new samples are taken."""
         f = self._require()
         r = self.settings.learning_rate if rate is None else _check_rate(rate)
-        f.learn(self._samples(as_frame(frame), centre, size), r)
+        estimated, self._estimated = self._estimated, None
+        c = _check_point("centre", centre)
+        sz = _check_point("size", size)
+        _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
+        if from_estimate and estimated is not None and estimated[0] is frame:
+            _, ec, esz, spectrum = estimated
+            shift = 0.5 * math.log(sz[0] * sz[1] / (esz[0] * esz[1])) / math.log(self.settings.step)
+            half = (self.settings.num_scales - 1) // 2
+            if abs(c[0] - ec[0]) < 0.5 and abs(c[1] - ec[1]) < 0.5 and abs(shift) <= half:
+                f.learn_spectrum(spectrum, r, shift)
+                return
+        f.learn(self._samples(as_frame(frame), c, sz), r)
