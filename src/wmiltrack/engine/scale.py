@@ -49,7 +49,8 @@ class HaarScale:
                      if params.scale_model != "ratio" else None)
         # DSST's vote on the size (scale_dsst), learnt at every template_every-th frame's box
         self.dsst_updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
-        self.dsst = (ScaleEstimator(ScaleFilterSettings(learning_rate=self.dsst_updates.rate))
+        self.dsst = (ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
+                                                                 self.dsst_updates.rate))
                      if params.scale_dsst > 0 else None)
 
     @property

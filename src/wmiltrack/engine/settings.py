@@ -378,6 +378,16 @@ class ScaleSettings:
         target's colours and no more. A contrast changes by about 0.01 between neighbouring
         scales, so a weight of 20 makes it count about as much as one step's
         ``scale_penalty`` (0.2).
+    scale_samples : int
+        DSST's scale samples (``scale_model="dsst"`` and ``scale_dsst``), odd, always over
+        DSST's range of sizes (33 samples 1.02 apart) with a label as wide: fewer cost less
+        (fDSST uses 17).
+    scale_veto : bool
+        With ``scale_model="dsst"`` and a colour cue: the size DSST prefers is taken only if
+        its box's colour contrast (as for ``scale_contrast``) is at least the current box's,
+        else the size is kept. DSST's fHOG scale samples cannot tell a low-textured or
+        deforming target from its surroundings and let the box grow into them (a bag on a
+        street: 0.70 -> 0.24 AUC); the colour contrast falls as soon as background enters.
     """
 
     scale_steps: int = 0
@@ -392,6 +402,8 @@ class ScaleSettings:
     scale_negatives: int = 0
     scale_contrast: float = 0.0
     scale_dsst: float = 0.0
+    scale_samples: int = 33
+    scale_veto: bool = False
 
     def __post_init__(self) -> None:
         ScaleSettings.check(self)
@@ -403,6 +415,11 @@ class ScaleSettings:
         _check_numbers(self, "scale_factor", "scale_penalty", "scale_min", "scale_max", "scale_mix",
                        "scale_contrast", "scale_dsst")
         _need(self.scale_dsst >= 0, f"scale_dsst must be >= 0, got {self.scale_dsst}")
+        _need(_is_int(self.scale_samples) and 3 <= self.scale_samples <= 65
+              and self.scale_samples % 2 == 1,
+              f"scale_samples must be an odd int in 3..65, got {self.scale_samples!r}")
+        _need(isinstance(self.scale_veto, bool),
+              f"scale_veto must be True or False, got {self.scale_veto!r}")
         _need(0 <= self.scale_steps <= 10, f"scale_steps must be in 0..10, got {self.scale_steps}")
         _need(_is_number(self.scale_learning_rate) and 0.0 <= self.scale_learning_rate < 1.0,
               f"scale_learning_rate must be in [0, 1), got {self.scale_learning_rate}")
@@ -588,6 +605,18 @@ class TemplateSettings:
         ``template_every``-th frame they may learn from (ECO's sparse updates: each learning
         step costs a feature extraction and a transform per channel), their rates raised to
         keep the same memory.
+    template_channels : int
+        The template's 31 fHOG channels projected onto this many (ECO's compression: the
+        principal axes of the first frame's features, fixed from then on), so that each
+        frame transforms fewer planes; 0 keeps all 31.
+    template_cell : int
+        fHOG cell side in template pixels (Staple: 4); with ``template_area`` it sets the
+        filter's grid, ``sqrt(template_area) / template_cell`` cells a side.
+    template_reuse : bool
+        The template learns from the frame's search sample, moved to the frame's final box
+        (ECO: one feature extraction and one transform a frame instead of two), when that box
+        is near the searched centre and of about the searched size; otherwise, and without
+        this, from a new sample around the final box.
     """
 
     template_weight: float = 0.0
@@ -596,6 +625,9 @@ class TemplateSettings:
     template_learning_rate: float = 0.01
     template_gate: float = 0.0
     template_every: int = 1
+    template_channels: int = 0
+    template_cell: int = 4
+    template_reuse: bool = False
 
     def __post_init__(self) -> None:
         TemplateSettings.check(self)
@@ -615,6 +647,14 @@ class TemplateSettings:
               f"template_gate must be in [0, 1], got {self.template_gate}")
         _need(_is_int(self.template_every) and 1 <= self.template_every <= 100,
               f"template_every must be an int in 1..100, got {self.template_every!r}")
+        _need(_is_int(self.template_channels) and 0 <= self.template_channels <= 31,
+              f"template_channels must be an int in 0..31, got {self.template_channels!r}")
+        _need(_is_int(self.template_cell) and 1 <= self.template_cell <= 16
+              and self.template_area >= (4 * self.template_cell) ** 2,
+              f"template_cell must be an int in 1..16 with template_area >= (4 cell)**2, "
+              f"got {self.template_cell!r}")
+        _need(isinstance(self.template_reuse, bool),
+              f"template_reuse must be True or False, got {self.template_reuse!r}")
 
 
 @dataclass(frozen=True)

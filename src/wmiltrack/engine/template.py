@@ -56,8 +56,10 @@ class CorrelationTemplate:
         self.moves = settings.template_motion
         self.learn_above = settings.template_gate
         self.updates = SparseUpdates(settings.template_learning_rate, settings.template_every)
+        self.reuse = settings.template_reuse
         self.filter = CorrelationFilter(CorrelationSettings(
-            template_area=settings.template_area, learning_rate=self.updates.rate))
+            template_area=settings.template_area, learning_rate=self.updates.rate,
+            compressed=settings.template_channels, cell=settings.template_cell))
         self._searched: tuple[tuple[float, float], Location] | None = None
         self.confidence = math.nan
 
@@ -93,33 +95,15 @@ class CorrelationTemplate:
             cx, cy = (region[0] + region[2]) / 2.0, (region[1] + region[3]) / 2.0
             self.origin((round(cx - w / 2.0), round(cy - h / 2.0), round(w), round(h)), frame)
         assert self._searched is not None
-        (cx, cy), loc = self._searched
+        _, loc = self._searched
         self._searched = None
         fh, fw = frame.shape[:2]
         x0, y0 = max(region[0], 0), max(region[1], 0)
-        x1, y1 = min(region[2], fw), min(region[3], fh)
-        r = loc.response.astype(np.float64)
-        rows, cols = r.shape
-        peak = float(r.max())
-        # response [i, j] is the target shifted by (j cell_w, i cell_h), indices modulo the grid
-        u = (np.arange(x0, x1) - cx) / loc.cell[0]
-        v = (np.arange(y0, y1) - cy) / loc.cell[1]
-        j0 = np.floor(u).astype(np.intp)
-        i0 = np.floor(v).astype(np.intp)
-        fu, fv = u - j0, v - i0
-        # along the columns for every grid row, then along the rows (the grid is far smaller
-        # than the region, so this is the cheap order)
-        across = r[:, j0 % cols] * (1.0 - fu) + r[:, (j0 + 1) % cols] * fu
-        value = (across[i0 % rows] * (1.0 - fv)[:, None]
-                 + across[(i0 + 1) % rows] * fv[:, None])
-        if peak > 0:
-            value /= peak
-        np.clip(value, 0.0, 1.0, out=value)
-        return value, x0, y0
+        return loc.map((x0, y0, min(region[2], fw), min(region[3], fh))), x0, y0
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
         if self.updates.due():
-            self.filter.learn(frame, box)
+            self.filter.learn(frame, box, from_search=self.reuse)
 
 
 class DSSTScale:
@@ -132,7 +116,8 @@ class DSSTScale:
         self.base_wh = base_wh
         self.frame_wh = frame_wh
         self.updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
-        self.estimator = ScaleEstimator(ScaleFilterSettings(learning_rate=self.updates.rate))
+        self.estimator = ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
+                                                                     self.updates.rate))
         self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
         self.tried: list[IntBox] = []
 
@@ -153,7 +138,9 @@ class DSSTScale:
 
     def search(self, model: HaarAppearance, frame: np.ndarray, box: IntBox, raw: float,
                contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
-        """The box at the size the filter prefers, centred where the search put it."""
+        """The box at the size the filter prefers, centred where the search put it. With
+        ``scale_veto`` and a colour cue (``contrast``), a new size whose box has less colour
+        contrast than the current one is refused."""
         p = self.settings
         factor = self.estimator.estimate(frame, _centre(box), self.size).factor
         w, h = self.size[0] * factor, self.size[1] * factor
@@ -164,9 +151,14 @@ class DSSTScale:
         fw, fh = self.frame_wh
         shrink = min(1.0, fw / w, fh / h)
         grow = max(1.0, min_side / (w * shrink), min_side / (h * shrink))
-        self.size = (w * shrink * grow, h * shrink * grow)
-        iw, ih = max(min_side, round(self.size[0])), max(min_side, round(self.size[1]))
-        return centred(box, min(iw, fw), min(ih, fh)), raw
+        size = (w * shrink * grow, h * shrink * grow)
+        iw, ih = max(min_side, round(size[0])), max(min_side, round(size[1]))
+        out = centred(box, min(iw, fw), min(ih, fh))
+        if (p.scale_veto and contrast is not None and (out[2], out[3]) != (box[2], box[3])
+                and contrast(out) < contrast(box)):
+            return box, raw
+        self.size = size
+        return out, raw
 
     def learning_extras(self, model: HaarAppearance, box: IntBox) -> tuple[None, int, None]:
         """(Nothing for the appearance model's learning step.)"""
@@ -179,4 +171,5 @@ class DSSTScale:
         """Fold in the scale samples around the frame's final box (every ``template_every``-th
         frame)."""
         if self.updates.due():
-            self.estimator.learn(frame, _centre(box), self.size)
+            self.estimator.learn(frame, _centre(box), self.size,
+                                 from_estimate=self.settings.template_reuse)
