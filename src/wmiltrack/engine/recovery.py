@@ -170,12 +170,14 @@ class Redetector:
         self.seen += 1
         return False
 
-    def back(self, conf: float, frame: np.ndarray, box: IntBox,
-             witnesses: Sequence[float] = ()) -> bool:
+    def back(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
         """Whether a lost frame's usual search found the target again at ``box``: its
-        confidence, its correlation with the template or a cue's confidence is back above
-        ``lost_drop`` times the running mean (then the lost state ends)."""
-        if self._dropped(conf, frame, box, witnesses):
+        confidence or its correlation with the template is back above ``lost_drop`` times the
+        running mean (then the lost state ends). The cues' own confidences are not asked: they
+        tell a target whose look changed from one that left, but a cue that learnt the
+        target's surroundings (the correlation filter's padding) answers nearly as well on
+        the empty place it left, so they cannot say that it came back."""
+        if self._dropped(conf, frame, box, ()):
             return False
         self.lost = False
         self.frames_lost = 0

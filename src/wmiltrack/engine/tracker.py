@@ -437,7 +437,7 @@ class Tracker:
             parts.scale.tried = []
         raw = yield from self._search_from(img, previous, self._stages)
         conf = confidence(raw, model.k, p.confidence_offset)
-        if not recovery.back(conf, img, self._box, self._witnesses()):
+        if not recovery.back(conf, img, self._box):
             found = recovery.find(img, (previous[2], previous[3]))
             if found is None:
                 self._hold(previous)
