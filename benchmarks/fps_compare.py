@@ -52,7 +52,13 @@ try:
 except ImportError:  # a checkout that was not installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from wmiltrack.trackers import OPENCV_TRACKERS, available_opencv_trackers, installed_opencv
+from wmiltrack.trackers import (
+    OPENCV_TRACKERS,
+    available_opencv_trackers,
+    installed_opencv,
+    parse_spec,
+    split_specs,
+)
 
 VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
 REFERENCE = "opencv:MIL"
@@ -145,12 +151,25 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"note: opencv:{n} skipped (not in this cv2)", file=sys.stderr)
     trackers = list(VARIANTS) + [f"opencv:{n}" for n in cv_names]
     if args.trackers:
-        wanted = [t.strip() for t in args.trackers.split(",") if t.strip()]
+        wanted = split_specs(args.trackers)
         known = list(VARIANTS) + [f"opencv:{n}" for n in OPENCV_TRACKERS]
-        unknown = [t for t in wanted if t not in known]  # unavailable OpenCV ones: noted above
+
+        def valid(spec: str) -> bool:
+            if spec in known or spec.startswith("opencv:"):
+                return spec in known
+            try:  # a variant with settings, e.g. rcwmil-plus:template_weight=0.2
+                name, _ = parse_spec(spec)
+            except ValueError:
+                return False
+            return name in VARIANTS
+
+        unknown = [t for t in wanted if not valid(t)]  # unavailable OpenCV ones: noted above
         if unknown:
-            ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)}")
-        trackers = [t for t in trackers if t in wanted or t == REFERENCE]
+            ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)} "
+                     "(a variant may carry settings: variant:name=value:...)")
+        specs = [t for t in wanted if not t.startswith("opencv:")]
+        trackers = specs + [t for t in trackers if t.startswith("opencv:")
+                            and (t in wanted or t == REFERENCE)]
 
     dist, ver = installed_opencv()
     simd = simd_path()
