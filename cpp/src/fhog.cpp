@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -144,11 +145,41 @@ int fixed_taps(const Taps& t, int n, int padded_n, int shift, std::vector<int>& 
   return count;
 }
 
+// Four floats with lane-wise IEEE arithmetic: one SSE register (GCC/Clang vector extension)
+// or, with WMILTRACK_NO_SIMD or another compiler, four separate floats; the same bits.
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(WMILTRACK_NO_SIMD)
+typedef float Lanes4 __attribute__((vector_size(16)));
+inline Lanes4 lanes4_zero() { return Lanes4{0.0f, 0.0f, 0.0f, 0.0f}; }
+inline Lanes4 lanes4_scale(float w, const float* p) {
+  Lanes4 x;
+  std::memcpy(&x, p, sizeof x);
+  return w * x;
+}
+inline Lanes4 lanes4_add(Lanes4 a, Lanes4 b) { return a + b; }
+inline Lanes4 lanes4_div(Lanes4 a, float d) { return a / d; }
+inline void lanes4_store(Lanes4 a, float* p) { std::memcpy(p, &a, sizeof a); }
+#else
+struct Lanes4 {
+  float v[4];
+};
+inline Lanes4 lanes4_zero() { return Lanes4{{0.0f, 0.0f, 0.0f, 0.0f}}; }
+inline Lanes4 lanes4_scale(float w, const float* p) {
+  return Lanes4{{w * p[0], w * p[1], w * p[2], w * p[3]}};
+}
+inline Lanes4 lanes4_add(Lanes4 a, Lanes4 b) {
+  return Lanes4{{a.v[0] + b.v[0], a.v[1] + b.v[1], a.v[2] + b.v[2], a.v[3] + b.v[3]}};
+}
+inline Lanes4 lanes4_div(Lanes4 a, float d) {
+  return Lanes4{{a.v[0] / d, a.v[1] / d, a.v[2] / d, a.v[3] / d}};
+}
+inline void lanes4_store(Lanes4 a, float* p) { std::memcpy(p, a.v, sizeof a.v); }
+#endif
+
 // The patch from a crop that holds every pixel its taps read: rows first (each output row
 // mixes the crop rows under it over the crop's columns), then columns. Four output rows at a
 // time: their column mixes are interleaved (mix4[4 c + q] for row q of the four), so that the
-// column pass computes the four rows' pixels with the same operations on adjacent values (the
-// compiler's 4-wide vectors), each pixel's sum in the order of its taps as one at a time.
+// column pass computes the four rows' pixels at once (Lanes4), each pixel's sum in the order
+// of its taps, as one at a time would.
 GrayPatch resample(const LumaCrop& crop, const PatchTaps& t, Scratch& s) {
   constexpr int kBlock = 4;
   GrayPatch out;
@@ -195,14 +226,14 @@ GrayPatch resample(const LumaCrop& crop, const PatchTaps& t, Scratch& s) {
       rows[q] = &out.pixels[static_cast<std::size_t>(r) * out.cols];
     }
     for (int i = 0; i < out.cols; ++i) {
-      float v[kBlock] = {0.0f, 0.0f, 0.0f, 0.0f};
+      Lanes4 v = lanes4_zero();
       for (int k = 0; k < kx; ++k) {
         const std::size_t at = static_cast<std::size_t>(k) * out.cols + i;
-        const float w = xw[at];
-        const float* src = mix4 + static_cast<std::size_t>(kBlock) * xi[at];
-        for (int q = 0; q < kBlock; ++q) v[q] += w * src[q];
+        v = lanes4_add(v, lanes4_scale(xw[at], mix4 + static_cast<std::size_t>(kBlock) * xi[at]));
       }
-      for (int q = kBlock - 1; q >= 0; --q) rows[q][i] = v[q] / 255.0f;
+      float r[kBlock];
+      lanes4_store(lanes4_div(v, 255.0f), r);
+      for (int q = kBlock - 1; q >= 0; --q) rows[q][i] = r[q];
     }
   }
   return out;
@@ -258,33 +289,10 @@ WMILTRACK_KERNEL void orient_row_body(const float* __restrict up, const float* _
                frac[cols - 1], bin[cols - 1]);
 }
 
-#ifdef WMILTRACK_AVX2_COPIES
-}  // namespace
-namespace detail {
-// orient_row_body compiled for AVX2 (8 pixels a step): the same IEEE operations (no fused
-// multiply-add), so the same bits as the baseline copy. Named *_avx2 for the portable-build
-// test (tests/test_core_hardening.py).
-__attribute__((target("avx2"))) void fhog_orient_row_avx2(const float* up, const float* mid,
-                                                         const float* down, int cols,
-                                                         float* mag, float* frac, int* bin) {
-  orient_row_body(up, mid, down, cols, mag, frac, bin);
-}
-}  // namespace detail
-namespace {
-#endif
-
-void orient_row(const float* up, const float* mid, const float* down, int cols, float* mag,
-                float* frac, int* bin) {
-#ifdef WMILTRACK_AVX2_COPIES
-  if (vmath::avx2()) return detail::fhog_orient_row_avx2(up, mid, down, cols, mag, frac, bin);
-#endif
-  orient_row_body(up, mid, down, cols, mag, frac, bin);
-}
-
 // norm[c] = 1 / sqrt(e[c] + ey[c] + e[c + dx] + ey[c + dx] + 1e-4) for c < n: the normaliser
 // of the block of a cell (energy e, row of cells) with the cells in row ey and column c + dx.
-void block_norms(const float* __restrict e, const float* __restrict ey, int dx, int n,
-                 float* __restrict norm) {
+WMILTRACK_KERNEL void block_norms(const float* __restrict e, const float* __restrict ey, int dx,
+                                  int n, float* __restrict norm) {
   for (int c = 0; c < n; ++c) {
     const float sum = e[c] + ey[c] + e[c + dx] + ey[c + dx];
     norm[c] = 1.0f / std::sqrt(sum + 1e-4f);
@@ -293,8 +301,9 @@ void block_norms(const float* __restrict e, const float* __restrict ey, int dx, 
 
 // One signed bin's plane (h, n cells) under the four normalisers (planes of norm, n apart):
 // dst = 0.5 * sum_j min(h n_j, 0.2), and each min(h n_j, 0.2) added to texture plane j.
-void clip_signed(const float* __restrict h, const float* __restrict norm, std::size_t n,
-                 float* __restrict dst, float* __restrict texture) {
+WMILTRACK_KERNEL void clip_signed(const float* __restrict h, const float* __restrict norm,
+                                  std::size_t n, float* __restrict dst,
+                                  float* __restrict texture) {
   const float* n0 = norm;
   const float* n1 = norm + n;
   const float* n2 = norm + 2 * n;
@@ -315,8 +324,9 @@ void clip_signed(const float* __restrict h, const float* __restrict norm, std::s
 }
 
 // One unsigned bin's plane (a + b) under the four normalisers: 0.5 * sum_j min(u n_j, 0.2).
-void clip_unsigned(const float* __restrict a, const float* __restrict b,
-                   const float* __restrict norm, std::size_t n, float* __restrict dst) {
+WMILTRACK_KERNEL void clip_unsigned(const float* __restrict a, const float* __restrict b,
+                                    const float* __restrict norm, std::size_t n,
+                                    float* __restrict dst) {
   const float* n0 = norm;
   const float* n1 = norm + n;
   const float* n2 = norm + 2 * n;
@@ -326,6 +336,114 @@ void clip_unsigned(const float* __restrict a, const float* __restrict b,
     dst[i] = 0.5f * (((std::min(u * n0[i], 0.2f) + std::min(u * n1[i], 0.2f)) +
                       std::min(u * n2[i], 0.2f)) + std::min(u * n3[i], 0.2f));
   }
+}
+
+// top[k] += wt row[k] and bottom[k] += fy row[k] (one row of pixels' votes into the two cell
+// rows around it), then row[k] = 0 for the next row; k < n.
+WMILTRACK_KERNEL void add_row_body(float* __restrict top, float* __restrict bottom,
+                                   float* __restrict row, float wt, float fy, std::size_t n) {
+  for (std::size_t k = 0; k < n; ++k) {
+    top[k] += wt * row[k];
+    bottom[k] += fy * row[k];
+    row[k] = 0.0f;
+  }
+}
+
+// From the cells' histograms (hist: 18 planes of cr x cc cells) to the 31 planes of out:
+// energy, the energies with the edge cells repeated once around them (padded, (cr + 2) x
+// (cc + 2); a border cell's blocks reuse its own row / column), the four block normalisers
+// of every cell (norm, 4 planes), the clipped features, the texture sums (texture, 4 planes).
+WMILTRACK_KERNEL void normalise_body(const float* __restrict hist, int cr, int cc,
+                                     float* __restrict energy, float* __restrict padded,
+                                     float* __restrict norm, float* __restrict texture,
+                                     float* __restrict out) {
+  const std::size_t plane = static_cast<std::size_t>(cr) * cc;
+  for (std::size_t i = 0; i < plane; ++i) energy[i] = 0.0f;
+  for (int o = 0; o < kBins / 2; ++o) {
+    const float* a = &hist[o * plane];
+    const float* b = &hist[(o + kBins / 2) * plane];
+    for (std::size_t i = 0; i < plane; ++i) energy[i] += (a[i] + b[i]) * (a[i] + b[i]);
+  }
+  const int pc = cc + 2;
+  for (int r = -1; r <= cr; ++r) {
+    const float* src = energy + static_cast<std::size_t>(r < 0 ? 0 : r < cr ? r : cr - 1) * cc;
+    float* dst = padded + static_cast<std::size_t>(r + 1) * pc;
+    dst[0] = src[0];
+    for (int c = 0; c < cc; ++c) dst[c + 1] = src[c];
+    dst[cc + 1] = src[cc - 1];
+  }
+  // Each block's sum in the order: the cell, the one above / below it, the one beside it, the
+  // diagonal one.
+  constexpr int kDy[4] = {-1, -1, 1, 1};
+  constexpr int kDx[4] = {-1, 1, -1, 1};
+  for (int j = 0; j < 4; ++j) {
+    for (int r = 0; r < cr; ++r) {
+      block_norms(padded + static_cast<std::size_t>(r + 1) * pc + 1,
+                  padded + static_cast<std::size_t>(r + 1 + kDy[j]) * pc + 1, kDx[j], cc,
+                  norm + j * plane + static_cast<std::size_t>(r) * cc);
+    }
+  }
+  // The texture features sum each normaliser's clipped values over the 18 signed bins (in
+  // bin order), then are scaled.
+  for (std::size_t i = 0; i < 4 * plane; ++i) texture[i] = 0.0f;
+  for (int o = 0; o < kBins; ++o) clip_signed(hist + o * plane, norm, plane, out + o * plane, texture);
+  for (int o = 0; o < kBins / 2; ++o) {
+    clip_unsigned(hist + o * plane, hist + (o + kBins / 2) * plane, norm, plane,
+                  out + (kBins + o) * plane);
+  }
+  float* const texture_out = out + (kBins + kBins / 2) * plane;
+  for (std::size_t i = 0; i < 4 * plane; ++i) texture_out[i] = texture[i] * 0.2357f;
+}
+
+#ifdef WMILTRACK_AVX2_COPIES
+}  // namespace
+namespace detail {
+// The kernels above compiled for AVX2 (8 floats a step): the same IEEE operations in the same
+// order (no fused multiply-add), so the same bits as the baseline copies. Named *_avx2 for the
+// portable-build test (tests/test_core_hardening.py).
+__attribute__((target("avx2"))) void fhog_orient_row_avx2(const float* up, const float* mid,
+                                                         const float* down, int cols,
+                                                         float* mag, float* frac, int* bin) {
+  orient_row_body(up, mid, down, cols, mag, frac, bin);
+}
+__attribute__((target("avx2"))) void fhog_add_row_avx2(float* top, float* bottom, float* row,
+                                                      float wt, float fy, std::size_t n) {
+  add_row_body(top, bottom, row, wt, fy, n);
+}
+__attribute__((target("avx2"))) void fhog_normalise_avx2(const float* hist, int cr, int cc,
+                                                        float* energy, float* padded,
+                                                        float* norm, float* texture,
+                                                        float* out) {
+  normalise_body(hist, cr, cc, energy, padded, norm, texture, out);
+}
+}  // namespace detail
+namespace {
+#endif
+
+// The kernels' entry points: the AVX2 copy where the CPU has it (vmath::avx2()).
+void orient_row(const float* up, const float* mid, const float* down, int cols, float* mag,
+                float* frac, int* bin) {
+#ifdef WMILTRACK_AVX2_COPIES
+  if (vmath::avx2()) return detail::fhog_orient_row_avx2(up, mid, down, cols, mag, frac, bin);
+#endif
+  orient_row_body(up, mid, down, cols, mag, frac, bin);
+}
+
+void add_row(float* top, float* bottom, float* row, float wt, float fy, std::size_t n) {
+#ifdef WMILTRACK_AVX2_COPIES
+  if (vmath::avx2()) return detail::fhog_add_row_avx2(top, bottom, row, wt, fy, n);
+#endif
+  add_row_body(top, bottom, row, wt, fy, n);
+}
+
+void normalise(const float* hist, int cr, int cc, float* energy, float* padded, float* norm,
+               float* texture, float* out) {
+#ifdef WMILTRACK_AVX2_COPIES
+  if (vmath::avx2()) {
+    return detail::fhog_normalise_avx2(hist, cr, cc, energy, padded, norm, texture, out);
+  }
+#endif
+  normalise_body(hist, cr, cc, energy, padded, norm, texture, out);
 }
 
 // Bounds (inclusive) of the frame pixels a set of taps reads.
@@ -392,7 +510,7 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
   const int hcols = cc + 3;
   const std::size_t hrow = static_cast<std::size_t>(hcols) * kBins;
   s.bordered.assign(static_cast<std::size_t>(cr + 3) * hrow, 0.0f);
-  s.row_hist.resize(hrow);
+  s.row_hist.assign(hrow, 0.0f);  // add_row leaves it zero for the next row
   // Cell coordinate of each column's pixel centre (cells' centres at integers), plus one for
   // the border: the offset of the first of its two cells in a row's histogram, and its weight
   // in the second.
@@ -428,7 +546,6 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
     const float* mid = pix + static_cast<std::size_t>(r) * cols;
     const float* down = pix + static_cast<std::size_t>(std::min(r + 1, rows - 1)) * cols;
     orient_row(up, mid, down, cols, mag, frac, bin);
-    std::fill(row_hist, row_hist + hrow, 0.0f);
     for (int phase = 0; phase < stride && phase < cols; ++phase) {
       for (int c = phase; c < cols; c += stride) {
         const int o0 = bin[c], o1 = o0 + 1 == kBins ? 0 : o0 + 1;
@@ -443,12 +560,7 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
       }
     }
     float* top = &s.bordered[static_cast<std::size_t>(y0 + 1) * hrow];
-    float* bottom = top + hrow;
-    const float wt = 1.0f - fy;
-    for (std::size_t k = 0; k < hrow; ++k) {
-      top[k] += wt * row_hist[k];
-      bottom[k] += fy * row_hist[k];
-    }
+    add_row(top, top + hrow, row_hist, 1.0f - fy, fy, hrow);
   }
   // The cells themselves, without the border, bin-major (plane o holds bin o of every cell),
   // so that the normalisation below runs over cells, several at a time.
@@ -461,54 +573,17 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
       for (int o = 0; o < kBins; ++o) hist[o * plane + at] = src[c * kBins + o];
     }
   }
-  // Energy of each cell's unsigned histogram, in a copy with its edge cells repeated once
-  // around it (the blocks of a border cell reuse its own row / column).
-  s.energy.assign(plane, 0.0f);
-  float* const energy = s.energy.data();
-  for (int o = 0; o < kBins / 2; ++o) {
-    const float* a = &hist[o * plane];
-    const float* b = &hist[(o + kBins / 2) * plane];
-    for (std::size_t i = 0; i < plane; ++i) energy[i] += (a[i] + b[i]) * (a[i] + b[i]);
-  }
-  const int pc = cc + 2;
-  s.padded.resize(static_cast<std::size_t>(cr + 2) * pc);
-  for (int r = -1; r <= cr; ++r) {
-    const float* src = energy + static_cast<std::size_t>(std::clamp(r, 0, cr - 1)) * cc;
-    float* dst = &s.padded[static_cast<std::size_t>(r + 1) * pc];
-    dst[0] = src[0];
-    std::copy(src, src + cc, dst + 1);
-    dst[cc + 1] = src[cc - 1];
-  }
-  // The four block normalisers of every cell (its 2 x 2 blocks of cells), each sum in the
-  // order: the cell, the one above / below it, the one beside it, the diagonal one.
-  constexpr int kDy[4] = {-1, -1, 1, 1};
-  constexpr int kDx[4] = {-1, 1, -1, 1};
-  s.norm.resize(4 * plane);
-  for (int j = 0; j < 4; ++j) {
-    for (int r = 0; r < cr; ++r) {
-      block_norms(&s.padded[static_cast<std::size_t>(r + 1) * pc + 1],
-                  &s.padded[static_cast<std::size_t>(r + 1 + kDy[j]) * pc + 1], kDx[j], cc,
-                  &s.norm[j * plane + static_cast<std::size_t>(r) * cc]);
-    }
-  }
   FeatureMap out;
   out.channels = kFhogChannels;
   out.rows = cr;
   out.cols = cc;
   out.data.resize(out.plane_size() * kFhogChannels);
-  const float* n = s.norm.data();
-  // The texture features sum each normaliser's clipped values over the 18 signed bins (in
-  // bin order), then are scaled.
-  s.texture.assign(4 * plane, 0.0f);
-  for (int o = 0; o < kBins; ++o) {
-    clip_signed(&hist[o * plane], n, plane, &out.data[o * plane], s.texture.data());
-  }
-  for (int o = 0; o < kBins / 2; ++o) {
-    clip_unsigned(&hist[o * plane], &hist[(o + kBins / 2) * plane], n, plane,
-                  &out.data[(kBins + o) * plane]);
-  }
-  float* const texture_out = &out.data[(kBins + kBins / 2) * plane];
-  for (std::size_t i = 0; i < 4 * plane; ++i) texture_out[i] = s.texture[i] * 0.2357f;
+  s.energy.resize(plane);
+  s.padded.resize(static_cast<std::size_t>(cr + 2) * (cc + 2));
+  s.norm.resize(4 * plane);
+  s.texture.resize(4 * plane);
+  normalise(hist, cr, cc, s.energy.data(), s.padded.data(), s.norm.data(), s.texture.data(),
+            out.data.data());
   return out;
 }
 
