@@ -71,8 +71,8 @@ struct Scratch {
   std::vector<float> mix, mix4;                 // resample's column mixes
   std::vector<int> x_index, y_index;            // resample's taps, fixed count per output
   std::vector<float> x_weight, y_weight;
-  std::vector<float> grad;                      // fhog: per-row pixel values
-  std::vector<int> bin, col_cell;
+  std::vector<float> grad;                      // fhog: col_frac and a row's votes
+  std::vector<int> col_cell;                    // fhog: col_cell and a row's vote offsets
   std::vector<float> row_hist, bordered, hist, energy, padded, norm, texture;
 };
 
@@ -175,6 +175,30 @@ inline Lanes4 lanes4_div(Lanes4 a, float d) {
 inline void lanes4_store(Lanes4 a, float* p) { std::memcpy(p, a.v, sizeof a.v); }
 #endif
 
+// m[c] = sum over k < n of w[k] src[k][c] (c < span), added in the order k = 0, 1, ... from
+// 0 in registers: one pass over m, whatever the number of rows mixed (n <= kMaxRowTaps).
+constexpr int kMaxRowTaps = 8;
+template <int N>
+void mix_rows_n(const float* const* src, const float* w, int span, float* __restrict m) {
+  for (int c = 0; c < span; ++c) {
+    float v = 0.0f;
+    for (int k = 0; k < N; ++k) v += w[k] * src[k][c];
+    m[c] = v;
+  }
+}
+void mix_rows(const float* const* src, const float* w, int n, int span, float* m) {
+  switch (n) {
+    case 1: return mix_rows_n<1>(src, w, span, m);
+    case 2: return mix_rows_n<2>(src, w, span, m);
+    case 3: return mix_rows_n<3>(src, w, span, m);
+    case 4: return mix_rows_n<4>(src, w, span, m);
+    case 5: return mix_rows_n<5>(src, w, span, m);
+    case 6: return mix_rows_n<6>(src, w, span, m);
+    case 7: return mix_rows_n<7>(src, w, span, m);
+    default: return mix_rows_n<8>(src, w, span, m);
+  }
+}
+
 // The patch from a crop that holds every pixel its taps read: rows first (each output row
 // mixes the crop rows under it over the crop's columns), then columns. Four output rows at a
 // time: their column mixes are interleaved (mix4[4 c + q] for row q of the four), so that the
@@ -198,13 +222,21 @@ GrayPatch resample(const LumaCrop& crop, const PatchTaps& t, Scratch& s) {
   const float* const xw = s.x_weight.data();
   for (int j0 = 0; j0 < out.rows; j0 += kBlock) {
     for (int q = 0; q < kBlock; ++q) {
-      float* const m = &s.mix[static_cast<std::size_t>(q) * span];
-      std::fill(m, m + span, 0.0f);
-      for (int k = 0; k < ky; ++k) {
+      const float* src[kMaxRowTaps];
+      float wy[kMaxRowTaps];
+      const int n = std::min(ky, kMaxRowTaps);
+      for (int k = 0; k < n; ++k) {
         const std::size_t at = static_cast<std::size_t>(k) * padded_rows + j0 + q;
-        const float wy = s.y_weight[at];
-        const float* src = crop.values + static_cast<std::size_t>(s.y_index[at]) * crop.cols + cmin;
-        for (int c = 0; c < span; ++c) m[c] += wy * src[c];
+        wy[k] = s.y_weight[at];
+        src[k] = crop.values + static_cast<std::size_t>(s.y_index[at]) * crop.cols + cmin;
+      }
+      float* const m = &s.mix[static_cast<std::size_t>(q) * span];
+      mix_rows(src, wy, n, span, m);
+      for (int k = n; k < ky; ++k) {  // (a region more than ~6 times the patch's height)
+        const std::size_t at = static_cast<std::size_t>(k) * padded_rows + j0 + q;
+        const float w = s.y_weight[at];
+        const float* row = crop.values + static_cast<std::size_t>(s.y_index[at]) * crop.cols + cmin;
+        for (int c = 0; c < span; ++c) m[c] += w * row[c];
       }
     }
     const float* m0 = &s.mix[0];
@@ -241,12 +273,21 @@ GrayPatch resample(const LumaCrop& crop, const PatchTaps& t, Scratch& s) {
 
 constexpr int kBins = 18;  // fHOG's signed orientation bins
 
+// A cell's histogram in the votes' buffers: the 18 signed bins and a copy of bin 0 after bin
+// 17 (bin 17's pixels vote into bins 17 and "18"), so that a pixel's two bins are always
+// adjacent; the copy is added into bin 0 at the end.
+constexpr int kCellStride = kBins + 1;
+
 // Orientation without std::atan2 (otherwise the costliest step): atan of the smaller over
 // the larger of |gx|, |gy| in [0, 1] by a degree-11 odd minimax polynomial (largest error
 // 1.7e-6 rad, checked against numpy in tests/test_correlation.py), then unfolded into the
-// octant of (gx, gy). For one pixel with gradient (dx, dy): its magnitude, its bin o0 (the
-// lower of the two it votes into) and its weight in the upper one.
-WMILTRACK_KERNEL void orient_pixel(float dx, float dy, float& mag, float& frac, int& bin) {
+// octant of (gx, gy). For one pixel with gradient (dx, dy), whose cells start at offset cell
+// of a row's histograms (its second cell kCellStride later) with weight fx in the second: the
+// offset of its lower bin o0 in the first cell, and its votes, magnitude m split between o0
+// and o0 + 1 (1 - f, f) and between the cells (1 - fx, fx): v0 .. v3 = (o0, first cell),
+// (o0 + 1, first), (o0, second), (o0 + 1, second).
+WMILTRACK_KERNEL void orient_pixel(float dx, float dy, int cell, float fx, int& offset,
+                                   float& v0, float& v1, float& v2, float& v3) {
   constexpr float kPi = 3.14159265358979323846f;
   constexpr float kA1 = 0.99997726f, kA3 = -0.33262347f, kA5 = 0.19354346f,
                   kA7 = -0.11643287f, kA9 = 0.05265332f, kA11 = -0.01172120f;
@@ -266,27 +307,76 @@ WMILTRACK_KERNEL void orient_pixel(float dx, float dy, float& mag, float& frac, 
   angle = s3 * (2.0f * kPi) + (1.0f - 2.0f * s3) * angle;
   const float o = angle * bins_per_radian;
   const int o0 = static_cast<int>(o);
-  frac = o - static_cast<float>(o0);
-  bin = o0 >= kBins ? o0 - kBins : o0;
-  mag = std::sqrt(dx * dx + dy * dy);
+  const float frac = o - static_cast<float>(o0);
+  offset = cell + (o0 >= kBins ? o0 - kBins : o0);
+  const float mag = std::sqrt(dx * dx + dy * dy);
+  const float a = mag * (1.0f - frac), b = mag * frac;
+  v0 = a * (1.0f - fx);
+  v1 = b * (1.0f - fx);
+  v2 = a * fx;
+  v3 = b * fx;
+}
+
+// orient_pixel of pixels 0 .. n - 1 of a row, from their gradients (gx, gy), into the four
+// planes of votes.
+WMILTRACK_KERNEL void orient_pixels(const float* __restrict gx, const float* __restrict gy, int n,
+                                    const int* __restrict col_cell,
+                                    const float* __restrict col_frac, int* __restrict offset,
+                                    float* __restrict p0, float* __restrict p1,
+                                    float* __restrict p2, float* __restrict p3) {
+  for (int c = 0; c < n; ++c) {
+    orient_pixel(gx[c], gy[c], col_cell[c], col_frac[c], offset[c], p0[c], p1[c], p2[c], p3[c]);
+  }
 }
 
 // orient_pixel of every pixel of a row (mid), with central differences (the edge pixel
-// repeated: up / down are the rows above and below, or mid itself at the patch's edge).
+// repeated: up / down are the rows above and below, or mid itself at the patch's edge);
+// pixel c's cells at col_cell[c], weight col_frac[c]; its votes first in four planes of
+// planes (cols apart: contiguous stores, the loop vectorises; two more planes hold the
+// gradients), then interleaved into vote[4 c .. 4 c + 3] for the voting.
 WMILTRACK_KERNEL void orient_row_body(const float* __restrict up, const float* __restrict mid,
                                       const float* __restrict down, int cols,
-                                      float* __restrict mag, float* __restrict frac,
-                                      int* __restrict bin) {
+                                      const int* __restrict col_cell,
+                                      const float* __restrict col_frac, int* __restrict offset,
+                                      float* __restrict planes, float* __restrict vote) {
+  float* const p0 = planes;
+  float* const p1 = planes + cols;
+  float* const p2 = planes + 2 * cols;
+  float* const p3 = planes + 3 * cols;
+  float* const gx = planes + 4 * cols;
+  float* const gy = planes + 5 * cols;
+  // The gradients first, so that the costly loop has no edge cases (and runs whole vectors).
+  for (int c = 0; c < cols; ++c) gy[c] = down[c] - up[c];
   if (cols == 1) {
-    orient_pixel(0.0f, down[0] - up[0], mag[0], frac[0], bin[0]);
-    return;
+    gx[0] = 0.0f;
+  } else {
+    gx[0] = mid[1] - mid[0];
+    for (int c = 1; c + 1 < cols; ++c) gx[c] = mid[c + 1] - mid[c - 1];
+    gx[cols - 1] = mid[cols - 1] - mid[cols - 2];
   }
-  orient_pixel(mid[1] - mid[0], down[0] - up[0], mag[0], frac[0], bin[0]);
-  for (int c = 1; c + 1 < cols; ++c) {
-    orient_pixel(mid[c + 1] - mid[c - 1], down[c] - up[c], mag[c], frac[c], bin[c]);
+  orient_pixels(gx, gy, cols, col_cell, col_frac, offset, p0, p1, p2, p3);
+  for (int c = 0; c < cols; ++c) {
+    vote[4 * c] = p0[c];
+    vote[4 * c + 1] = p1[c];
+    vote[4 * c + 2] = p2[c];
+    vote[4 * c + 3] = p3[c];
   }
-  orient_pixel(mid[cols - 1] - mid[cols - 2], down[cols - 1] - up[cols - 1], mag[cols - 1],
-               frac[cols - 1], bin[cols - 1]);
+}
+
+// Two adjacent floats of a histogram plus two votes: one 8-byte add (GCC/Clang vector
+// extension), or two with WMILTRACK_NO_SIMD or another compiler; the same bits.
+inline void add_pair(float* h, const float* v) {
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(WMILTRACK_NO_SIMD)
+  typedef float Pair __attribute__((vector_size(8)));
+  Pair x, y;
+  std::memcpy(&x, h, sizeof x);
+  std::memcpy(&y, v, sizeof y);
+  x += y;
+  std::memcpy(h, &x, sizeof x);
+#else
+  h[0] += v[0];
+  h[1] += v[1];
+#endif
 }
 
 // norm[c] = 1 / sqrt(e[c] + ey[c] + e[c + dx] + ey[c + dx] + 1e-4) for c < n: the normaliser
@@ -403,8 +493,10 @@ namespace detail {
 // portable-build test (tests/test_core_hardening.py).
 __attribute__((target("avx2"))) void fhog_orient_row_avx2(const float* up, const float* mid,
                                                          const float* down, int cols,
-                                                         float* mag, float* frac, int* bin) {
-  orient_row_body(up, mid, down, cols, mag, frac, bin);
+                                                         const int* col_cell,
+                                                         const float* col_frac, int* offset,
+                                                         float* planes, float* vote) {
+  orient_row_body(up, mid, down, cols, col_cell, col_frac, offset, planes, vote);
 }
 __attribute__((target("avx2"))) void fhog_add_row_avx2(float* top, float* bottom, float* row,
                                                       float wt, float fy, std::size_t n) {
@@ -421,12 +513,16 @@ namespace {
 #endif
 
 // The kernels' entry points: the AVX2 copy where the CPU has it (vmath::avx2()).
-void orient_row(const float* up, const float* mid, const float* down, int cols, float* mag,
-                float* frac, int* bin) {
+void orient_row(const float* up, const float* mid, const float* down, int cols,
+                const int* col_cell, const float* col_frac, int* offset, float* planes,
+                float* vote) {
 #ifdef WMILTRACK_AVX2_COPIES
-  if (vmath::avx2()) return detail::fhog_orient_row_avx2(up, mid, down, cols, mag, frac, bin);
+  if (vmath::avx2()) {
+    return detail::fhog_orient_row_avx2(up, mid, down, cols, col_cell, col_frac, offset,
+                                        planes, vote);
+  }
 #endif
-  orient_row_body(up, mid, down, cols, mag, frac, bin);
+  orient_row_body(up, mid, down, cols, col_cell, col_frac, offset, planes, vote);
 }
 
 void add_row(float* top, float* bottom, float* row, float wt, float fy, std::size_t n) {
@@ -508,36 +604,35 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
   // cells' pixels, and those beyond the last whole cell, vote into it; it is dropped), so that
   // the voting needs no bounds checks.
   const int hcols = cc + 3;
-  const std::size_t hrow = static_cast<std::size_t>(hcols) * kBins;
+  const std::size_t hrow = static_cast<std::size_t>(hcols) * kCellStride;
   s.bordered.assign(static_cast<std::size_t>(cr + 3) * hrow, 0.0f);
   s.row_hist.assign(hrow, 0.0f);  // add_row leaves it zero for the next row
   // Cell coordinate of each column's pixel centre (cells' centres at integers), plus one for
-  // the border: the offset of the first of its two cells in a row's histogram, and its weight
-  // in the second.
+  // the border: the offset of the first of its two cells in a row's histograms, and its
+  // weight in the second.
   const float inv_cell = 1.0f / static_cast<float>(cell);
-  s.col_cell.resize(static_cast<std::size_t>(cols));
-  s.grad.resize(static_cast<std::size_t>(cols) * 3);  // col_frac, magnitude, bin fraction
-  s.bin.resize(static_cast<std::size_t>(cols));
+  s.col_cell.resize(static_cast<std::size_t>(cols) * 2);  // col_cell, then the votes' offsets
+  s.grad.resize(static_cast<std::size_t>(cols) * 11);  // col_frac, 6 planes, votes
+  int* const col_cell = s.col_cell.data();
+  int* const offset = col_cell + cols;
   float* const col_frac = s.grad.data();
-  float* const mag = col_frac + cols;
-  float* const frac = mag + cols;
-  int* const bin = s.bin.data();
+  float* const planes = col_frac + cols;
+  float* const vote = planes + 6 * cols;
   for (int c = 0; c < cols; ++c) {
     const float x = (static_cast<float>(c) + 0.5f) * inv_cell - 0.5f;
     const int x0 = static_cast<int>(std::floor(x));
-    s.col_cell[c] = (x0 + 1) * kBins;
+    col_cell[c] = (x0 + 1) * kCellStride;
     col_frac[c] = x - static_cast<float>(x0);
   }
-  // Per row: the gradients' magnitude and orientation bin of every pixel (a branch-free loop
-  // the compiler vectorises, twice: AVX2 where the CPU has it), then their votes into the row's
-  // cells along x, then the row's votes into the two cell rows around it. The votes go column
-  // by column 2 cells apart (c, c + 2 cell, ...; then c + 1, ...): two pixels voted one after
-  // the other never share a histogram entry, so no vote waits for the previous one's store
-  // (neighbouring pixels of a smooth image fall in the same bins).
+  // Per row: every pixel's gradient, orientation and votes (a branch-free loop the compiler
+  // vectorises, twice: AVX2 where the CPU has it), then the votes into the row's cells along x,
+  // then the row's votes into the two cell rows around it. The votes go column by column 2
+  // cells apart (c, c + 2 cell, ...; then c + 1, ...): two pixels voted one after the other
+  // never share a histogram entry, so no vote waits for the previous one's store (neighbouring
+  // pixels of a smooth image fall in the same bins).
   const int stride = 2 * cell;
   const float* pix = patch.pixels.data();
   float* const row_hist = s.row_hist.data();
-  const int* const col_cell = s.col_cell.data();
   for (int r = 0; r < rows; ++r) {
     const float y = (static_cast<float>(r) + 0.5f) * inv_cell - 0.5f;
     const int y0 = static_cast<int>(std::floor(y));
@@ -545,32 +640,29 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
     const float* up = pix + static_cast<std::size_t>(std::max(r - 1, 0)) * cols;
     const float* mid = pix + static_cast<std::size_t>(r) * cols;
     const float* down = pix + static_cast<std::size_t>(std::min(r + 1, rows - 1)) * cols;
-    orient_row(up, mid, down, cols, mag, frac, bin);
+    orient_row(up, mid, down, cols, col_cell, col_frac, offset, planes, vote);
     for (int phase = 0; phase < stride && phase < cols; ++phase) {
       for (int c = phase; c < cols; c += stride) {
-        const int o0 = bin[c], o1 = o0 + 1 == kBins ? 0 : o0 + 1;
-        const float a = mag[c] * (1.0f - frac[c]), b = mag[c] * frac[c];
-        const float fx = col_frac[c];
-        float* h0 = row_hist + col_cell[c];
-        float* h1 = h0 + kBins;
-        h0[o0] += a * (1.0f - fx);
-        h0[o1] += b * (1.0f - fx);
-        h1[o0] += a * fx;
-        h1[o1] += b * fx;
+        float* h = row_hist + offset[c];
+        add_pair(h, vote + 4 * c);
+        add_pair(h + kCellStride, vote + 4 * c + 2);
       }
     }
     float* top = &s.bordered[static_cast<std::size_t>(y0 + 1) * hrow];
     add_row(top, top + hrow, row_hist, 1.0f - fy, fy, hrow);
   }
   // The cells themselves, without the border, bin-major (plane o holds bin o of every cell),
-  // so that the normalisation below runs over cells, several at a time.
+  // so that the normalisation below runs over cells, several at a time; bin 0 gathers its
+  // copy's votes.
   s.hist.resize(plane * kBins);
   float* const hist = s.hist.data();
   for (int r = 0; r < cr; ++r) {
-    const float* src = &s.bordered[static_cast<std::size_t>(r + 1) * hrow + kBins];
+    const float* src = &s.bordered[static_cast<std::size_t>(r + 1) * hrow + kCellStride];
     for (int c = 0; c < cc; ++c) {
       const std::size_t at = static_cast<std::size_t>(r) * cc + c;
-      for (int o = 0; o < kBins; ++o) hist[o * plane + at] = src[c * kBins + o];
+      const float* cell_hist = src + c * kCellStride;
+      hist[at] = cell_hist[0] + cell_hist[kBins];
+      for (int o = 1; o < kBins; ++o) hist[o * plane + at] = cell_hist[o];
     }
   }
   FeatureMap out;
