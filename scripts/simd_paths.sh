@@ -6,8 +6,9 @@
 #
 #   scripts/simd_paths.sh
 #
-# Every paper preset and rcwmil-plus runs 40 frames of a generated sequence on each path;
-# tests/simd_paths_check.py compares the three runs and fails on any difference. Needs what
+# Every paper preset and rcwmil-plus runs 40 frames of a generated sequence on each path, and
+# the correlation filters' features (gray patches, fHOG, scale samples) are computed on a few
+# of its frames; tests/simd_paths_check.py compares the three runs and fails on any difference. Needs what
 # scripts/sanitize.sh needs (cmake, a C++17 compiler, pybind11, Cython, cmeel-eigen in $PYTHON).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -1,10 +1,10 @@
 // Microbenchmarks of wmiltrack's C++ core: integral image, Haar feature projection,
-// candidate scoring, and a whole frame step of the tracker (the same kernels in the same
+// candidate scoring, the correlation filters' patch resampling and fHOG, and a whole frame step of the tracker (the same kernels in the same
 // order as Tracker.update, no Python: the floor the Python path is measured against). Plain
 // std::chrono; each case is run `reps` times after one warm-up call and reports the minimum
 // and median wall time of one call and a throughput from the minimum.
 //
-//   bench_core [--quick] [--reps N] [--frame-only] [--preset rcwmil|mil]
+//   bench_core [--quick] [--reps N] [--frame-only] [--fhog-only] [--preset rcwmil|mil]
 //
 // The feature bank mimics the tracker's: every feature sums 2..4 random rectangles inside
 // the target box with weights +-1/sqrt(n) (compressive-tracking style).
@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "wmiltrack/fhog.hpp"
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/integral.hpp"
 #include "wmiltrack/learning.hpp"
@@ -102,6 +103,76 @@ Image random_image(int rows, int cols, std::mt19937& rng) {
   std::uniform_int_distribution<int> d(0, 255);
   for (auto& p : im.bgr) p = static_cast<std::uint8_t>(d(rng));
   return im;
+}
+
+// A frame with the structure of a photograph (smooth shading, hard edges, a little noise):
+// fHOG's cost depends on the content (how often neighbouring pixels vote into the same bin).
+Image textured_image(int rows, int cols, std::mt19937& rng) {
+  Image im{rows, cols, std::vector<std::uint8_t>(static_cast<std::size_t>(rows) * cols * 3)};
+  std::normal_distribution<double> noise(0.0, 3.0);
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const double shade = 60.0 * std::sin(c / 13.0) * std::cos(r / 17.0);
+      const double block = ((c / 40 + r / 40) % 2) ? 40.0 : -40.0;
+      for (int k = 0; k < 3; ++k) {
+        const double v = 128.0 + shade + block * (k == 1 ? 1.0 : 0.5) + noise(rng);
+        im.bgr[(static_cast<std::size_t>(r) * cols + c) * 3 + k] =
+            static_cast<std::uint8_t>(std::clamp(v, 0.0, 255.0));
+      }
+    }
+  }
+  return im;
+}
+
+// The correlation filter's features of one region (_core.fhog_region): cf::sample_gray of
+// the region around the frame's centre resampled to the template size, then cf::fhog with
+// cell 4; and each of the two alone. Throughput: template pixels per second.
+void bench_fhog(int reps_cap, double budget, std::mt19937& rng) {
+  struct Frame {
+    const char* name;
+    Image img;
+  };
+  const Frame frames[] = {{"textured", textured_image(480, 640, rng)},
+                          {"noise", random_image(480, 640, rng)}};
+  struct Cfg {
+    double region;
+    int out;
+  };
+  const Cfg cfgs[] = {{192.0, 160}, {160.0, 160}, {100.0, 100}, {400.0, 160}};
+  for (const Frame& fr : frames) {
+    const ImageView view = fr.img.view();
+    for (const Cfg& c : cfgs) {
+      const double cx = 320.5, cy = 240.3;
+      const std::string cfg = std::string(fr.name) + " " + std::to_string(int(c.region)) + "->" +
+                              std::to_string(c.out) + " cell 4";
+      const double px = static_cast<double>(c.out) * c.out;
+      {
+        auto f = [&] {
+          const cf::FeatureMap x = cf::fhog(cf::sample_gray(view, cx, cy, c.region, c.region, c.out, c.out), 4);
+          g_sink = g_sink + x.data[0];
+        };
+        const int reps = calibrate(f, budget, reps_cap);
+        row("fhog_regn", cfg, reps, time_it(reps, f), px, "px");
+      }
+      {
+        auto f = [&] {
+          const cf::GrayPatch p = cf::sample_gray(view, cx, cy, c.region, c.region, c.out, c.out);
+          g_sink = g_sink + p.pixels[0];
+        };
+        const int reps = calibrate(f, budget, reps_cap);
+        row("sample", cfg, reps, time_it(reps, f), px, "px");
+      }
+      {
+        const cf::GrayPatch p = cf::sample_gray(view, cx, cy, c.region, c.region, c.out, c.out);
+        auto f = [&] {
+          const cf::FeatureMap x = cf::fhog(p, 4);
+          g_sink = g_sink + x.data[0];
+        };
+        const int reps = calibrate(f, budget, reps_cap);
+        row("fhog", cfg, reps, time_it(reps, f), px, "px");
+      }
+    }
+  }
 }
 
 FeatureBank random_bank(int m, int w, int h, std::mt19937& rng) {
@@ -430,6 +501,7 @@ void bench_frame(int reps_cap, bool quick, const char* only, std::mt19937& rng) 
 int main(int argc, char** argv) {
   bool quick = false;
   bool frame_only = false;
+  bool fhog_only = false;
   const char* only = nullptr;
   int reps_cap = 200;
   for (int i = 1; i < argc; ++i) {
@@ -437,12 +509,14 @@ int main(int argc, char** argv) {
       quick = true;
     } else if (std::strcmp(argv[i], "--frame-only") == 0) {
       frame_only = true;
+    } else if (std::strcmp(argv[i], "--fhog-only") == 0) {
+      fhog_only = true;
     } else if (std::strcmp(argv[i], "--preset") == 0 && i + 1 < argc) {
       only = argv[++i];
     } else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc) {
       reps_cap = std::max(5, std::atoi(argv[++i]));
     } else {
-      std::fprintf(stderr, "usage: %s [--quick] [--reps N] [--frame-only] [--preset NAME]\n", argv[0]);
+      std::fprintf(stderr, "usage: %s [--quick] [--reps N] [--frame-only] [--fhog-only] [--preset NAME]\n", argv[0]);
       return 2;
     }
   }
@@ -451,16 +525,22 @@ int main(int argc, char** argv) {
   std::mt19937 rng(12345);
   std::printf("| Benchmark  | Configuration                    | Reps   | Min us     | Median us  | Throughput (min)   |\n");
   std::printf("|------------|----------------------------------|--------|------------|------------|--------------------|\n");
+  if (fhog_only) {
+    bench_fhog(reps_cap, budget, rng);
+    return g_sink == 12345.678 ? 1 : 0;
+  }
   if (!frame_only) {
     bench_integral(reps_cap, budget, rng);
     bench_channels(reps_cap, budget, rng);
     bench_project(reps_cap, budget, rng);
     bench_score(reps_cap, budget, rng);
+    bench_fhog(reps_cap, budget, rng);
   }
   bench_frame(reps_cap, quick, only, rng);
   std::printf("\nintegral: pixels of the ROI converted to luma and summed per second; project: "
               "feature values per second; channels: ROI pixels x planes per second; score: candidate boxes scored per second (each "
-              "evaluates K=50 features and their Gaussian log-ratios); frame: one whole frame step of the "
+              "evaluates K=50 features and their Gaussian log-ratios); fhog_regn/sample/fhog: "
+              "template pixels per second of cf::sample_gray + cf::fhog (cell 4), each alone; frame: one whole frame step of the "
               "preset in C++ (median us per stage after the row; the bag sampling between search and "
               "projection is not timed), the floor of Tracker.update.\n");
   return g_sink == 12345.678 ? 1 : 0;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Configure, build (out of tree, in build/bench) and run the C++ microbenchmarks.
-#   benchmarks/cpp/run.sh [--quick] [--reps N]
+#   benchmarks/cpp/run.sh [--quick] [--reps N] [--frame-only] [--fhog-only]
 # Needs cmake, a C++17 compiler and a Python with Eigen from PyPI (cmeel-eigen, installed
 # into the active environment if missing).
 set -euo pipefail

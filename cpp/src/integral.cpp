@@ -227,7 +227,8 @@ bool have_ssse3() {
 }
 #endif
 
-// Luma of frame row y, columns [xa, xb), into out[0 .. xb - xa).
+}  // namespace
+
 void luma_row(const ImageView& image, int y, int xa, int xb, std::uint8_t* out) {
   const std::uint8_t* src = image.data + y * image.row_stride + xa * image.col_stride;
 #ifdef WMILTRACK_SSSE3_LUMA
@@ -251,6 +252,8 @@ void luma_row(const ImageView& image, int y, int xa, int xb, std::uint8_t* out) 
     });
   }
 }
+
+namespace {
 
 // Luma of frame row y over the ROI's columns plus one on each side: ext[j] is the luma at
 // column x0 - 1 + j (j = 0 .. w + 1), the frame's edge column replicated outside the frame.

@@ -10,6 +10,7 @@
 
 #include "wmiltrack/correlation.hpp"
 #include "wmiltrack/fhog.hpp"
+#include "wmiltrack/vmath.hpp"
 
 #include "check.hpp"
 
@@ -132,6 +133,59 @@ void test_fhog() {
   CHECK(throws_invalid([&] { fhog(flat, 9); }));
 }
 
+// The patches and fHOG on awkward sizes (1 pixel wide or high, output rows not a multiple of
+// the resampling's 4-row blocks, sides not whole cells, cells 1 .. 8, a colour frame), each
+// computed on the AVX2 copies and on the portable ones: the same bits (and, under the
+// sanitizers, no read or write outside the buffers).
+void test_fhog_paths() {
+  const int rows = 61, cols = 83;
+  const auto gray = texture(rows, cols, 7);
+  std::vector<std::uint8_t> bgr(gray.size() * 3);
+  for (std::size_t i = 0; i < gray.size(); ++i) {
+    bgr[3 * i] = gray[i];
+    bgr[3 * i + 1] = static_cast<std::uint8_t>(255 - gray[i]);
+    bgr[3 * i + 2] = static_cast<std::uint8_t>(gray[i] / 2 + 60);
+  }
+  ImageView colour = gray_view(bgr, rows, cols);
+  colour.channels = 3;
+  colour.col_stride = 3;
+  colour.row_stride = static_cast<std::ptrdiff_t>(cols) * 3;
+  struct Case {
+    double cx, cy, w, h;
+    int out_cols, out_rows;
+  };
+  const Case cases[] = {{41.0, 30.0, 50.0, 40.0, 1, 1},   {41.0, 30.0, 50.0, 40.0, 1, 9},
+                        {41.0, 30.0, 50.0, 40.0, 9, 1},   {20.3, 17.8, 23.0, 19.0, 37, 23},
+                        {2.0, 60.0, 140.0, 90.0, 29, 18}, {41.0, 30.0, 300.0, 250.0, 64, 51},
+                        {70.5, 5.5, 12.0, 9.0, 40, 30}};
+  for (const ImageView& v : {gray_view(gray, rows, cols), colour}) {
+    for (const Case& c : cases) {
+      const GrayPatch native = sample_gray(v, c.cx, c.cy, c.w, c.h, c.out_cols, c.out_rows);
+      vmath::force_portable(true);
+      const GrayPatch portable = sample_gray(v, c.cx, c.cy, c.w, c.h, c.out_cols, c.out_rows);
+      vmath::force_portable(false);
+      CHECK(native.rows == c.out_rows && native.cols == c.out_cols);
+      CHECK(native.pixels == portable.pixels);
+      for (int cell = 1; cell <= 8; ++cell) {
+        if (native.rows < cell || native.cols < cell) continue;
+        const FeatureMap a = fhog(native, cell);
+        vmath::force_portable(true);
+        const FeatureMap b = fhog(native, cell);
+        vmath::force_portable(false);
+        CHECK(a.rows == native.rows / cell && a.cols == native.cols / cell);
+        CHECK(a.data == b.data);
+        // Planes 0-26 sum four clipped (<= 0.2) terms times 0.5; planes 27-30 eighteen, times
+        // 0.2357.
+        const std::size_t texture = static_cast<std::size_t>(27) * a.plane_size();
+        CHECK(std::all_of(a.data.begin(), a.data.begin() + texture,
+                          [](float x) { return x >= 0.0f && x <= 0.4f + 1e-6f; }));
+        CHECK(std::all_of(a.data.begin() + texture, a.data.end(),
+                          [](float x) { return x >= 0.0f && x <= 0.2357f * 18 * 0.2f + 1e-6f; }));
+      }
+    }
+  }
+}
+
 // Circularly shifted copy of a feature map: value at (r, c) moves to (r + dr, c + dc).
 FeatureMap roll(const FeatureMap& x, int dr, int dc) {
   FeatureMap y = x;
@@ -215,6 +269,7 @@ void test_scale_filter() {
 int main() {
   test_sample_gray();
   test_fhog();
+  test_fhog_paths();
   test_translation_filter();
   test_scale_filter();
   if (wmiltrack_test::failures) {
