@@ -60,7 +60,7 @@ from wmiltrack.trackers import (
     split_specs,
 )
 
-VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
+VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf")
 REFERENCE = "opencv:MIL"
 
 

@@ -6,7 +6,7 @@
 #
 #   scripts/simd_paths.sh
 #
-# Every paper preset and rcwmil-plus runs 40 frames of a generated sequence on each path, and
+# Every paper preset, rcwmil-plus and rcwmil-cf run 40 frames of a generated sequence on each path, and
 # the correlation filters' features (gray patches, fHOG, scale samples) are computed on a few
 # of its frames; tests/simd_paths_check.py compares the three runs and fails on any difference. Needs what
 # scripts/sanitize.sh needs (cmake, a C++17 compiler, pybind11, Cython, cmeel-eigen in $PYTHON).

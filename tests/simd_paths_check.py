@@ -17,7 +17,7 @@ import json
 import os
 import sys
 
-VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus")
+VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf")
 FHOG = "fhog"  # the key of the correlation-filter features' digests
 
 

@@ -361,3 +361,130 @@ def test_core_rejects_bad_arguments() -> None:
         s.respond(np.zeros((5, 3), np.float32))
     with pytest.raises(ValueError, match="factors"):
         _core.scale_samples(np.zeros((50, 50), np.uint8), (25.0, 25.0), (10.0, 10.0), [], (8, 8))
+
+
+# ------------------------------------------------------- shared transforms, compression, map
+def test_a_sample_learnt_with_a_shift_puts_the_peak_there() -> None:
+    """learn_spectrum moves the sample so that the target, ``shift`` cells off its centre, is
+    centred: answering the same sample then peaks at that shift (sub-cell too), for a full
+    and a compressed filter alike."""
+    rng = np.random.default_rng(11)
+    x = rng.random((31, 30, 36)).astype(np.float32)
+    for compressed in (0, 10):
+        f = _core.TranslationFilter(30, 36, 31, 2.0, 1e-3, compressed)
+        f.learn(x, 1.0)
+        s = f.transform(x)
+        assert s.channels == (compressed or 31) == f.filter_channels
+        r = f.respond_spectrum(s, 5)
+        assert (r.row_shift, r.col_shift) == pytest.approx((0.0, 0.0), abs=1e-6)
+        for shift in [(3.0, -2.0), (1.4, 2.6), (-4.0, 0.0)]:
+            f.learn_spectrum(s, 1.0, shift)
+            r = f.respond_spectrum(s, 5)
+            assert (r.row_shift, r.col_shift) == pytest.approx(shift, abs=0.05), shift
+
+
+def test_respond_and_respond_spectrum_agree() -> None:
+    rng = np.random.default_rng(12)
+    x, z = rng.random((2, 31, 24, 20)).astype(np.float32)
+    f = _core.TranslationFilter(24, 20, 31, 1.5, 1e-3)
+    f.learn(x, 1.0)
+    np.testing.assert_array_equal(f.respond(z, 5).values, f.respond_spectrum(f.transform(z), 5).values)
+
+
+def test_compression_keeps_the_principal_axes_of_the_first_sample() -> None:
+    """The projection's rows are orthonormal, largest variance first (second moments of the
+    first sample's cells), and fixed after the first learn."""
+    rng = np.random.default_rng(13)
+    base = rng.random((31, 3)).astype(np.float32)  # features mostly in a 3-D subspace
+    x = (base @ rng.random((3, 20 * 20)).astype(np.float32)
+         + 0.01 * rng.random((31, 400)).astype(np.float32)).reshape(31, 20, 20)
+    f = _core.TranslationFilter(20, 20, 31, 1.5, 1e-3, 5)
+    assert f.projection.shape == (0, 31)
+    f.learn(x, 1.0)
+    p = f.projection.astype(np.float64)
+    assert p.shape == (5, 31)
+    np.testing.assert_allclose(p @ p.T, np.eye(5), atol=1e-5)
+    flat = x.reshape(31, -1).astype(np.float64)
+    energy = np.sum((p @ flat) ** 2, axis=1)
+    assert np.all(np.diff(energy) <= 1e-6 * energy[0])  # largest first
+    assert energy[:3].sum() / np.sum(flat**2) > 0.99  # the subspace is found
+    f.learn(rng.random((31, 20, 20)).astype(np.float32), 0.5)
+    np.testing.assert_array_equal(f.projection, p.astype(np.float32))
+    with pytest.raises(ValueError, match="compressed"):
+        _core.TranslationFilter(20, 20, 31, 1.5, 1e-3, 5).transform(x)
+
+
+def test_response_map_matches_numpy() -> None:
+    """Location.map: the response at every pixel of a region taken as the target's centre,
+    bilinear between cells, wrapping around, divided by the peak, clipped to [0, 1]."""
+    frame = texture(240, 320, 14)
+    cf = CorrelationFilter()
+    cf.init(frame, (130.0, 90.0, 60.0, 50.0))
+    loc = cf.locate(shifted(frame, 2.5, -1.5), (160.0, 115.0))
+    region = (100, 60, 230, 170)
+    got = loc.map(region)
+    r = loc.response.astype(np.float64)
+    rows, cols = r.shape
+    u = (np.arange(region[0], region[2]) - loc.centre[0]) / loc.cell[0]
+    v = (np.arange(region[1], region[3]) - loc.centre[1]) / loc.cell[1]
+    j0, i0 = np.floor(u).astype(int), np.floor(v).astype(int)
+    fu, fv = u - j0, v - i0
+    across = r[:, j0 % cols] * (1 - fu) + r[:, (j0 + 1) % cols] * fu
+    want = across[i0 % rows] * (1 - fv)[:, None] + across[(i0 + 1) % rows] * fv[:, None]
+    want = np.clip(want / r.max(), 0.0, 1.0)
+    assert got.shape == (110, 130)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
+def test_learning_from_the_search_sample_follows_the_target() -> None:
+    """learn(from_search=True) reuses the last locate's sample on that frame, moved to the new
+    box, when the box is near; a box far away, another frame, or no locate take a new
+    sample. Either way the filter then finds the moved target."""
+    frame = texture(240, 320, 15)
+    box = (130.0, 90.0, 60.0, 50.0)
+    cf = CorrelationFilter(CorrelationSettings(compressed=10))
+    cf.init(frame, box)
+    moved = shifted(frame, 5.0, 3.0)
+    loc = cf.locate(moved, (160.0, 115.0))
+    cf.learn(moved, (box[0] + loc.dx, box[1] + loc.dy, 60.0, 50.0), 0.5, from_search=True)
+    assert cf.reused == 1
+    cf.learn(moved, (box[0] + 5, box[1] + 3, 60.0, 50.0), 0.5, from_search=True)  # no locate
+    assert cf.reused == 1
+    cf.locate(moved, (165.0, 118.0))
+    cf.learn(moved, (10.0, 10.0, 60.0, 50.0), 0.5, from_search=True)  # far: a new sample
+    assert cf.reused == 1
+    cf.locate(moved, (165.0, 118.0))
+    cf.learn(frame, box, 0.5, from_search=True)  # another frame
+    assert cf.reused == 1
+    again = cf.locate(shifted(frame, 7.0, 4.0), (165.0, 118.0))
+    assert abs(again.dx - 2.0) < 1.5 and abs(again.dy - 1.0) < 1.5, (again.dx, again.dy)
+
+
+def test_scale_filter_learnt_with_a_shift_prefers_that_size() -> None:
+    """The scale filter's learn_spectrum moves the label: answering the same samples then
+    peaks ``shift`` samples off the middle; respond and respond_spectrum agree."""
+    frame = texture(240, 320, 16, blur=1.5)
+    factors = list(ScaleEstimator().factors)
+    args = (frame, (160.0, 120.0), (80.0, 60.0), factors, (20, 16), 4)
+    samples = _core.scale_samples(*args)
+    f = _core.ScaleFilter(33, samples.shape[1], math.sqrt(33) / 4, 1e-3)
+    f.learn(samples, 1.0)
+    spectrum = f.sample(*args)
+    np.testing.assert_allclose(f.respond(samples).values, f.respond_spectrum(spectrum).values,
+                               rtol=0, atol=1e-6)
+    for shift in (3.0, -2.4):
+        f.learn_spectrum(spectrum, 1.0, shift)
+        r = f.respond_spectrum(spectrum)
+        assert r.best + r.offset - 16 == pytest.approx(shift, abs=0.1)
+
+
+def test_scale_settings_spanning_keeps_dssts_range() -> None:
+    assert ScaleFilterSettings.spanning(33) == ScaleFilterSettings()
+    s = ScaleFilterSettings.spanning(17, 0.05)
+    assert s.num_scales == 17 and s.learning_rate == 0.05
+    assert s.step**8 == pytest.approx(1.02**16)
+    # the label as wide in log-size: sigma (samples) x log(step) is DSST's
+    assert math.sqrt(17) * s.sigma_factor * math.log(s.step) == pytest.approx(
+        math.sqrt(33) * 0.25 * math.log(1.02))
+    with pytest.raises(ValueError, match="num_scales"):
+        ScaleFilterSettings.spanning(16)

@@ -129,10 +129,20 @@ def test_template_settings_are_checked(overrides: dict[str, object], match: str)
         wmiltrack.Params.for_variant("rcwmil-plus", **overrides)
 
 
-def test_every_preset_leaves_the_template_out() -> None:
+def test_only_rcwmil_cf_has_the_correlation_filters() -> None:
+    """The template and DSST are rcwmil-cf's: the paper presets and rcwmil-plus (the fast
+    one) leave them out, and rcwmil-cf is rcwmil-plus with them and nothing else changed."""
     for name, p in wmiltrack.variants().items():
+        if name == "rcwmil-cf":
+            continue
         assert p.template_weight == 0.0 and not p.template_motion, name
         assert p.scale_model != "dsst", name
+    cf, plus = wmiltrack.Params.for_variant("rcwmil-cf"), wmiltrack.Params.for_variant("rcwmil-plus")
+    changed = {k for k, v in cf.as_dict().items() if plus.as_dict()[k] != v}
+    assert changed == {"variant", "description", "colour_weight", "template_weight",
+                       "template_area", "template_cell", "template_channels", "template_reuse",
+                       "scale_model", "scale_samples", "scale_veto"}
+    assert cf.template_weight > 0 and cf.scale_model == "dsst" and cf.scale_veto
 
 
 def test_dsst_votes_inside_the_haar_scale_search(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -190,3 +200,35 @@ def test_template_every_learns_the_filters_on_every_nth_frame() -> None:
     assert calls == {"filter": 4, "scale": 4}
     with pytest.raises(ValueError, match="template_every"):
         wmiltrack.Params.for_variant("rcwmil-plus", template_every=0)
+
+
+def test_scale_veto_keeps_the_size_where_the_colour_contrast_falls(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``scale_veto``: DSST's new size is taken only if the colour cue's contrast of the new
+    box is at least the current box's; without a colour cue, or without the veto, it is
+    taken."""
+    from wmiltrack.engine.correlation import ScaleEstimate, ScaleEstimator
+    from wmiltrack.engine.template import DSSTScale
+
+    seq = make_sequence(2, size=(160, 200), target_size=(36, 30), seed=6, occlusion=False)
+    frames, box = seq.load(), tuple(int(v) for v in seq.groundtruth[0])
+    monkeypatch.setattr(ScaleEstimator, "estimate",
+                        lambda self, frame, centre, size: ScaleEstimate(1.2, np.zeros(17, np.float32)))
+
+    def scaled(veto: bool, contrast: object) -> tuple[int, int, int, int]:
+        p = wmiltrack.Params.for_variant("rcwmil-cf", scale_veto=veto)
+        part = DSSTScale(p, (box[2], box[3]), (200, 160))
+        part.start(frames[0], box)
+        out, raw = part.search(None, frames[1], box, 0.5, contrast)  # type: ignore[arg-type]
+        assert raw == 0.5
+        return out
+
+    def smaller_is_better(b: tuple[int, int, int, int]) -> float:
+        return -float(b[2] * b[3])
+
+    def larger_is_better(b: tuple[int, int, int, int]) -> float:
+        return float(b[2] * b[3])
+
+    assert scaled(True, smaller_is_better) == box
+    grown = scaled(True, larger_is_better)
+    assert grown[2] * grown[3] > 1.3 * box[2] * box[3]
+    assert scaled(True, None) == grown and scaled(False, smaller_is_better) == grown
