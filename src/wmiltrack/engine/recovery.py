@@ -90,6 +90,7 @@ class Redetector:
         self.seen = 0  # tracked frames judged since the start or the last re-detection
         self.last = math.nan
         self.template: np.ndarray | None = None
+        self.size: tuple[int, int] | None = None  # of the last box that matched as usual
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
         """Take the first look of the target as the template; no history."""
@@ -101,6 +102,7 @@ class Redetector:
         self.seen = 0
         self.last = math.nan
         self.template = None
+        self.size = (box[2], box[3])
         self.learn(frame, box)
 
     def _patch(self, frame: np.ndarray, box: IntBox) -> np.ndarray | None:
@@ -130,6 +132,8 @@ class Redetector:
             self.template = patch
             return
         m = _match(patch, self.template)
+        if self.match is None or m >= self.match:
+            self.size = (box[2], box[3])
         self.match = m if self.match is None else _MEMORY * self.match + (1.0 - _MEMORY) * m
         cv2.addWeighted(self.template, 1.0 - _TEMPLATE_RATE, patch, _TEMPLATE_RATE, 0.0,
                         dst=self.template)
@@ -191,9 +195,11 @@ class Redetector:
         return max(s.recover_floor, relative)
 
     def find(self, frame: np.ndarray, size: tuple[int, int]) -> IntBox | None:
-        """The box of ``size`` that matches the template best over the whole frame, if it
-        matches well enough to end the lost state (then the lost state ends); else None and
-        one more frame is lost.
+        """The box that matches the template best over the whole frame, if it matches well
+        enough to end the lost state (then the lost state ends); else None and one more frame
+        is lost. The box has the size of the last tracked box that matched the template at
+        least as well as usual (``size`` before any did): a target that an occluder covered
+        bit by bit may have had its box shrunk or grown before it counted as lost.
 
         Two passes: the whole frame at a resolution where the template has at most
         ``_SEARCH_AREA`` pixels (a 32-px target on a 640 x 480 frame: 0.6 instead of 4 ms),
@@ -202,7 +208,7 @@ class Redetector:
         if self.template is None:
             self.frames_lost += 1
             return None
-        w, h = size
+        w, h = self.size if self.size is not None else size
         fh, fw = frame.shape[:2]
         if w > fw or h > fh:
             self.frames_lost += 1

@@ -119,6 +119,7 @@ class DSSTScale:
         self.estimator = ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
                                                                      self.updates.rate))
         self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
+        self.given = base_wh  # the size of the box this part last gave
         self.tried: list[IntBox] = []
 
     @property
@@ -142,6 +143,8 @@ class DSSTScale:
         ``scale_veto`` and a colour cue (``contrast``), a new size whose box has less colour
         contrast than the current one is refused."""
         p = self.settings
+        if (box[2], box[3]) != self.given:  # another part sized the box (a re-detection)
+            self.size = (float(box[2]), float(box[3]))
         factor = self.estimator.estimate(frame, _centre(box), self.size).factor
         w, h = self.size[0] * factor, self.size[1] * factor
         s = math.sqrt(w * h / (self.base_wh[0] * self.base_wh[1]))
@@ -156,8 +159,10 @@ class DSSTScale:
         out = centred(box, min(iw, fw), min(ih, fh))
         if (p.scale_veto and contrast is not None and (out[2], out[3]) != (box[2], box[3])
                 and contrast(out) < contrast(box)):
-            return box, raw
-        self.size = size
+            out = box
+        else:
+            self.size = size
+        self.given = (out[2], out[3])
         return out, raw
 
     def learning_extras(self, model: HaarAppearance, box: IntBox) -> tuple[None, int, None]:
