@@ -91,8 +91,8 @@ class CorrelationTemplate:
         (bilinear between the response's cells; the response wraps around), divided by its
         peak and clipped to [0, 1]."""
         if self._searched is None:  # not the motion model: search around the region's centre
-            w, h = self.filter.size
-            cx, cy = (region[0] + region[2]) / 2.0, (region[1] + region[3]) / 2.0
+            w, h = self.filter.size  # (the region of centres: its middle pixel's index)
+            cx, cy = (region[0] + region[2] - 1) / 2.0, (region[1] + region[3] - 1) / 2.0
             self.origin((round(cx - w / 2.0), round(cy - h / 2.0), round(w), round(h)), frame)
         assert self._searched is not None
         _, loc = self._searched

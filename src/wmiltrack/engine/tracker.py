@@ -493,7 +493,12 @@ class Tracker:
         x, y, w, h = origin
         m = self._params.search_reach + 1
         region = (x - m, y - m, x + w + m, y + h + m)
-        tables = [(*c.table(img, region), c.weight, getattr(c, "at_centre", False)) for c in cues]
+        # a map read at the candidates' centres (x + dx + w // 2, ...) need only cover those
+        centres = (x + w // 2 - m, y + h // 2 - m, x + w // 2 + m + 1, y + h // 2 + m + 1)
+        tables = []
+        for c in cues:
+            at_centre = getattr(c, "at_centre", False)
+            tables.append((*c.table(img, centres if at_centre else region), c.weight, at_centre))
         rel = self._params.colour_relative
         offset = self._params.confidence_offset if rel is None else -rel
         return tables, offset, rel is not None
