@@ -141,8 +141,8 @@ def test_only_rcwmil_cf_has_the_correlation_filters() -> None:
     changed = {k for k, v in cf.as_dict().items() if plus.as_dict()[k] != v}
     assert changed == {"variant", "description", "colour_weight", "template_weight",
                        "template_area", "template_cell", "template_channels", "template_reuse",
-                       "scale_model", "scale_samples", "scale_veto"}
-    assert cf.template_weight > 0 and cf.scale_model == "dsst" and cf.scale_veto
+                       "scale_model", "scale_samples"}
+    assert cf.template_weight > 0 and cf.scale_model == "dsst" and not cf.scale_veto
 
 
 def test_dsst_votes_inside_the_haar_scale_search(monkeypatch: pytest.MonkeyPatch) -> None:
