@@ -30,7 +30,7 @@ def single(variant: str, seed: int, frames: list[np.ndarray], box: tuple[float, 
     return [t.update(f).box for f in frames[start + 1:]]
 
 
-@pytest.mark.parametrize("variant", ["rcwmil", "mil", "rcwmil-plus"])
+@pytest.mark.parametrize("variant", ["rcwmil", "mil", "rcwmil-plus", "rcwmil-cf"])
 @pytest.mark.parametrize(("threads", "share"), [(1, "never"), (2, "never"), (1, "always"), (2, "always")])
 def test_each_target_gives_the_boxes_of_a_single_tracker(two_targets, variant: str, threads: int,
                                                          share: str) -> None:
