@@ -488,3 +488,44 @@ def test_scale_settings_spanning_keeps_dssts_range() -> None:
         math.sqrt(33) * 0.25 * math.log(1.02))
     with pytest.raises(ValueError, match="num_scales"):
         ScaleFilterSettings.spanning(16)
+
+
+def test_the_new_core_calls_refuse_bad_arguments() -> None:
+    """A spectrum of another filter, a shift that is not finite, a region without pixels, the
+    wrong number of scale factors: ValueError naming the problem, nothing learnt."""
+    rng = np.random.default_rng(17)
+    x = rng.random((31, 20, 24)).astype(np.float32)
+    f = _core.TranslationFilter(20, 24, 31, 1.5, 1e-3)
+    g = _core.TranslationFilter(20, 24, 31, 1.5, 1e-3, 8)
+    with pytest.raises(ValueError, match="learn"):
+        f.learn_spectrum(f.transform(x), 0.5)  # the first learn takes features
+    f.learn(x, 1.0)
+    g.learn(x, 1.0)
+    with pytest.raises(ValueError, match="shape"):
+        f.learn_spectrum(g.transform(x), 0.5)
+    with pytest.raises(ValueError, match="shape"):
+        f.respond_spectrum(g.transform(x))
+    with pytest.raises(ValueError, match="finite"):
+        f.learn_spectrum(f.transform(x), 0.5, (math.nan, 0.0))
+    with pytest.raises(ValueError, match="rate"):
+        f.learn_spectrum(f.transform(x), 1.5)
+    with pytest.raises(ValueError, match="compressed"):
+        _core.TranslationFilter(20, 24, 31, 1.5, 1e-3, -1)
+    r = f.respond(x, 5)
+    with pytest.raises(ValueError, match="region"):
+        r.map((10.0, 10.0), (2.0, 2.0), (5, 5, 5, 9))
+    with pytest.raises(ValueError, match="cell"):
+        r.map((10.0, 10.0), (0.0, 2.0), (0, 0, 5, 5))
+    frame = texture(120, 160, 18)
+    samples = _core.scale_samples(frame, (80.0, 60.0), (40.0, 30.0), [0.9, 1.0, 1.1], (20, 16), 4)
+    s = _core.ScaleFilter(3, samples.shape[1], 1.0, 1e-3)
+    s.learn(samples, 1.0)
+    with pytest.raises(ValueError, match="factors"):
+        s.sample(frame, (80.0, 60.0), (40.0, 30.0), [1.0, 1.1], (20, 16), 4)
+    with pytest.raises(ValueError, match="dims"):
+        s.sample(frame, (80.0, 60.0), (40.0, 30.0), [0.9, 1.0, 1.1], (24, 16), 4)
+    with pytest.raises(ValueError, match="finite"):
+        s.learn_spectrum(s.sample(frame, (80.0, 60.0), (40.0, 30.0), [0.9, 1.0, 1.1], (20, 16), 4),
+                         0.5, math.inf)
+    with pytest.raises(ValueError, match="compressed"):
+        CorrelationSettings(compressed=32)
