@@ -88,6 +88,29 @@ void check_rate(double rate) {
   require(rate > 0.0 && rate <= 1.0, "rate must be in (0, 1], got " + std::to_string(rate));
 }
 
+void require_shape(const LockedTranslation& t, const FeatureMap& x) {
+  require(x.channels == t.filter.channels() && x.rows == t.filter.rows() &&
+              x.cols == t.filter.cols(),
+          "features must have shape (channels, rows, cols) of the filter");
+}
+
+void require_shape(const LockedTranslation& t, const cf::Spectrum& s) {
+  require(s.channels == t.filter.filter_channels() && s.rows == t.filter.rows() &&
+              s.cols == t.filter.cols(),
+          "the spectrum is not of this filter's shape");
+}
+
+// respond() to features or to a transformed sample, checked, without the GIL, under the lock.
+template <typename Sample>
+cf::TranslationResponse respond_locked(LockedTranslation& t, const Sample& z, int exclusion) {
+  require(exclusion >= 0, "exclusion must be >= 0");
+  require_shape(t, z);
+  py::gil_scoped_release release;
+  std::lock_guard<std::mutex> guard(t.lock);
+  if (!t.filter.trained()) throw py::value_error("call learn() before respond()");
+  return t.filter.respond(z, exclusion);
+}
+
 }  // namespace
 
 void bind_cf(py::module_& m) {
@@ -294,9 +317,7 @@ void bind_cf(py::module_& m) {
           "transform",
           [](LockedTranslation& t, const py::array& features) {
             const FeatureMap x = feature_map(features);
-            require(x.channels == t.filter.channels() && x.rows == t.filter.rows() &&
-                        x.cols == t.filter.cols(),
-                    "features must have shape (channels, rows, cols) of the filter");
+            require_shape(t, x);
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> guard(t.lock);
             if (t.filter.filter_channels() < t.filter.channels() && t.filter.projection().empty()) {
@@ -312,9 +333,7 @@ void bind_cf(py::module_& m) {
             check_rate(rate);
             const auto [rs, cs] = shift;
             require(std::isfinite(rs) && std::isfinite(cs), "shift must be finite");
-            require(s.channels == t.filter.filter_channels() && s.rows == t.filter.rows() &&
-                        s.cols == t.filter.cols(),
-                    "the spectrum is not of this filter's shape");
+            require_shape(t, s);
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> guard(t.lock);
             if (!t.filter.trained()) throw py::value_error("the first learn() takes features");
@@ -327,14 +346,7 @@ void bind_cf(py::module_& m) {
       .def(
           "respond_spectrum",
           [](LockedTranslation& t, const cf::Spectrum& s, int exclusion) {
-            require(exclusion >= 0, "exclusion must be >= 0");
-            require(s.channels == t.filter.filter_channels() && s.rows == t.filter.rows() &&
-                        s.cols == t.filter.cols(),
-                    "the spectrum is not of this filter's shape");
-            py::gil_scoped_release release;
-            std::lock_guard<std::mutex> guard(t.lock);
-            if (!t.filter.trained()) throw py::value_error("call learn() before respond()");
-            return t.filter.respond(s, exclusion);
+            return respond_locked(t, s, exclusion);
           },
           py::arg("spectrum"), py::arg("exclusion") = 5,
           "respond() to a transformed sample.")
@@ -359,9 +371,7 @@ void bind_cf(py::module_& m) {
           [](LockedTranslation& t, const py::array& features, double rate) {
             check_rate(rate);
             const FeatureMap x = feature_map(features);
-            require(x.channels == t.filter.channels() && x.rows == t.filter.rows() &&
-                        x.cols == t.filter.cols(),
-                    "features must have shape (channels, rows, cols) of the filter");
+            require_shape(t, x);
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> guard(t.lock);
             t.filter.learn(x, rate);
@@ -372,15 +382,7 @@ void bind_cf(py::module_& m) {
       .def(
           "respond",
           [](LockedTranslation& t, const py::array& features, int exclusion) {
-            require(exclusion >= 0, "exclusion must be >= 0");
-            const FeatureMap z = feature_map(features);
-            require(z.channels == t.filter.channels() && z.rows == t.filter.rows() &&
-                        z.cols == t.filter.cols(),
-                    "features must have shape (channels, rows, cols) of the filter");
-            py::gil_scoped_release release;
-            std::lock_guard<std::mutex> guard(t.lock);
-            if (!t.filter.trained()) throw py::value_error("call learn() before respond()");
-            return t.filter.respond(z, exclusion);
+            return respond_locked(t, feature_map(features), exclusion);
           },
           py::arg("features"), py::arg("exclusion") = 5,
           "The response to a sample, its sub-cell peak and confidences (PSR leaves out the\n"
