@@ -130,19 +130,20 @@ def test_template_settings_are_checked(overrides: dict[str, object], match: str)
 
 
 def test_only_rcwmil_cf_has_the_correlation_filters() -> None:
-    """The template and DSST are rcwmil-cf's: the paper presets and rcwmil-plus (the fast
-    one) leave them out, and rcwmil-cf is rcwmil-plus with them and nothing else changed."""
+    """The template and DSST's vote are rcwmil-cf's: the paper presets and rcwmil-plus (the
+    fast one) leave them out, and rcwmil-cf is rcwmil-plus with them and nothing else
+    changed."""
     for name, p in wmiltrack.variants().items():
         if name == "rcwmil-cf":
             continue
         assert p.template_weight == 0.0 and not p.template_motion, name
-        assert p.scale_model != "dsst", name
+        assert p.scale_model != "dsst" and p.scale_dsst == 0.0, name
     cf, plus = wmiltrack.Params.for_variant("rcwmil-cf"), wmiltrack.Params.for_variant("rcwmil-plus")
     changed = {k for k, v in cf.as_dict().items() if plus.as_dict()[k] != v}
     assert changed == {"variant", "description", "colour_weight", "template_weight",
                        "template_area", "template_cell", "template_channels", "template_reuse",
-                       "scale_model", "scale_samples"}
-    assert cf.template_weight > 0 and cf.scale_model == "dsst" and not cf.scale_veto
+                       "scale_dsst", "scale_samples"}
+    assert cf.template_weight > 0 and cf.scale_dsst > 0 and cf.scale_model == plus.scale_model
 
 
 def test_dsst_votes_inside_the_haar_scale_search(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -215,7 +216,7 @@ def test_scale_veto_keeps_the_size_where_the_colour_contrast_falls(monkeypatch: 
                         lambda self, frame, centre, size: ScaleEstimate(1.2, np.zeros(17, np.float32)))
 
     def scaled(veto: bool, contrast: object) -> tuple[int, int, int, int]:
-        p = wmiltrack.Params.for_variant("rcwmil-cf", scale_veto=veto)
+        p = wmiltrack.Params.for_variant("rcwmil-cf", scale_model="dsst", scale_veto=veto)
         part = DSSTScale(p, (box[2], box[3]), (200, 160))
         part.start(frames[0], box)
         out, raw = part.search(None, frames[1], box, 0.5, contrast)  # type: ignore[arg-type]
@@ -232,3 +233,30 @@ def test_scale_veto_keeps_the_size_where_the_colour_contrast_falls(monkeypatch: 
     grown = scaled(True, larger_is_better)
     assert grown[2] * grown[3] > 1.3 * box[2] * box[3]
     assert scaled(True, None) == grown and scaled(False, smaller_is_better) == grown
+
+
+def test_dssts_vote_learns_from_its_own_samples_with_the_same_result(monkeypatch: pytest.MonkeyPatch) -> None:
+    """When the Haar scale search keeps the box DSST voted around, DSST learns from the
+    samples of its vote instead of taking them again: the same samples, so the same boxes."""
+    from wmiltrack.engine.correlation import ScaleEstimator
+
+    seq = make_sequence(40, size=(160, 200), target_size=(36, 30), seed=4)
+    frames, box = seq.load(), tuple(seq.groundtruth[0])
+
+    def run() -> list[tuple[float, float, float, float]]:
+        t = wmiltrack.Tracker("rcwmil-cf", seed=0)
+        t.init(frames[0], box)
+        return [t.update(f).box for f in frames[1:]]
+
+    reused = run()
+    fresh_learn = ScaleEstimator.learn
+    calls = {"reuse asked": 0}
+
+    def always_fresh(self: ScaleEstimator, frame: np.ndarray, centre: object, size: object,
+                     rate: float | None = None, *, from_estimate: bool = False) -> None:
+        calls["reuse asked"] += from_estimate
+        fresh_learn(self, frame, centre, size, rate)
+
+    monkeypatch.setattr(ScaleEstimator, "learn", always_fresh)
+    assert run() == reused
+    assert calls["reuse asked"] > 20  # most frames keep the voted box

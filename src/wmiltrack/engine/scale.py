@@ -52,6 +52,7 @@ class HaarScale:
         self.dsst = (ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
                                                                  self.dsst_updates.rate))
                      if params.scale_dsst > 0 else None)
+        self._voted: IntBox | None = None  # the box DSST's last vote was taken around
 
     @property
     def scale(self) -> float:
@@ -86,12 +87,16 @@ class HaarScale:
         """Fold the frame's box into DSST's vote, if any (the Haar models learn with the
         appearance model's learning step: :meth:`learning_extras`)."""
         if self.dsst is not None and self.dsst_updates.due():
-            self.dsst.learn(frame, (box[0] + box[2] / 2.0, box[1] + box[3] / 2.0), (box[2], box[3]))
+            # the vote's own samples when the box is the one they were taken around (the same
+            # samples, so the same filter, without taking them again)
+            self.dsst.learn(frame, (box[0] + box[2] / 2.0, box[1] + box[3] / 2.0), (box[2], box[3]),
+                            from_estimate=box == self._voted)
 
     def _dsst_vote(self, frame: np.ndarray, box: IntBox) -> Callable[[IntBox], float] | None:
         """DSST's response (divided by its peak) at a tried box's size, around ``box``."""
         if self.dsst is None:
             return None
+        self._voted = box
         est = self.dsst.estimate(frame, (box[0] + box[2] / 2.0, box[1] + box[3] / 2.0),
                                  (box[2], box[3]))
         r = est.response.astype(np.float64)
