@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from typing import Any
 
 from .options import Subparsers
@@ -44,9 +45,19 @@ def variant_table() -> str:
                                                       "uniform": "equal"}[p.instance_weights]
         if key == "plus":
             parts = []
-            if p.scale_steps:
+            if p.scale_model == "dsst":
+                parts.append(f"scale by DSST ({p.scale_samples} samples)")
+            elif p.scale_steps:
                 contrast = f", colour contrast {p.scale_contrast:g}" if p.scale_contrast > 0 else ""
-                parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} ({p.scale_model}{contrast})")
+                vote = (f", DSST vote {p.scale_dsst:g} ({p.scale_samples} samples)"
+                        if p.scale_dsst > 0 else "")
+                parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} "
+                             f"({p.scale_model}{contrast}{vote})")
+            if p.template_weight > 0:
+                cells = round(math.sqrt(p.template_area) / p.template_cell)
+                kept = f", {p.template_channels} channels" if p.template_channels else ""
+                parts.append(f"fHOG correlation filter {p.template_weight:g} "
+                             f"(~{cells}x{cells} cells{kept})")
             if p.channels:
                 parts.append("channels " + "+".join(p.channels))
             if p.colour_weight > 0:
@@ -58,6 +69,8 @@ def variant_table() -> str:
                 parts.append(f"score colour {p.score_colour:g}{first}")
             if p.score_luma > 0:
                 parts.append(f"score luma {p.score_luma:g} (first frame)")
+            if p.redetect:
+                parts.append("lost state and re-detection")
             return ", ".join(parts) or "-"
         if key == "search":
             s = f"{p.coarse_radius}/{p.coarse_step}"
