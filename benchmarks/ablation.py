@@ -1,9 +1,11 @@
 """rcwmil-plus's ablation: mean AUC over seeds and update FPS of each component, added to
-rcwmil one at a time and taken out of rcwmil-plus one at a time.
+rcwmil one at a time and taken out of rcwmil-plus one at a time; with ``--preset rcwmil-cf``,
+rcwmil-cf's parts taken out (or changed) one at a time.
 
 Usage::
 
     python benchmarks/ablation.py                      # 17 shared sequences x seeds 0-2, ~4 min
+    python benchmarks/ablation.py --preset rcwmil-cf -j 2   # rcwmil-cf's parts, ~3 min
     python benchmarks/ablation.py --seeds 3,4 -j 2     # other seeds, two worker processes
     python benchmarks/ablation.py --json ablation.json --rows "+ colour,rcwmil-plus"
 
@@ -63,13 +65,31 @@ COMPONENTS: dict[str, tuple[dict[str, object], dict[str, object]]] = {
 }
 
 
+#: rcwmil-cf's parts: the values that take each one out of rcwmil-cf (or change it).
+CF_PARTS: dict[str, dict[str, object]] = {
+    "- template": {"template_weight": 0.0},
+    "- DSST's vote": {"scale_dsst": 0.0},
+    "DSST as the scale model": {"scale_model": "dsst", "scale_dsst": 0.0},
+    "- compression": {"template_channels": 0},
+    "- learning from the search sample": {"template_reuse": False},
+    "- lost state": {"redetect": False},
+    "33 scale samples": {"scale_samples": 33},
+}
+
+
 def spec(name: str, overrides: dict[str, object]) -> str:
     """``name:field=value:...`` (values as Python literals, read back by ``literal_eval``)."""
     return ":".join([name, *(f"{k}={v!r}" for k, v in overrides.items())])
 
 
-def default_rows() -> dict[str, str]:
-    """Row title -> tracker spec: rcwmil, + each component, rcwmil-plus, - each component."""
+def default_rows(preset: str = "rcwmil-plus") -> dict[str, str]:
+    """Row title -> tracker spec: rcwmil, + each component, rcwmil-plus, - each component;
+    for rcwmil-cf: rcwmil-plus, rcwmil-cf, and rcwmil-cf with each part out or changed."""
+    if preset == "rcwmil-cf":
+        cf = {"rcwmil-plus": "rcwmil-plus", "rcwmil-cf": "rcwmil-cf"}
+        cf.update({f"rcwmil-cf {title}": spec("rcwmil-cf", change)
+                   for title, change in CF_PARTS.items()})
+        return cf
     rows = {"rcwmil": "rcwmil"}
     for comp, (on, _) in COMPONENTS.items():
         if on:
@@ -94,6 +114,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                     "or ../shared/data/otb)")
     ap.add_argument("--seeds", default="0,1,2", help="tracker seeds (default 0,1,2)")
     ap.add_argument("-j", "--jobs", type=int, default=1, help="worker processes for the AUC runs")
+    ap.add_argument("--preset", choices=("rcwmil-plus", "rcwmil-cf"), default="rcwmil-plus",
+                    help="whose parts (default rcwmil-plus)")
     ap.add_argument("--rows", default=None, help="comma-separated row titles (default: all)")
     ap.add_argument("--sequences", default=None, help="comma-separated sequence names (default all)")
     ap.add_argument("--fps-sequences", default="David,Coke,Surfer,Panda",
@@ -109,7 +131,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not paths:
         print(f"no OTB sequences under {root} (set --otb or $WMILTRACK_OTB)", file=sys.stderr)
         return 2
-    rows = default_rows()
+    rows = default_rows(args.preset)
     if args.rows:
         wanted = [r.strip() for r in args.rows.split(",") if r.strip()]
         unknown = [r for r in wanted if r not in rows]

@@ -14,8 +14,10 @@ import numpy as np
 import pytest
 from conftest import skip_or_fail, write_generated_otb
 
+import wmiltrack
 from wmiltrack.cli import main
 from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.trackers import parse_spec
 
 REPO = Path(__file__).resolve().parent.parent
 BENCH = REPO / "benchmarks"
@@ -154,6 +156,21 @@ def test_ablation_on_a_generated_dataset(tmp_path: Path) -> None:
         assert f"| {title} | {sum(doc['auc'][title]) / 2:.3f} |" in r.stdout
     bad = _run([str(BENCH / "ablation.py"), "--otb", str(data), "--rows", "nonsense"])
     assert bad.returncode == 2 and "unknown rows" in bad.stderr
+
+
+def test_ablation_of_rcwmil_cf_rows() -> None:
+    """--preset rcwmil-cf: rcwmil-plus, rcwmil-cf and each part changed, each a valid spec."""
+    sys.path.insert(0, str(BENCH))
+    try:
+        import ablation
+    finally:
+        sys.path.remove(str(BENCH))
+    rows = ablation.default_rows("rcwmil-cf")
+    assert list(rows)[:2] == ["rcwmil-plus", "rcwmil-cf"]
+    assert rows["rcwmil-cf - DSST's vote"] == "rcwmil-cf:scale_dsst=0.0"
+    for spec in rows.values():
+        name, overrides = parse_spec(spec)
+        wmiltrack.Params.for_variant(name, **overrides)  # every row is a valid tracker
 
 
 def test_hidden_target_check_runs() -> None:
