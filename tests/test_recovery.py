@@ -104,8 +104,8 @@ def test_a_target_larger_than_the_frame_is_not_searched_for() -> None:
     rng = np.random.default_rng(0)
     frame = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
     part.start(frame, (10, 10, 30, 20))
-    assert part.find(frame[:15, :20], (30, 20)) is None
-    assert part.find(frame, (30, 20)) == (10, 10, 30, 20)  # the template's own place
+    assert part.find(frame[:15, :20]) is None
+    assert part.find(frame) == (10, 10, 30, 20)  # the template's own place
 
 
 @pytest.mark.parametrize("bad", [

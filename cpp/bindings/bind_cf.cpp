@@ -69,6 +69,19 @@ GrayPatch sample(const ImageView& view, Pair centre, Pair size, Size out_size) {
   return cf::sample_gray(view, cx, cy, w, h, ow, oh);
 }
 
+// The arguments of scale samples (scale_samples, ScaleFilter.sample), checked.
+void check_scale_samples(Pair centre, Pair size, const std::vector<double>& factors,
+                         Size model_size, int cell) {
+  check_region(centre, size);
+  require(!factors.empty(), "factors must not be empty");
+  for (double f : factors) {
+    require(std::isfinite(f) && f > 0.0, "factors must be positive and finite");
+  }
+  const auto [mw, mh] = model_size;
+  require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
+  require(mw >= cell && mh >= cell, "model_size must hold at least one cell");
+}
+
 struct LockedTranslation {
   cf::TranslationFilter filter;
   std::mutex lock;
@@ -98,6 +111,16 @@ void require_shape(const LockedTranslation& t, const cf::Spectrum& s) {
   require(s.channels == t.filter.filter_channels() && s.rows == t.filter.rows() &&
               s.cols == t.filter.cols(),
           "the spectrum is not of this filter's shape");
+}
+
+// transform() under the lock (a compressed filter's projection comes from its first learn);
+// the caller has released the GIL.
+cf::Spectrum transform_locked(LockedTranslation& t, const FeatureMap& x) {
+  std::lock_guard<std::mutex> guard(t.lock);
+  if (t.filter.filter_channels() < t.filter.channels() && t.filter.projection().empty()) {
+    throw py::value_error("a compressed filter learns before it transforms a sample");
+  }
+  return t.filter.transform(x);
 }
 
 // respond() to features or to a transformed sample, checked, without the GIL, under the lock.
@@ -177,14 +200,8 @@ void bind_cf(py::module_& m) {
       [](const py::array& frame, Pair centre, Pair size, const std::vector<double>& factors,
          Size model_size, int cell) {
         const ImageView view = image_view(frame);
-        check_region(centre, size);
-        require(!factors.empty(), "factors must not be empty");
-        for (double f : factors) {
-          require(std::isfinite(f) && f > 0.0, "factors must be positive and finite");
-        }
+        check_scale_samples(centre, size, factors, model_size, cell);
         const auto [mw, mh] = model_size;
-        require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
-        require(mw >= cell && mh >= cell, "model_size must hold at least one cell");
         const auto [cx, cy] = centre;
         const auto [w, h] = size;
         const int dims = cf::scale_sample_dims(mw, mh, cell);
@@ -303,12 +320,7 @@ void bind_cf(py::module_& m) {
             require(ow / cell == t.filter.cols() && oh / cell == t.filter.rows(),
                     "out_size / cell must be the filter's (cols, rows)");
             py::gil_scoped_release release;
-            FeatureMap x = cf::fhog(sample(view, centre, size, out_size), cell);
-            std::lock_guard<std::mutex> guard(t.lock);
-            if (t.filter.filter_channels() < t.filter.channels() && t.filter.projection().empty()) {
-              throw py::value_error("a compressed filter learns before it samples");
-            }
-            return t.filter.transform(x);
+            return transform_locked(t, cf::fhog(sample(view, centre, size, out_size), cell));
           },
           py::arg("frame"), py::arg("centre"), py::arg("size"), py::arg("out_size"),
           py::arg("cell") = 4,
@@ -319,11 +331,7 @@ void bind_cf(py::module_& m) {
             const FeatureMap x = feature_map(features);
             require_shape(t, x);
             py::gil_scoped_release release;
-            std::lock_guard<std::mutex> guard(t.lock);
-            if (t.filter.filter_channels() < t.filter.channels() && t.filter.projection().empty()) {
-              throw py::value_error("a compressed filter learns before it transforms");
-            }
-            return t.filter.transform(x);
+            return transform_locked(t, x);
           },
           py::arg("features"),
           "The sample as this filter takes it (features x window, projected, half spectra).")
@@ -453,15 +461,10 @@ void bind_cf(py::module_& m) {
           [](LockedScale& s, const py::array& frame, Pair centre, Pair size,
              const std::vector<double>& factors, Size model_size, int cell) {
             const ImageView view = image_view(frame);
-            check_region(centre, size);
+            check_scale_samples(centre, size, factors, model_size, cell);
             require(static_cast<int>(factors.size()) == s.filter.num_scales(),
                     "factors must hold num_scales values");
-            for (double f : factors) {
-              require(std::isfinite(f) && f > 0.0, "factors must be positive and finite");
-            }
             const auto [mw, mh] = model_size;
-            require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
-            require(mw >= cell && mh >= cell, "model_size must hold at least one cell");
             require(cf::scale_sample_dims(mw, mh, cell) == s.filter.dims(),
                     "model_size and cell must give the filter's dims");
             const auto [cx, cy] = centre;

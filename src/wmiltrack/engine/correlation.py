@@ -108,6 +108,14 @@ def _check_point(name: str, value: Any) -> tuple[float, float]:
     return a, b
 
 
+def _check_target(centre: Any, size: Any) -> tuple[tuple[float, float], tuple[float, float]]:
+    """``centre`` and ``size`` as checked pairs (a positive size)."""
+    c = _check_point("centre", centre)
+    sz = _check_point("size", size)
+    _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
+    return c, sz
+
+
 def _check_rate(rate: float) -> float:
     _need(isinstance(rate, (int, float)) and not isinstance(rate, bool) and 0.0 < float(rate) <= 1.0,
           f"rate must be in (0, 1], got {rate!r}")
@@ -255,13 +263,14 @@ class Location:
 
 
 @dataclass(frozen=True)
-class _Searched:
-    """The last search's transformed sample, for :meth:`CorrelationFilter.learn` to reuse."""
+class _Sample:
+    """A filter's last transformed sample (a search's or an estimate's) and where it was taken,
+    for the filter's learning step on the same frame to reuse instead of sampling again."""
 
     frame: Any
-    spectrum: _core.Spectrum
-    location: Location
+    centre: tuple[float, float]
     size: tuple[float, float]
+    spectrum: _core.Spectrum
 
 
 @dataclass(frozen=True)
@@ -307,7 +316,7 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         self._base_region = (0.0, 0.0)  # the search region's size at init (frame pixels)
         self._out_size = (0, 0)  # template pixels (w, h)
         self._size = (0.0, 0.0)  # the size last learnt
-        self._searched: _Searched | None = None
+        self._searched: _Sample | None = None
         self.reused = 0  # learning steps that reused their frame's search sample
 
     @property
@@ -371,9 +380,7 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         f = self._require()
         given = frame
         frame = as_frame(frame)
-        c = _check_point("centre", centre)
-        sz = self._size if size is None else _check_point("size", size)
-        _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
+        c, sz = _check_target(centre, self._size if size is None else size)
         region = self._region(sz)
         spectrum = f.sample(frame, c, region, self._out_size, self.settings.cell)
         r = f.respond_spectrum(spectrum, self.settings.exclusion)
@@ -382,7 +389,7 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         loc = Location(dx=r.col_shift * cell_w, dy=r.row_shift * cell_h, peak=r.peak,
                        psr=r.psr, apce=r.apce, response=r.values, cell=(cell_w, cell_h),
                        centre=c, raw=r)
-        self._searched = _Searched(given, spectrum, loc, sz)
+        self._searched = _Sample(given, c, sz, spectrum)
         return loc
 
     def learn(self, frame: Any, box: Any, rate: float | None = None, *,
@@ -398,9 +405,9 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         x, y, w, h = _check_box(box)
         r = self.settings.learning_rate if rate is None else _check_rate(rate)
         if from_search and searched is not None and searched.frame is frame:
-            loc = searched.location
-            col = (x + w / 2.0 - loc.centre[0]) / loc.cell[0]
-            row = (y + h / 2.0 - loc.centre[1]) / loc.cell[1]
+            region = self._region(searched.size)  # frame pixels per cell: region / grid
+            col = (x + w / 2.0 - searched.centre[0]) / (region[0] / f.cols)
+            row = (y + h / 2.0 - searched.centre[1]) / (region[1] / f.rows)
             ratio = w * h / (searched.size[0] * searched.size[1])
             if abs(col) <= f.cols / 4 and abs(row) <= f.rows / 4 and 1 / 1.1 <= ratio <= 1.1:
                 f.learn_spectrum(searched.spectrum, r, (row, col))
@@ -425,7 +432,7 @@ class ScaleEstimator(_Trained[_core.ScaleFilter]):
         self.factors: tuple[float, ...] = tuple(s.step ** (k - half) for k in range(s.num_scales))
         self._filter = None
         self._model_size = (0, 0)
-        self._estimated: tuple[Any, tuple[float, float], tuple[float, float], _core.Spectrum] | None = None
+        self._estimated: _Sample | None = None
 
     def copy(self) -> ScaleEstimator:
         """An independent copy (sample size and model as they are now)."""
@@ -446,11 +453,9 @@ class ScaleEstimator(_Trained[_core.ScaleFilter]):
         self._filter = _core.ScaleFilter(s.num_scales, dims, sigma, s.lam)
         self.learn(frame, (x + w / 2.0, y + h / 2.0), (w, h), 1.0)
 
-    def _samples(self, frame: np.ndarray, centre: Any, size: Any) -> npt.NDArray[np.float32]:
-        c = _check_point("centre", centre)
-        sz = _check_point("size", size)
-        _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
-        return _core.scale_samples(frame, c, sz, list(self.factors), self._model_size,
+    def _samples(self, frame: np.ndarray, centre: tuple[float, float],
+                 size: tuple[float, float]) -> npt.NDArray[np.float32]:
+        return _core.scale_samples(frame, centre, size, list(self.factors), self._model_size,
                                    self.settings.cell)
 
     def estimate(self, frame: Any, centre: Any, size: Any) -> ScaleEstimate:
@@ -458,13 +463,11 @@ class ScaleEstimator(_Trained[_core.ScaleFilter]):
         best sample, refined by a parabola through its neighbours)."""
         f = self._require()
         given = frame
-        c = _check_point("centre", centre)
-        sz = _check_point("size", size)
-        _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
+        c, sz = _check_target(centre, size)
         spectrum = f.sample(as_frame(frame), c, sz, list(self.factors), self._model_size,
                             self.settings.cell)
         r = f.respond_spectrum(spectrum)
-        self._estimated = (given, c, sz, spectrum)
+        self._estimated = _Sample(given, c, sz, spectrum)
         half = (self.settings.num_scales - 1) // 2
         factor = self.settings.step ** (r.best + r.offset - half)
         return ScaleEstimate(factor=float(factor), response=r.values)
@@ -480,14 +483,12 @@ class ScaleEstimator(_Trained[_core.ScaleFilter]):
         f = self._require()
         r = self.settings.learning_rate if rate is None else _check_rate(rate)
         estimated, self._estimated = self._estimated, None
-        c = _check_point("centre", centre)
-        sz = _check_point("size", size)
-        _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
-        if from_estimate and estimated is not None and estimated[0] is frame:
-            _, ec, esz, spectrum = estimated
+        c, sz = _check_target(centre, size)
+        if from_estimate and estimated is not None and estimated.frame is frame:
+            ec, esz = estimated.centre, estimated.size
             shift = 0.5 * math.log(sz[0] * sz[1] / (esz[0] * esz[1])) / math.log(self.settings.step)
             half = (self.settings.num_scales - 1) // 2
             if abs(c[0] - ec[0]) < 0.5 and abs(c[1] - ec[1]) < 0.5 and abs(shift) <= half:
-                f.learn_spectrum(spectrum, r, shift)
+                f.learn_spectrum(estimated.spectrum, r, shift)
                 return
         f.learn(self._samples(as_frame(frame), c, sz), r)

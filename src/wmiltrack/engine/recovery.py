@@ -77,7 +77,9 @@ class Redetector:
     ``lost`` says whether the target counts as lost; ``reference`` is the running mean of the
     classifier's confidence over tracked frames (None right after the start or a re-detection),
     ``match`` the running mean of the tracked boxes' correlation with the template; both are
-    frozen while lost. ``last`` is the last re-detection's best correlation.
+    frozen while lost. ``last`` is the last re-detection's best correlation; ``size`` the size
+    of the last tracked box that matched the template at least as well as usual (what
+    :meth:`find` looks for).
     """
 
     def __init__(self, settings: RecoverySettings) -> None:
@@ -194,21 +196,21 @@ class Redetector:
         relative = s.recover_ratio * match * s.recover_decay ** max(self.frames_lost - 1, 0)
         return max(s.recover_floor, relative)
 
-    def find(self, frame: np.ndarray, size: tuple[int, int]) -> IntBox | None:
+    def find(self, frame: np.ndarray) -> IntBox | None:
         """The box that matches the template best over the whole frame, if it matches well
         enough to end the lost state (then the lost state ends); else None and one more frame
         is lost. The box has the size of the last tracked box that matched the template at
-        least as well as usual (``size`` before any did): a target that an occluder covered
-        bit by bit may have had its box shrunk or grown before it counted as lost.
+        least as well as usual (:attr:`size`): a target that an occluder covered bit by bit
+        may have had its box shrunk or grown before it counted as lost.
 
         Two passes: the whole frame at a resolution where the template has at most
         ``_SEARCH_AREA`` pixels (a 32-px target on a 640 x 480 frame: 0.6 instead of 4 ms),
         then the neighbourhood of its best place at the template's own resolution, whose
         correlation decides."""
-        if self.template is None:
+        if self.template is None or self.size is None:
             self.frames_lost += 1
             return None
-        w, h = self.size if self.size is not None else size
+        w, h = self.size
         fh, fw = frame.shape[:2]
         if w > fw or h > fh:
             self.frames_lost += 1

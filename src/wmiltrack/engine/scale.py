@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from .appearance import HaarAppearance
     from .params import Params
 
-__all__ = ["HaarScale", "centred"]
+__all__ = ["HaarScale", "centred", "dsst_filter"]
 
 
 def centred(box: IntBox, w: int, h: int, dx: float = 0.0, dy: float = 0.0) -> IntBox:
@@ -27,6 +27,15 @@ def centred(box: IntBox, w: int, h: int, dx: float = 0.0, dy: float = 0.0) -> In
     cx = box[0] + box[2] / 2.0 + dx
     cy = box[1] + box[3] / 2.0 + dy
     return int(math.floor(cx - w / 2.0 + 0.5)), int(math.floor(cy - h / 2.0 + 0.5)), w, h
+
+
+def dsst_filter(params: Params) -> tuple[SparseUpdates, ScaleEstimator]:
+    """DSST's scale filter for a tracker (``scale_samples`` over DSST's range) and its
+    learning schedule (every ``template_every``-th frame, at the rate that keeps DSST's
+    memory), as the scale model and as the Haar scale search's vote both use them."""
+    updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
+    return updates, ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
+                                                                updates.rate))
 
 
 class HaarScale:
@@ -48,10 +57,8 @@ class HaarScale:
         self.pool = (GaussianPool(params.replace(learning_rate=params.scale_learning_rate))
                      if params.scale_model != "ratio" else None)
         # DSST's vote on the size (scale_dsst), learnt at every template_every-th frame's box
-        self.dsst_updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
-        self.dsst = (ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
-                                                                 self.dsst_updates.rate))
-                     if params.scale_dsst > 0 else None)
+        self.dsst_updates, dsst = dsst_filter(params)
+        self.dsst = dsst if params.scale_dsst > 0 else None
         self._voted: IntBox | None = None  # the box DSST's last vote was taken around
 
     @property

@@ -14,16 +14,9 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-from .correlation import (
-    CorrelationFilter,
-    CorrelationSettings,
-    Location,
-    ScaleEstimator,
-    ScaleFilterSettings,
-    SparseUpdates,
-)
+from .correlation import CorrelationFilter, CorrelationSettings, Location, SparseUpdates
 from .frames import IntBox
-from .scale import centred
+from .scale import centred, dsst_filter
 
 if TYPE_CHECKING:
     from .appearance import HaarAppearance
@@ -60,7 +53,7 @@ class CorrelationTemplate:
         self.filter = CorrelationFilter(CorrelationSettings(
             template_area=settings.template_area, learning_rate=self.updates.rate,
             compressed=settings.template_channels, cell=settings.template_cell))
-        self._searched: tuple[tuple[float, float], Location] | None = None
+        self._searched: Location | None = None  # this frame's search, for table()
         self.confidence = math.nan
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
@@ -73,9 +66,8 @@ class CorrelationTemplate:
         the last box."""
         if frame is None:
             return box
-        centre = _centre(box)
-        loc = self.filter.locate(frame, centre, (box[2], box[3]))
-        self._searched = (centre, loc)
+        loc = self.filter.locate(frame, _centre(box), (box[2], box[3]))
+        self._searched = loc
         self.confidence = loc.peak
         if not self.moves:
             return box
@@ -94,8 +86,8 @@ class CorrelationTemplate:
             w, h = self.filter.size  # (the region of centres: its middle pixel's index)
             cx, cy = (region[0] + region[2] - 1) / 2.0, (region[1] + region[3] - 1) / 2.0
             self.origin((round(cx - w / 2.0), round(cy - h / 2.0), round(w), round(h)), frame)
-        assert self._searched is not None
-        _, loc = self._searched
+        loc = self._searched
+        assert loc is not None
         self._searched = None
         fh, fw = frame.shape[:2]
         x0, y0 = max(region[0], 0), max(region[1], 0)
@@ -115,9 +107,7 @@ class DSSTScale:
         self.settings = params
         self.base_wh = base_wh
         self.frame_wh = frame_wh
-        self.updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
-        self.estimator = ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
-                                                                     self.updates.rate))
+        self.updates, self.estimator = dsst_filter(params)
         self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
         self.given = base_wh  # the size of the box this part last gave
         self.tried: list[IntBox] = []

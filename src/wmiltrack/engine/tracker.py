@@ -438,7 +438,7 @@ class Tracker:
         raw = yield from self._search_from(img, previous, self._stages)
         conf = confidence(raw, model.k, p.confidence_offset)
         if not recovery.back(conf, img, self._box):
-            found = recovery.find(img, (previous[2], previous[3]))
+            found = recovery.find(img)
             if found is None:
                 self._hold(previous)
                 return 0.0
