@@ -21,18 +21,26 @@ F64 = npt.NDArray[np.float64]
 U8 = npt.NDArray[np.uint8]
 
 
-def tent_weights(start: float, step: float, n: int, limit: int) -> F64:
+def lattice_stride(step: float) -> int:
+    """Every pixel up to a step of 4 frame pixels per output sample, then every
+    floor(step / 2)-th (fhog.hpp)."""
+    return 1 if step < 4.0 else math.floor(step / 2.0)
+
+
+def tent_weights(start: float, step: float, n: int, limit: int, stride: int = 1) -> F64:
     """(n, limit) matrix: output sample j's normalised tent weights over the frame's pixels
-    along one axis (fhog.hpp: radius max(1, step) around start + (j + 0.5) step - 0.5,
-    edge pixels repeated outside the frame)."""
+    along one axis (fhog.hpp: radius max(1, step) around start + (j + 0.5) step - 0.5, on
+    every stride-th pixel, the lattice's edge points repeated outside the frame)."""
     w = np.zeros((n, limit))
     radius = max(1.0, step)
+    last = (limit - 1) // stride
     for j in range(n):
         centre = start + (j + 0.5) * step - 0.5
-        for i in range(math.floor(centre - radius) + 1, math.ceil(centre + radius)):
-            t = 1.0 - abs(i - centre) / radius
+        for i in range(math.floor((centre - radius) / stride) + 1,
+                       math.ceil((centre + radius) / stride)):
+            t = 1.0 - abs(i * stride - centre) / radius
             if t > 0:
-                w[j, min(max(i, 0), limit - 1)] += t
+                w[j, min(max(i, 0), last) * stride] += t
         w[j] /= w[j].sum()
     return w
 
@@ -48,8 +56,8 @@ def luma(frame: U8) -> F64:
 def gray_patch_reference(frame: U8, centre: tuple[float, float], size: tuple[float, float],
                          out_size: tuple[int, int]) -> F64:
     (cx, cy), (w, h), (ow, oh) = centre, size, out_size
-    wy = tent_weights(cy - h / 2, h / oh, oh, frame.shape[0])
-    wx = tent_weights(cx - w / 2, w / ow, ow, frame.shape[1])
+    wy = tent_weights(cy - h / 2, h / oh, oh, frame.shape[0], lattice_stride(h / oh))
+    wx = tent_weights(cx - w / 2, w / ow, ow, frame.shape[1], lattice_stride(w / ow))
     return np.asarray(wy @ luma(frame) @ wx.T / 255.0)
 
 
@@ -57,7 +65,9 @@ CASES = [  # centre, size, out_size (w, h)
     ((40.0, 30.0), (48.0, 36.0), (37, 1)),     # one output row
     ((40.0, 30.0), (48.0, 36.0), (23, 2)),
     ((40.3, 29.6), (19.0, 13.0), (41, 23)),    # enlarging, rows not a multiple of 4
-    ((35.5, 31.2), (70.0, 55.0), (17, 13)),    # shrinking about 4x
+    ((35.5, 31.2), (70.0, 55.0), (17, 13)),    # shrinking about 4x (every 2nd pixel read)
+    ((37.5, 29.2), (75.0, 50.0), (9, 13)),     # 8x across (every 4th), 4x down (every 2nd)
+    ((40.0, 30.0), (47.0, 37.0), (12, 10)),    # just under 4x: every pixel
     ((3.0, 2.0), (30.0, 22.0), (16, 11)),      # leaves the frame at the top left
     ((77.0, 58.0), (33.0, 40.0), (12, 9)),     # and at the bottom right
     ((40.0, 30.0), (500.0, 400.0), (9, 7)),    # far larger than the frame

@@ -24,27 +24,29 @@ struct Taps {
 
 // Output sample j covers frame coordinates [start + j * step, start + (j + 1) * step); its
 // centre is start + (j + 0.5) * step - 0.5 in pixel-centre coordinates. A tent of radius
-// max(1, step) around it weights the frame pixels.
-Taps make_taps(double start, double step, int n, int limit) {
+// max(1, step) around it weights the frame pixels on a lattice of every `stride`-th pixel
+// (indices in lattice units: frame coordinate index * stride, clamped to the frame).
+Taps make_taps(double start, double step, int n, int limit, int stride) {
   Taps t;
   t.first.reserve(static_cast<std::size_t>(n) + 1);
   const double radius = std::max(1.0, step);
+  const int last = (limit - 1) / stride;  // the last lattice point inside the frame
   for (int j = 0; j < n; ++j) {
     t.first.push_back(static_cast<int>(t.index.size()));
     const double centre = start + (j + 0.5) * step - 0.5;
-    const int lo = static_cast<int>(std::floor(centre - radius)) + 1;
-    const int hi = static_cast<int>(std::ceil(centre + radius)) - 1;
+    const int lo = static_cast<int>(std::floor((centre - radius) / stride)) + 1;
+    const int hi = static_cast<int>(std::ceil((centre + radius) / stride)) - 1;
     double total = 0.0;
     const std::size_t begin = t.weight.size();
     for (int i = lo; i <= hi; ++i) {
-      const double w = 1.0 - std::abs(i - centre) / radius;
+      const double w = 1.0 - std::abs(i * stride - centre) / radius;
       if (w <= 0.0) continue;
-      t.index.push_back(std::clamp(i, 0, limit - 1));
+      t.index.push_back(std::clamp(i, 0, last));
       t.weight.push_back(static_cast<float>(w));
       total += w;
     }
-    if (t.weight.size() == begin) {  // cannot happen with radius >= 1, kept for safety
-      t.index.push_back(std::clamp(static_cast<int>(std::lround(centre)), 0, limit - 1));
+    if (t.weight.size() == begin) {  // cannot happen with radius >= stride, kept for safety
+      t.index.push_back(std::clamp(static_cast<int>(std::lround(centre / stride)), 0, last));
       t.weight.push_back(1.0f);
       total = 1.0;
     }
@@ -56,10 +58,20 @@ Taps make_taps(double start, double step, int n, int limit) {
   return t;
 }
 
+// The lattice step of a resampling whose output samples are `step` frame pixels apart:
+// every pixel up to a step of 4, then every floor(step / 2)-th, so that a tent still reads
+// at least four lattice points across (a region several times the patch's size costs what
+// one twice its size does, not its area).
+int lattice_stride(double step) {
+  if (!(step >= 4.0)) return 1;  // (and a size that is not finite: patch_taps refuses it)
+  return static_cast<int>(std::min(std::floor(step / 2.0), 65536.0));
+}
+
 // The taps of one output patch, both axes.
 struct PatchTaps {
   Taps x, y;
   int out_cols = 0, out_rows = 0;
+  int stride_x = 1, stride_y = 1;  // lattice steps (frame pixels) of x's and y's indices
 };
 
 // Buffers reused from call to call by one thread (the correlation filter samples the same
@@ -81,17 +93,22 @@ Scratch& scratch() {
   return s;
 }
 
-// The frame's luma over rows [r0, r1] x columns [c0, c1] (inclusive), converted once so that
-// several resamplings (scale samples) read floats. Its values live in the thread's scratch.
+// The frame's luma at lattice rows [r0, r1] x columns [c0, c1] (inclusive; frame row
+// r * stride_y, column c * stride_x), converted once so that several resamplings (scale
+// samples) read floats. Its values live in the thread's scratch.
 struct LumaCrop {
   int r0 = 0, c0 = 0, rows = 0, cols = 0;
   const float* values = nullptr;
-  LumaCrop(const ImageView& frame, int row0, int row1, int col0, int col1, Scratch& s)
+  LumaCrop(const ImageView& frame, int row0, int row1, int col0, int col1, int stride_x,
+           int stride_y, Scratch& s)
       : r0(row0), c0(col0), rows(row1 - row0 + 1), cols(col1 - col0 + 1) {
     s.crop.resize(static_cast<std::size_t>(rows) * cols);
     s.luma_row.resize(static_cast<std::size_t>(cols));
+    ImageView lattice = frame;  // every stride_x-th column: luma_row reads them in a row
+    lattice.col_stride *= stride_x;
+    lattice.cols = (frame.cols - 1) / stride_x + 1;
     for (int r = 0; r < rows; ++r) {
-      luma_row(frame, r0 + r, c0, c0 + cols, s.luma_row.data());
+      luma_row(lattice, (r0 + r) * stride_y, c0, c0 + cols, s.luma_row.data());
       float* out = &s.crop[static_cast<std::size_t>(r) * cols];
       const std::uint8_t* in = s.luma_row.data();
       for (int c = 0; c < cols; ++c) out[c] = static_cast<float>(in[c]);
@@ -109,8 +126,10 @@ void check_frame(const ImageView& frame) {
   }
 }
 
+// The taps of a region w x h around (cx, cy) resampled to out_cols x out_rows, on the lattice
+// of every stride_x-th column and stride_y-th row of the frame.
 PatchTaps patch_taps(const ImageView& frame, double cx, double cy, double w, double h,
-                     int out_cols, int out_rows) {
+                     int out_cols, int out_rows, int stride_x, int stride_y) {
   if (!(std::isfinite(cx) && std::isfinite(cy) && std::isfinite(w) && std::isfinite(h)) ||
       !(w > 0.0 && h > 0.0)) {
     throw std::invalid_argument("sample_gray: the centre must be finite and the size positive");
@@ -118,9 +137,9 @@ PatchTaps patch_taps(const ImageView& frame, double cx, double cy, double w, dou
   if (out_cols < 1 || out_rows < 1) {
     throw std::invalid_argument("sample_gray: the output size must be at least 1 x 1");
   }
-  return PatchTaps{make_taps(cx - w / 2.0, w / out_cols, out_cols, frame.cols),
-                   make_taps(cy - h / 2.0, h / out_rows, out_rows, frame.rows), out_cols,
-                   out_rows};
+  return PatchTaps{make_taps(cx - w / 2.0, w / out_cols, out_cols, frame.cols, stride_x),
+                   make_taps(cy - h / 2.0, h / out_rows, out_rows, frame.rows, stride_y),
+                   out_cols, out_rows, stride_x, stride_y};
 }
 
 // Taps with the same count for every output (the largest; the others padded with weight 0 on
@@ -554,33 +573,42 @@ void extend(const Taps& t, int& lo, int& hi) {
 GrayPatch sample_gray(const ImageView& frame, double cx, double cy, double w, double h,
                       int out_cols, int out_rows) {
   check_frame(frame);
-  const PatchTaps t = patch_taps(frame, cx, cy, w, h, out_cols, out_rows);
+  const int sx = out_cols > 0 ? lattice_stride(w / out_cols) : 1;
+  const int sy = out_rows > 0 ? lattice_stride(h / out_rows) : 1;
+  const PatchTaps t = patch_taps(frame, cx, cy, w, h, out_cols, out_rows, sx, sy);
   int r0 = frame.rows, r1 = -1, c0 = frame.cols, c1 = -1;
   extend(t.y, r0, r1);
   extend(t.x, c0, c1);
   Scratch& s = scratch();
-  return resample(LumaCrop(frame, r0, r1, c0, c1, s), t, s);
+  return resample(LumaCrop(frame, r0, r1, c0, c1, sx, sy, s), t, s);
 }
 
 std::vector<GrayPatch> sample_gray_scales(const ImageView& frame, double cx, double cy, double w,
                                           double h, const std::vector<double>& factors,
                                           int out_cols, int out_rows) {
   check_frame(frame);
-  std::vector<PatchTaps> taps;
-  taps.reserve(factors.size());
-  int r0 = frame.rows, r1 = -1, c0 = frame.cols, c1 = -1;
+  std::vector<GrayPatch> out;
+  if (factors.empty()) return out;
+  double smallest = factors.front();
   for (double f : factors) {
     if (!(f > 0.0 && std::isfinite(f))) {
       throw std::invalid_argument("sample_gray_scales: factors must be positive and finite");
     }
-    taps.push_back(patch_taps(frame, cx, cy, w * f, h * f, out_cols, out_rows));
+    smallest = std::min(smallest, f);
+  }
+  // One lattice for every scale (they share one crop): the finest any of them needs.
+  const int sx = out_cols > 0 ? lattice_stride(w * smallest / out_cols) : 1;
+  const int sy = out_rows > 0 ? lattice_stride(h * smallest / out_rows) : 1;
+  std::vector<PatchTaps> taps;
+  taps.reserve(factors.size());
+  int r0 = frame.rows, r1 = -1, c0 = frame.cols, c1 = -1;
+  for (double f : factors) {
+    taps.push_back(patch_taps(frame, cx, cy, w * f, h * f, out_cols, out_rows, sx, sy));
     extend(taps.back().y, r0, r1);
     extend(taps.back().x, c0, c1);
   }
-  std::vector<GrayPatch> out;
-  if (taps.empty()) return out;
   Scratch& s = scratch();
-  const LumaCrop crop(frame, r0, r1, c0, c1, s);
+  const LumaCrop crop(frame, r0, r1, c0, c1, sx, sy, s);
   out.reserve(taps.size());
   for (const PatchTaps& t : taps) out.push_back(resample(crop, t, s));
   return out;

@@ -263,7 +263,8 @@ FHOG_CHANNELS: Final[int]  # 31: 18 signed + 9 unsigned orientation bins + 4 blo
 def cf_gray_patch(frame: npt.NDArray[np.uint8], centre: tuple[float, float],
                   size: tuple[float, float], out_size: tuple[int, int]) -> _F32:
     """The region of size (w, h) centred on centre, resampled to out_size = (w, h) pixels of
-    luma / 255 (rows x cols; edge pixels replicated outside the frame)."""
+    luma / 255 (rows x cols; edge pixels replicated outside the frame; a tent over the pixels
+    under each output pixel, every floor(span / 2)-th of them where it spans 4 or more)."""
 def fhog(patch: npt.ArrayLike, cell: int = 4) -> _F32:
     """fHOG of a gray patch: (31, rows // cell, cols // cell)."""
 def fhog_region(frame: npt.NDArray[np.uint8], centre: tuple[float, float],

@@ -41,13 +41,16 @@ constexpr int kFhogChannels = 31;
 // of the region outside the frame take the nearest edge pixel. Each output pixel is a
 // tent-weighted average of the frame pixels under it (radius: one output pixel in frame
 // pixels, at least one), i.e. bilinear when enlarging and an anti-aliased average when
-// shrinking. Throws std::invalid_argument for a non-positive or non-finite size, an output
+// shrinking. Where an output pixel spans 4 frame pixels or more along an axis, the tent reads
+// every floor(span / 2)-th pixel along it (at least four under each tent): a region many
+// times the patch's size costs about what one twice its size does. Throws std::invalid_argument for a non-positive or non-finite size, an output
 // size below 1, or an empty frame.
 GrayPatch sample_gray(const ImageView& frame, double cx, double cy, double w, double h,
                       int out_cols, int out_rows);
 
 // sample_gray of the regions (w f) x (h f) around (cx, cy) for each factor f, all resampled to
-// out_cols x out_rows; the frame's luma under them is converted once. Same errors as
+// out_cols x out_rows; the frame's luma under them is converted once, on the lattice the
+// smallest factor needs (so a larger one may read more pixels than its own sample_gray). Same errors as
 // sample_gray, and std::invalid_argument for a non-positive or non-finite factor.
 std::vector<GrayPatch> sample_gray_scales(const ImageView& frame, double cx, double cy, double w,
                                           double h, const std::vector<double>& factors,
