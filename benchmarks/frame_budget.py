@@ -51,7 +51,7 @@ import wmiltrack
 
 STAGES = ("integral", "search", "scale", "sampling", "projection", "gaussian update",
           "log ratios", "selection", "learning (one call)", "search, bags and learning (one call)", "colour",
-          "glue")
+          "template", "DSST", "lost state", "glue")
 # Stages that run in compiled calls with the GIL released (the others hold it all or part of
 # the time: sampling and glue are Python and numpy, scale and colour mix both; MILBoost's
 # selection also takes numpy's exp of its inputs first, with the GIL).
@@ -64,23 +64,24 @@ CORE_STAGES = {"score_grid": "search", "search": "search", "project": "projectio
 
 
 class _Clock:
-    """Per-frame time of each stage; nested timed calls count once (in the outer stage)."""
+    """Per-frame time of each stage; a timed call inside another counts in its own stage and
+    is taken out of the outer one's."""
 
     def __init__(self) -> None:
         self.frame: dict[str, float] = defaultdict(float)
-        self.depth = 0
+        self.inner: list[float] = []  # per open timed call: time of the timed calls inside it
 
     def wrap(self, stage: str, fn: Callable[..., Any]) -> Callable[..., Any]:
         def timed(*args: Any, **kwargs: Any) -> Any:
-            if self.depth:
-                return fn(*args, **kwargs)
-            self.depth += 1
+            self.inner.append(0.0)
             t0 = time.perf_counter()
             try:
                 return fn(*args, **kwargs)
             finally:
-                self.frame[stage] += time.perf_counter() - t0
-                self.depth -= 1
+                spent = time.perf_counter() - t0
+                self.frame[stage] += spent - self.inner.pop()
+                if self.inner:
+                    self.inner[-1] += spent
         return timed
 
 
@@ -139,6 +140,17 @@ def instrumented(clock: _Clock) -> Iterator[None]:
         for name in ("integral", "learn"):
             patch(colour.ColourModel, name, "colour")
     except ImportError:  # versions without the colour model
+        pass
+    try:  # the correlation filters (rcwmil-cf) and the lost state
+        from wmiltrack.engine import correlation, recovery
+        for name in ("locate", "learn"):
+            patch(correlation.CorrelationFilter, name, "template")
+        patch(correlation.Location, "map", "template")
+        for name in ("estimate", "learn"):
+            patch(correlation.ScaleEstimator, name, "DSST")
+        for name in ("judge", "learn"):
+            patch(recovery.Redetector, name, "lost state")
+    except (ImportError, AttributeError):  # versions without them
         pass
     try:
         yield
