@@ -42,7 +42,8 @@ def _track(variant: str, frames: list, first: tuple) -> list[list[str]]:
 
 def _fhog_digests(frames: list) -> list[str]:
     """sha256 of every feature array the correlation filters' kernels give on a few frames,
-    regions inside and leaving the frame, shrunk and enlarged, output sizes not whole blocks."""
+    regions inside and leaving the frame, shrunk (also by 4 and more, read on a lattice) and
+    enlarged, output sizes not whole blocks."""
     from wmiltrack import _core
 
     digests = []
@@ -50,7 +51,9 @@ def _fhog_digests(frames: list) -> list[str]:
         h, w = frame.shape[:2]
         for centre, size, out_size in [((w / 2, h / 2), (0.6 * w, 0.6 * h), (160, 160)),
                                        ((w / 3 + 0.4, h / 2 - 0.3), (37.0, 29.0), (61, 47)),
-                                       ((3.0, h - 2.0), (1.5 * w, h), (96, 66))]:
+                                       ((3.0, h - 2.0), (1.5 * w, h), (96, 66)),
+                                       # shrunk 4x and more: the tent on every n-th pixel
+                                       ((w / 2 + 0.7, h / 2 - 0.2), (0.9 * w, 0.9 * h), (24, 18))]:
             for a in (_core.cf_gray_patch(frame, centre, size, out_size),
                       _core.fhog_region(frame, centre, size, out_size, 4),
                       _core.fhog_region(frame, centre, size, out_size, 3),
