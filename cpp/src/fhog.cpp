@@ -31,6 +31,11 @@ Taps make_taps(double start, double step, int n, int limit, int stride) {
   t.first.reserve(static_cast<std::size_t>(n) + 1);
   const double radius = std::max(1.0, step);
   const int last = (limit - 1) / stride;  // the last lattice point inside the frame
+  // At most 2 radius / stride + 2 taps an output (below 11 with lattice_stride's strides):
+  // room for all of them, no reallocation in the loop.
+  const double most = std::min(2.0 * radius / stride + 2.0, 64.0);
+  t.index.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(most));
+  t.weight.reserve(t.index.capacity());
   for (int j = 0; j < n; ++j) {
     t.first.push_back(static_cast<int>(t.index.size()));
     const double centre = start + (j + 0.5) * step - 0.5;
