@@ -1,6 +1,8 @@
 // Correlation filters in the Fourier domain (see correlation.hpp).
 #include "wmiltrack/correlation.hpp"
 
+#include "wmiltrack/vmath.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -76,6 +78,53 @@ class Fft2 {
   Eigen::FFT<float> fft_, half_fft_;
   std::vector<Complex> col_in_, col_out_, row_buf_, full_;
 };
+
+// out (rows x n, row-major) = m (rows x inner, row-major) times x (inner x n, row-major),
+// each entry summed over j = 0, 1, ... in order (no fused multiply-add), then multiplied by
+// scale[i] when scale is given. Columns in blocks of kMixBlock, so that a block of x's rows
+// stays in the L1 cache while every row of the product reads it.
+constexpr std::size_t kMixBlock = 128;
+WMILTRACK_KERNEL void mix_rows_body(const float* m, int rows, int inner, const float* x,
+                                    std::size_t n, const float* scale, float* out) {
+  for (std::size_t c0 = 0; c0 < n; c0 += kMixBlock) {
+    const std::size_t c1 = std::min(n, c0 + kMixBlock);
+    for (int k = 0; k < rows; ++k) {
+      float* __restrict o = out + static_cast<std::size_t>(k) * n;
+      const float* mk = m + static_cast<std::size_t>(k) * inner;
+      const float a0 = mk[0];
+      for (std::size_t i = c0; i < c1; ++i) o[i] = a0 * x[i];
+      for (int j = 1; j < inner; ++j) {
+        const float a = mk[j];
+        const float* __restrict xj = x + static_cast<std::size_t>(j) * n;
+        for (std::size_t i = c0; i < c1; ++i) o[i] += a * xj[i];
+      }
+      if (scale != nullptr) {
+        for (std::size_t i = c0; i < c1; ++i) o[i] *= scale[i];
+      }
+    }
+  }
+}
+
+#ifdef WMILTRACK_AVX2_COPIES
+__attribute__((target("avx2"))) void mix_rows_avx2(const float* m, int rows, int inner,
+                                                   const float* x, std::size_t n,
+                                                   const float* scale, float* out) {
+  mix_rows_body(m, rows, inner, x, n, scale, out);
+}
+#endif
+void mix_rows_base(const float* m, int rows, int inner, const float* x, std::size_t n,
+                   const float* scale, float* out) {
+  mix_rows_body(m, rows, inner, x, n, scale, out);
+}
+
+// mix_rows_body on the AVX2 copy where the CPU has it (the same bits on either).
+void mix_rows(const float* m, int rows, int inner, const float* x, std::size_t n,
+              const float* scale, float* out) {
+#ifdef WMILTRACK_AVX2_COPIES
+  if (vmath::avx2()) return mix_rows_avx2(m, rows, inner, x, n, scale, out);
+#endif
+  mix_rows_base(m, rows, inner, x, n, scale, out);
+}
 
 // MATLAB's hann(n): 0.5 (1 - cos(2 pi k / (n - 1))), k = 0 .. n - 1; 1 for n == 1.
 std::vector<float> hann(int n) {
@@ -210,15 +259,17 @@ Spectrum TranslationFilter::transform(const FeatureMap& x) const {
     throw std::logic_error("TranslationFilter: a compressed filter learns before it transforms");
   }
   const std::size_t plane = x.plane_size();
-  std::vector<float> projected;
-  const float* planes = x.data.data();
+  // The kept channels (projected, or the features' own), times the window.
+  std::vector<float> windowed(static_cast<std::size_t>(kept_) * plane);
   if (project) {
-    using RowMajor = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-    projected.resize(static_cast<std::size_t>(kept_) * plane);
-    Eigen::Map<RowMajor>(projected.data(), kept_, static_cast<Eigen::Index>(plane)).noalias() =
-        Eigen::Map<const RowMajor>(projection_.data(), kept_, channels_) *
-        Eigen::Map<const RowMajor>(x.data.data(), channels_, static_cast<Eigen::Index>(plane));
-    planes = projected.data();
+    mix_rows(projection_.data(), kept_, channels_, x.data.data(), plane, window_.data(),
+             windowed.data());
+  } else {
+    for (int k = 0; k < kept_; ++k) {
+      const float* src = &x.data[k * plane];
+      float* dst = &windowed[k * plane];
+      for (std::size_t i = 0; i < plane; ++i) dst[i] = src[i] * window_[i];
+    }
   }
   Fft2 fft(rows_, cols_);
   const std::size_t half = static_cast<std::size_t>(rows_) * fft.half();
@@ -227,12 +278,7 @@ Spectrum TranslationFilter::transform(const FeatureMap& x) const {
   out.rows = rows_;
   out.cols = cols_;
   out.data.resize(half * static_cast<std::size_t>(kept_));
-  std::vector<float> windowed(plane);
-  for (int k = 0; k < kept_; ++k) {
-    const float* src = &planes[k * plane];
-    for (std::size_t i = 0; i < plane; ++i) windowed[i] = src[i] * window_[i];
-    fft.forward_half(windowed.data(), &out.data[k * half]);
-  }
+  for (int k = 0; k < kept_; ++k) fft.forward_half(&windowed[k * plane], &out.data[k * half]);
   return out;
 }
 
@@ -447,25 +493,28 @@ void ScaleFilter::check(const Spectrum& s) const {
 }
 
 // Bins 0 .. n / 2 of the windowed samples' transform along the scales, per feature
-// (dims x (n / 2 + 1)): two matrix products (bins x scales times scales x dims), whose
-// column-major results are already feature-major.
+// (dims x (n / 2 + 1)): two matrix products (bins x scales times scales x dims, mix_rows),
+// interleaved feature-major.
 Spectrum ScaleFilter::transform(const std::vector<float>& samples) const {
   if (samples.size() != static_cast<std::size_t>(n_) * dims_) {
     throw std::invalid_argument("ScaleFilter: " + std::to_string(samples.size()) +
                                 " values for " + std::to_string(n_) + " samples of " +
                                 std::to_string(dims_) + " features");
   }
-  using RowMajor = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  const Eigen::Index half = static_cast<Eigen::Index>(label_f_.size());
-  const Eigen::Map<const RowMajor> x(samples.data(), n_, dims_);
-  const Eigen::MatrixXf re = Eigen::Map<const RowMajor>(dft_re_.data(), half, n_) * x;
-  const Eigen::MatrixXf im = Eigen::Map<const RowMajor>(dft_im_.data(), half, n_) * x;
+  const std::size_t half = label_f_.size(), dims = static_cast<std::size_t>(dims_);
+  std::vector<float> re(half * dims), im(half * dims);  // bins x features
+  mix_rows(dft_re_.data(), static_cast<int>(half), n_, samples.data(), dims, nullptr, re.data());
+  mix_rows(dft_im_.data(), static_cast<int>(half), n_, samples.data(), dims, nullptr, im.data());
   Spectrum out;
   out.channels = dims_;
   out.rows = 1;
   out.cols = n_;
-  out.data.resize(static_cast<std::size_t>(half) * dims_);
-  for (std::size_t i = 0; i < out.data.size(); ++i) out.data[i] = Complex(re.data()[i], im.data()[i]);
+  out.data.resize(half * dims);  // feature-major: feature d's bins at d * half
+  for (std::size_t b = 0; b < half; ++b) {
+    for (std::size_t d = 0; d < dims; ++d) {
+      out.data[d * half + b] = Complex(re[b * dims + d], im[b * dims + d]);
+    }
+  }
   return out;
 }
 
