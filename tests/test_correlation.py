@@ -414,6 +414,28 @@ def test_compression_keeps_the_principal_axes_of_the_first_sample() -> None:
         _core.TranslationFilter(20, 20, 31, 1.5, 1e-3, 5).transform(x)
 
 
+@pytest.mark.parametrize(("rows", "cols"), [(20, 23), (12, 5), (40, 40)])
+def test_compressed_filter_is_the_filter_of_the_projected_features(rows: int, cols: int) -> None:
+    """A compressed filter answers as an uncompressed one given the projected channels (the
+    projection and the window are one kernel in the core: its blocks of columns, whatever the
+    plane's size, add up as a matrix product does)."""
+    rng = np.random.default_rng(21)
+    a, b, z = (rng.random((31, rows, cols)).astype(np.float32) for _ in range(3))
+    small = _core.TranslationFilter(rows, cols, 31, 1.5, 1e-3, 6)
+    small.learn(a, 1.0)
+    p = small.projection.astype(np.float64)
+
+    def project(x: npt.NDArray[np.float32]) -> npt.NDArray[np.float32]:
+        return (p @ x.reshape(31, -1).astype(np.float64)).astype(np.float32).reshape(6, rows, cols)
+
+    plain = _core.TranslationFilter(rows, cols, 6, 1.5, 1e-3, 0)
+    plain.learn(project(a), 1.0)
+    small.learn(b, 0.3)
+    plain.learn(project(b), 0.3)
+    got, want = small.respond(z).values, plain.respond(project(z)).values
+    np.testing.assert_allclose(got, want, atol=1e-4 * np.abs(want).max())
+
+
 def test_response_map_matches_numpy() -> None:
     """Location.map: the response at every pixel of a region taken as the target's centre,
     bilinear between cells, wrapping around, divided by the peak, clipped to [0, 1]."""
