@@ -106,24 +106,27 @@ WMILTRACK_KERNEL void mix_rows_body(const float* m, int rows, int inner, const f
 }
 
 #ifdef WMILTRACK_AVX2_COPIES
-__attribute__((target("avx2"))) void mix_rows_avx2(const float* m, int rows, int inner,
-                                                   const float* x, std::size_t n,
-                                                   const float* scale, float* out) {
+}  // namespace
+namespace detail {
+// The kernel compiled for AVX2 (8 floats a step, the same IEEE operations in the same order),
+// with external linkage so that its name (*_avx2) stays in the symbol table: the portable-build
+// test (tests/test_core_hardening.py) allows wide instructions only in such functions.
+__attribute__((target("avx2"))) void cf_mix_rows_avx2(const float* m, int rows, int inner,
+                                                      const float* x, std::size_t n,
+                                                      const float* scale, float* out) {
   mix_rows_body(m, rows, inner, x, n, scale, out);
 }
+}  // namespace detail
+namespace {
 #endif
-void mix_rows_base(const float* m, int rows, int inner, const float* x, std::size_t n,
-                   const float* scale, float* out) {
-  mix_rows_body(m, rows, inner, x, n, scale, out);
-}
 
 // mix_rows_body on the AVX2 copy where the CPU has it (the same bits on either).
 void mix_rows(const float* m, int rows, int inner, const float* x, std::size_t n,
               const float* scale, float* out) {
 #ifdef WMILTRACK_AVX2_COPIES
-  if (vmath::avx2()) return mix_rows_avx2(m, rows, inner, x, n, scale, out);
+  if (vmath::avx2()) return detail::cf_mix_rows_avx2(m, rows, inner, x, n, scale, out);
 #endif
-  mix_rows_base(m, rows, inner, x, n, scale, out);
+  mix_rows_body(m, rows, inner, x, n, scale, out);
 }
 
 // MATLAB's hann(n): 0.5 (1 - cos(2 pi k / (n - 1))), k = 0 .. n - 1; 1 for n == 1.
