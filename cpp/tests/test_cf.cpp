@@ -91,14 +91,25 @@ void test_sample_gray() {
   const std::vector<std::uint8_t> flat(static_cast<std::size_t>(rows) * cols, 100);
   const GrayPatch half = sample_gray(gray_view(flat, rows, cols), 25.0, 20.0, 40.0, 40.0, 20, 20);
   for (float value : half.pixels) CHECK(std::abs(value - 100.0f / 255.0f) < 1e-5f);
-  // Several scales at once: each the same as its own sample_gray.
-  const std::vector<double> factors = {0.5, 1.0, 1.7, 3.0};
+  // Shrinking by 4 and more reads a lattice of pixels (every 2nd, 3rd, ...): a constant frame
+  // still stays constant.
+  const GrayPatch sparse = sample_gray(gray_view(flat, rows, cols), 25.0, 20.0, 45.0, 36.0, 5, 4);
+  for (float value : sparse.pixels) CHECK(std::abs(value - 100.0f / 255.0f) < 1e-5f);
+  // Several scales at once: each the same as its own sample_gray while every one reads every
+  // pixel (an output pixel under 4 frame pixels)...
+  const std::vector<double> factors = {0.5, 1.0, 1.7};
   const std::vector<GrayPatch> scales = sample_gray_scales(v, 12.3, 30.8, 14.0, 9.0, factors, 7, 5);
   CHECK(scales.size() == factors.size());
   for (std::size_t i = 0; i < factors.size(); ++i) {
     const GrayPatch one = sample_gray(v, 12.3, 30.8, 14.0 * factors[i], 9.0 * factors[i], 7, 5);
     CHECK(scales[i].pixels == one.pixels);
   }
+  // ... and on the lattice of the smallest factor otherwise: the smallest is its own
+  // sample_gray (every 4th pixel across, every 3rd down here), the larger reads it more densely
+  // than its own would (every 5th across) and differs from it.
+  const std::vector<GrayPatch> wide = sample_gray_scales(v, 25.0, 20.0, 14.0, 9.0, {4.0, 5.0}, 7, 5);
+  CHECK(wide[0].pixels == sample_gray(v, 25.0, 20.0, 56.0, 36.0, 7, 5).pixels);
+  CHECK(wide[1].pixels != sample_gray(v, 25.0, 20.0, 70.0, 45.0, 7, 5).pixels);
   CHECK(throws_invalid([&] { sample_gray_scales(v, 0.0, 0.0, 5.0, 5.0, {1.0, -1.0}, 5, 5); }));
   CHECK(throws_invalid([&] { sample_gray(v, 0.0, 0.0, 0.0, 10.0, 5, 5); }));
   CHECK(throws_invalid([&] { sample_gray(v, NAN, 0.0, 10.0, 10.0, 5, 5); }));
