@@ -72,11 +72,11 @@ int lattice_stride(double step) {
   return static_cast<int>(std::min(std::floor(step / 2.0), 65536.0));
 }
 
-// The taps of one output patch, both axes.
+// The taps of one output patch, both axes (indices in the units of the lattice they were made
+// for: the caller keeps its strides).
 struct PatchTaps {
   Taps x, y;
   int out_cols = 0, out_rows = 0;
-  int stride_x = 1, stride_y = 1;  // lattice steps (frame pixels) of x's and y's indices
 };
 
 // Buffers reused from call to call by one thread (the correlation filter samples the same
@@ -144,7 +144,7 @@ PatchTaps patch_taps(const ImageView& frame, double cx, double cy, double w, dou
   }
   return PatchTaps{make_taps(cx - w / 2.0, w / out_cols, out_cols, frame.cols, stride_x),
                    make_taps(cy - h / 2.0, h / out_rows, out_rows, frame.rows, stride_y),
-                   out_cols, out_rows, stride_x, stride_y};
+                   out_cols, out_rows};
 }
 
 // Taps with the same count for every output (the largest; the others padded with weight 0 on
