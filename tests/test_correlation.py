@@ -417,8 +417,8 @@ def test_compression_keeps_the_principal_axes_of_the_first_sample() -> None:
 @pytest.mark.parametrize(("rows", "cols"), [(20, 23), (12, 5), (40, 40)])
 def test_compressed_filter_is_the_filter_of_the_projected_features(rows: int, cols: int) -> None:
     """A compressed filter answers as an uncompressed one given the projected channels (the
-    projection and the window are one kernel in the core: its blocks of columns, whatever the
-    plane's size, add up as a matrix product does)."""
+    core projects with its weighted-row kernel, in blocks of lanes whatever the plane's size:
+    they must add up as a matrix product does)."""
     rng = np.random.default_rng(21)
     a, b, z = (rng.random((31, rows, cols)).astype(np.float32) for _ in range(3))
     small = _core.TranslationFilter(rows, cols, 31, 1.5, 1e-3, 6)

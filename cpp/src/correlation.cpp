@@ -79,54 +79,18 @@ class Fft2 {
   std::vector<Complex> col_in_, col_out_, row_buf_, full_;
 };
 
-// out (rows x n, row-major) = m (rows x inner, row-major) times x (inner x n, row-major),
-// each entry summed over j = 0, 1, ... in order (no fused multiply-add), then multiplied by
-// scale[i] when scale is given. Columns in blocks of kMixBlock, so that a block of x's rows
-// stays in the L1 cache while every row of the product reads it.
-constexpr std::size_t kMixBlock = 128;
-WMILTRACK_KERNEL void mix_rows_body(const float* m, int rows, int inner, const float* x,
-                                    std::size_t n, const float* scale, float* out) {
-  for (std::size_t c0 = 0; c0 < n; c0 += kMixBlock) {
-    const std::size_t c1 = std::min(n, c0 + kMixBlock);
-    for (int k = 0; k < rows; ++k) {
-      float* __restrict o = out + static_cast<std::size_t>(k) * n;
-      const float* mk = m + static_cast<std::size_t>(k) * inner;
-      const float a0 = mk[0];
-      for (std::size_t i = c0; i < c1; ++i) o[i] = a0 * x[i];
-      for (int j = 1; j < inner; ++j) {
-        const float a = mk[j];
-        const float* __restrict xj = x + static_cast<std::size_t>(j) * n;
-        for (std::size_t i = c0; i < c1; ++i) o[i] += a * xj[i];
-      }
-      if (scale != nullptr) {
-        for (std::size_t i = c0; i < c1; ++i) o[i] *= scale[i];
-      }
-    }
-  }
-}
-
-#ifdef WMILTRACK_AVX2_COPIES
-}  // namespace
-namespace detail {
-// The kernel compiled for AVX2 (8 floats a step, the same IEEE operations in the same order),
-// with external linkage so that its name (*_avx2) stays in the symbol table: the portable-build
-// test (tests/test_core_hardening.py) allows wide instructions only in such functions.
-__attribute__((target("avx2"))) void cf_mix_rows_avx2(const float* m, int rows, int inner,
-                                                      const float* x, std::size_t n,
-                                                      const float* scale, float* out) {
-  mix_rows_body(m, rows, inner, x, n, scale, out);
-}
-}  // namespace detail
-namespace {
-#endif
-
-// mix_rows_body on the AVX2 copy where the CPU has it (the same bits on either).
+// out (rows x n, row-major) = m (rows x inner, row-major) times x (inner x n, row-major), each
+// row vmath::weighted_rows_f32 of x (its sums in the order j = 0, 1, ...; the same bits on
+// every code path), then multiplied by scale[i] when scale is given.
 void mix_rows(const float* m, int rows, int inner, const float* x, std::size_t n,
               const float* scale, float* out) {
-#ifdef WMILTRACK_AVX2_COPIES
-  if (vmath::avx2()) return detail::cf_mix_rows_avx2(m, rows, inner, x, n, scale, out);
-#endif
-  mix_rows_body(m, rows, inner, x, n, scale, out);
+  for (int k = 0; k < rows; ++k) {
+    float* o = out + static_cast<std::size_t>(k) * n;
+    vmath::weighted_rows_f32(x, inner, static_cast<int>(n), m + static_cast<std::size_t>(k) * inner, o);
+    if (scale != nullptr) {
+      for (std::size_t i = 0; i < n; ++i) o[i] *= scale[i];
+    }
+  }
 }
 
 // MATLAB's hann(n): 0.5 (1 - cos(2 pi k / (n - 1))), k = 0 .. n - 1; 1 for n == 1.
