@@ -80,13 +80,34 @@ inline __attribute__((always_inline)) F log_f(F x) {
   return x == x ? out : x;
 }
 
-// log(e^l + g) given ln g: max(l, ln g) + log(1 + e^-|l - ln g|), for any l (no overflow).
+// Whether every lane of a comparison's result is true (a bool, or a GCC vector mask).
+template <class M>
+inline __attribute__((always_inline)) bool all_of(M m) {
+  if constexpr (std::is_same_v<M, bool>) {
+    return m;
+  } else {
+    std::uint64_t w[sizeof(M) / 8];
+    std::memcpy(w, &m, sizeof w);
+    std::uint64_t all = ~std::uint64_t{0};
+    for (std::uint64_t x : w) all &= x;
+    return all == ~std::uint64_t{0};
+  }
+}
+
+// log(e^l1 + g) - log(e^l0 + g) given ln g, each term as max(l, ln g) + log(1 + e^-|l - ln g|)
+// (for any l: no overflow). Where every lane of both terms lies more than 17 from ln g,
+// e^-|l - ln g| < 2^-24, so 1 + it rounds to 1 and log_f(1) is 0: the logs are exactly 0 and
+// are not computed, with the same bits (the search's candidates far from the target, whose
+// densities are far below the guard, take this path).
 template <class F, class I>
-inline __attribute__((always_inline)) F log_exp_plus(F l, float ln_g) {
-  const F t = l - ln_g;
-  const F top = t > 0.0f ? l : F{} + ln_g;
-  const F neg = t > 0.0f ? -t : t;
-  return top + log_f<F, I>(1.0f + exp_f<F, I>(neg));
+inline __attribute__((always_inline)) F log_exp_plus_diff(F l1, F l0, float ln_g) {
+  const F t1 = l1 - ln_g, t0 = l0 - ln_g;
+  const F top1 = t1 > 0.0f ? l1 : F{} + ln_g;
+  const F top0 = t0 > 0.0f ? l0 : F{} + ln_g;
+  const F neg1 = t1 > 0.0f ? -t1 : t1;
+  const F neg0 = t0 > 0.0f ? -t0 : t0;
+  if (all_of(neg1 < -17.0f) && all_of(neg0 < -17.0f)) return (top1 + 0.0f) - (top0 + 0.0f);
+  return (top1 + log_f<F, I>(1.0f + exp_f<F, I>(neg1))) - (top0 + log_f<F, I>(1.0f + exp_f<F, I>(neg0)));
 }
 
 }  // namespace wmiltrack::fmath

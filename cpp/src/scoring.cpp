@@ -245,7 +245,7 @@ inline __attribute__((always_inline)) F guarded_of(F v, const FusedFeature& f) {
   const F d0 = v - f.mu0;
   const F l1 = f.lb1 - (d * d) * f.a1;
   const F l0 = f.lb0 - (d0 * d0) * f.a0;
-  return fmath::log_exp_plus<F, I>(l1, f.ln_guard) - fmath::log_exp_plus<F, I>(l0, f.ln_guard);
+  return fmath::log_exp_plus_diff<F, I>(l1, l0, f.ln_guard);
 }
 
 float guarded(float v, const FusedFeature& f) { return guarded_of<float, std::int32_t>(v, f); }
