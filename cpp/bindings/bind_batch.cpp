@@ -10,7 +10,7 @@ namespace wmiltrack::bindings {
 namespace {
 
 void require_threads(int threads) {
-  require(threads >= 1, "threads must be >= 1, got " + std::to_string(threads));
+  require(threads >= 1, [&] { return "threads must be >= 1, got " + std::to_string(threads); });
 }
 
 // Runs every job on up to `threads` threads with the GIL released once; their results, in
@@ -51,13 +51,13 @@ py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       require(searches[i].ii != searches[j].ii || (!searches[i].frame && !searches[j].frame),
-              "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
-                  " share an IntegralImage that one of them computes");
+              [&] { return "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
+                  " share an IntegralImage that one of them computes"; });
       // (Two Generators may wrap one bit generator: it is its lock that each job takes.)
       require(!py::getattr(bag_jobs[i].rng, "bit_generator", bag_jobs[i].rng)
                    .is(py::getattr(bag_jobs[j].rng, "bit_generator", bag_jobs[j].rng)),
-              "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
-                  " draw from the same generator");
+              [&] { return "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
+                  " draw from the same generator"; });
     }
   }
   std::vector<LearnJob> learns;  // their boxes come from the draws below
@@ -123,8 +123,8 @@ void bind_batch(py::module_& m) {
         for (std::size_t i = 0; i < jobs.size(); ++i) {
           for (std::size_t j = 0; j < jobs.size(); ++j) {
             require(i == j || !jobs[i].frame || jobs[i].ii != jobs[j].ii,
-                    "job " + std::to_string(i) + " computes an IntegralImage that job " +
-                        std::to_string(j) + " also uses");
+                    [&] { return "job " + std::to_string(i) + " computes an IntegralImage that job " +
+                        std::to_string(j) + " also uses"; });
           }
         }
         return run_all(jobs, threads, search_result);

@@ -36,8 +36,8 @@ py::array_t<float> feature_array(const FeatureMap& x) {
 FeatureMap feature_map(const py::array& features) {
   const auto a = CArray<float>::ensure(features);
   require(static_cast<bool>(a), "features must be a float array");
-  require(a.ndim() == 3, "features must be channels x rows x cols, got " +
-                             std::to_string(a.ndim()) + " dimensions");
+  require(a.ndim() == 3, [&] { return "features must be channels x rows x cols, got " +
+                             std::to_string(a.ndim()) + " dimensions"; });
   FeatureMap x;
   x.channels = static_cast<int>(a.shape(0));
   x.rows = static_cast<int>(a.shape(1));
@@ -50,7 +50,7 @@ std::vector<float> sample_rows(const py::array& samples, int rows, int cols) {
   const auto a = CArray<float>::ensure(samples);
   require(static_cast<bool>(a), "samples must be a float array");
   require(a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == cols,
-          "samples must have shape (" + std::to_string(rows) + ", " + std::to_string(cols) + ")");
+          [&] { return "samples must have shape (" + std::to_string(rows) + ", " + std::to_string(cols) + ")"; });
   return std::vector<float>(a.data(), a.data() + a.size());
 }
 
@@ -78,7 +78,7 @@ void check_scale_samples(Pair centre, Pair size, const std::vector<double>& fact
     require(std::isfinite(f) && f > 0.0, "factors must be positive and finite");
   }
   const auto [mw, mh] = model_size;
-  require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
+  require(cell >= 1, [&] { return "cell must be at least 1, got " + std::to_string(cell); });
   require(mw >= cell && mh >= cell, "model_size must hold at least one cell");
 }
 
@@ -98,7 +98,7 @@ struct LockedScale {
 };
 
 void check_rate(double rate) {
-  require(rate > 0.0 && rate <= 1.0, "rate must be in (0, 1], got " + std::to_string(rate));
+  require(rate > 0.0 && rate <= 1.0, [&] { return "rate must be in (0, 1], got " + std::to_string(rate); });
 }
 
 void require_shape(const LockedTranslation& t, const FeatureMap& x) {
@@ -162,7 +162,7 @@ void bind_cf(py::module_& m) {
       [](const py::array& patch, int cell) {
         const auto a = CArray<float>::ensure(patch);
         require(static_cast<bool>(a) && a.ndim() == 2, "patch must be a 2-D float array");
-        require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
+        require(cell >= 1, [&] { return "cell must be at least 1, got " + std::to_string(cell); });
         require(a.shape(0) >= cell && a.shape(1) >= cell, "the patch is smaller than one cell");
         GrayPatch p;
         p.rows = static_cast<int>(a.shape(0));
@@ -183,7 +183,7 @@ void bind_cf(py::module_& m) {
       [](const py::array& frame, Pair centre, Pair size, Size out_size, int cell) {
         const ImageView view = image_view(frame);
         check_region(centre, size);
-        require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
+        require(cell >= 1, [&] { return "cell must be at least 1, got " + std::to_string(cell); });
         require(std::get<0>(out_size) >= cell && std::get<1>(out_size) >= cell,
                 "out_size must hold at least one cell");
         FeatureMap x;
@@ -315,7 +315,7 @@ void bind_cf(py::module_& m) {
              int cell) {
             const ImageView view = image_view(frame);
             check_region(centre, size);
-            require(cell >= 1, "cell must be at least 1, got " + std::to_string(cell));
+            require(cell >= 1, [&] { return "cell must be at least 1, got " + std::to_string(cell); });
             const auto [ow, oh] = out_size;
             require(ow / cell == t.filter.cols() && oh / cell == t.filter.rows(),
                     "out_size / cell must be the filter's (cols, rows)");

@@ -68,7 +68,7 @@ void bind_colour(py::module_& m) {
       "the bin of the pixel's luma in all three (gray frames accepted). With step > 1, learn\n"
       "and likelihood_sums read the pixels whose frame row and column are multiples of step.")
       .def(py::init([](int bits, double rate, bool intensity) {
-             require(bits >= 1 && bits <= 8, "bits must be in 1..8, got " + std::to_string(bits));
+             require(bits >= 1 && bits <= 8, [&] { return "bits must be in 1..8, got " + std::to_string(bits); });
              require(rate > 0.0 && rate <= 1.0, "rate must be in (0, 1]");
              return std::make_unique<LockedHistograms>(bits, rate, intensity);
            }),
@@ -96,7 +96,7 @@ void bind_colour(py::module_& m) {
           [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in,
              std::tuple<int, int, int, int> inside, std::tuple<int, int, int, int> core, int step) {
             const auto [view, region] = colour_region(h, frame, region_in);
-            require(step >= 1, "step must be at least 1, got " + std::to_string(step));
+            require(step >= 1, [&] { return "step must be at least 1, got " + std::to_string(step); });
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> guard(h.lock);
             h.hist.learn(view, region, span_of(inside), span_of(core), step);
@@ -130,7 +130,7 @@ void bind_colour(py::module_& m) {
           [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in,
              std::tuple<int, int, int, int> inner, int step) {
             const auto [view, region] = colour_region(h, frame, region_in);
-            require(step >= 1, "step must be at least 1, got " + std::to_string(step));
+            require(step >= 1, [&] { return "step must be at least 1, got " + std::to_string(step); });
             py::gil_scoped_release release;
             std::lock_guard<std::mutex> guard(h.lock);
             if (!h.hist.learnt()) throw py::value_error("call learn() before likelihood_sums()");

@@ -25,7 +25,7 @@ BagJob make_bags(const BagRequest& r) {
   job.rng = r.rng;
   const auto offsets = [](const py::handle& obj, const char* name) {
     const Int32Array a = int32_array(obj, name);
-    require(a.ndim() == 2 && a.shape[1] == 2, std::string(name) + " must be an (n, 2) array");
+    require(a.ndim() == 2 && a.shape[1] == 2, [&] { return std::string(name) + " must be an (n, 2) array"; });
     return a.values;
   };
   job.pos = offsets(r.pos_offsets, "pos_offsets");
@@ -37,7 +37,7 @@ BagJob make_bags(const BagRequest& r) {
                  : mode == "uniform" ? InstanceWeights::kUniform
                                      : InstanceWeights::kNone;
   require(spec.weights != InstanceWeights::kNone || mode == "none",
-          "weights must be 'exp', 'exp_sq', 'uniform' or 'none', got '" + mode + "'");
+          [&] { return "weights must be 'exp', 'exp_sq', 'uniform' or 'none', got '" + mode + "'"; });
   spec.n_pos_offsets = static_cast<int>(job.pos.size() / 2);
   spec.n_neg_offsets = static_cast<int>(job.neg.size() / 2);
   if (spec.weights == InstanceWeights::kExp || spec.weights == InstanceWeights::kExpSq) {

@@ -16,8 +16,8 @@ ImageView image_view(const py::array& frame) {
                          py::str(frame.dtype()).cast<std::string>());
   }
   const auto nd = frame.ndim();
-  require(nd == 2 || nd == 3, "frame must be H x W or H x W x C, got " + std::to_string(nd) +
-                                  " dimensions");
+  require(nd == 2 || nd == 3, [&] { return "frame must be H x W or H x W x C, got " + std::to_string(nd) +
+                                  " dimensions"; });
   ImageView v;
   v.data = static_cast<const std::uint8_t*>(frame.data());
   v.rows = static_cast<int>(frame.shape(0));
@@ -28,7 +28,7 @@ ImageView image_view(const py::array& frame) {
   v.channel_stride = nd == 3 ? frame.strides(2) : 1;
   require(v.rows > 0 && v.cols > 0, "frame is empty");
   require(v.channels == 1 || v.channels == 3 || v.channels == 4,
-          "frame must have 1, 3 (BGR) or 4 (BGRA) channels, got " + std::to_string(v.channels));
+          [&] { return "frame must have 1, 3 (BGR) or 4 (BGRA) channels, got " + std::to_string(v.channels); });
   return v;
 }
 

@@ -87,7 +87,7 @@ LearnJob make_learn(const LearnRequest& r, py::object keep, bool bags_later) {
               "w_pos must hold one weight per positive");
       step.w_pos = job.w_pos.data();
     }
-    require(k >= 1 && k <= M, "k must be in 1.." + std::to_string(M));
+    require(k >= 1 && k <= M, [&] { return "k must be in 1.." + std::to_string(M); });
     step.k = k;
     step.code_gradient = r.code_gradient;
   } else if (r.select == "ratios") {

@@ -70,9 +70,9 @@ void bind_scoring(py::module_& m) {
          std::tuple<int, int> frame_size, bool return_scores) -> py::tuple {
         // The sizes first: nothing is allocated for a grid the core would refuse.
         require(radius >= 1 && radius <= kMaxSearchRadius,
-                "radius must be in 1 .. " + std::to_string(kMaxSearchRadius) +
-                    " (the grid is walked in full), got " + std::to_string(radius));
-        require(step >= 1, "step must be >= 1, got " + std::to_string(step));
+                [&] { return "radius must be in 1 .. " + std::to_string(kMaxSearchRadius) +
+                    " (the grid is walked in full), got " + std::to_string(radius); });
+        require(step >= 1, [&] { return "step must be >= 1, got " + std::to_string(step); });
         const auto [x, y, w, h] = box;
         const auto [fw, fh] = frame_size;
         require(w > 0 && h > 0, "box must have positive size");

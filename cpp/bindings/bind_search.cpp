@@ -36,8 +36,8 @@ void take_cues(SearchJob& job, const py::object& cues) {
     const auto table = cue[0].cast<CArray<double>>();
     const py::ssize_t extra = t.centre ? 0 : 1;  // an integral image has a zero row and column
     require(table.ndim() == 2 && table.shape(0) >= 1 && table.shape(1) >= 1,
-            t.centre ? "cues: a centre map must be a 2-D array"
-                     : "cues: a table must be a 2-D integral image (rows + 1) x (cols + 1)");
+            [&] { return t.centre ? "cues: a centre map must be a 2-D array"
+                     : "cues: a table must be a 2-D integral image (rows + 1) x (cols + 1)"; });
     t.table = table.data();
     t.rows = static_cast<int>(table.shape(0) - extra);
     t.cols = static_cast<int>(table.shape(1) - extra);
@@ -62,9 +62,9 @@ SearchJob make_search(const SearchRequest& r, py::object keep) {
   const FeatureBank& bank = *r.bank.cast<const FeatureBank*>();
   for (const auto& [radius, step] : r.stages) {
     require(radius >= 1 && radius <= kMaxSearchRadius,
-            "radius must be in 1 .. " + std::to_string(kMaxSearchRadius) + ", got " +
-                std::to_string(radius));
-    require(step >= 1, "step must be >= 1, got " + std::to_string(step));
+            [&] { return "radius must be in 1 .. " + std::to_string(kMaxSearchRadius) + ", got " +
+                std::to_string(radius); });
+    require(step >= 1, [&] { return "step must be >= 1, got " + std::to_string(step); });
     job.stages.push_back(SearchStage{radius, step});
   }
   const auto [x, y, w, h] = r.box;
@@ -86,7 +86,7 @@ SearchJob make_search(const SearchRequest& r, py::object keep) {
     for (py::ssize_t k = 0; k < job.selected.size(); ++k) {
       const std::int32_t f = job.selected.data()[k];
       require(f >= 0 && f < m,
-              "selected index " + std::to_string(f) + " outside the pool of " + std::to_string(m));
+              [&] { return "selected index " + std::to_string(f) + " outside the pool of " + std::to_string(m); });
       g[a].push_back(src[a]->data()[f]);
     }
   }
