@@ -185,12 +185,12 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
   const std::vector<double> ones(static_cast<std::size_t>(std::max(N, 1)), 1.0);
   std::vector<unsigned char> used(static_cast<std::size_t>(M), 0);
   // Instance-major float copy of the log ratios (row j: every feature's h on instance j, the
-  // positives then the negatives; rows padded with zeros to a multiple of 64 features), so
+  // positives then the negatives; rows padded with zeros to a multiple of 8 features), so
   // that the scoring runs over features: M independent float sums, each adding its terms in
   // the order j = 0, 1, ..., several features a step (vmath::weighted_rows_f32; the same bits
   // at any vector width). Float halves the bytes and doubles the lanes; a score only ranks the
   // features of one round.
-  const int width = (M + 63) / 64 * 64;
+  const int width = (M + 7) / 8 * 8;
   const std::size_t wz = static_cast<std::size_t>(width);
   std::vector<float> hT(static_cast<std::size_t>(P + N) * wz, 0.0f), gf(static_cast<std::size_t>(P + N));
   std::vector<float> score(wz);
