@@ -117,16 +117,35 @@ Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h,
       bags.w_pos.assign(np, 1.0 / static_cast<double>(np));
       break;
   }
-  // The negatives' candidates: the offsets whose box lies inside the frame, in order.
-  std::vector<std::int32_t> cx, cy;
-  for (int i = 0; i < spec.n_neg_offsets; ++i) {
-    const std::int64_t x = static_cast<std::int64_t>(box.x) + spec.neg[2 * i];
-    const std::int64_t y = static_cast<std::int64_t>(box.y) + spec.neg[2 * i + 1];
-    if (!inside(x, y, box, frame_w, frame_h)) continue;
-    cx.push_back(static_cast<std::int32_t>(x));
-    cy.push_back(static_cast<std::int32_t>(y));
+  // The negatives' candidates: the offsets whose box lies inside the frame, in order. Where
+  // the offsets' bounding box lies inside (the usual case, away from the frame's edges), that
+  // is all of them, and they are not copied.
+  const int n_off = spec.n_neg_offsets;
+  bool all_inside = n_off > 0;
+  if (all_inside) {
+    std::int32_t x0 = spec.neg[0], x1 = x0, y0 = spec.neg[1], y1 = y0;
+    for (int i = 1; i < n_off; ++i) {
+      x0 = std::min(x0, spec.neg[2 * i]);
+      x1 = std::max(x1, spec.neg[2 * i]);
+      y0 = std::min(y0, spec.neg[2 * i + 1]);
+      y1 = std::max(y1, spec.neg[2 * i + 1]);
+    }
+    all_inside = inside(static_cast<std::int64_t>(box.x) + x0, static_cast<std::int64_t>(box.y) + y0,
+                        box, frame_w, frame_h) &&
+                 inside(static_cast<std::int64_t>(box.x) + x1, static_cast<std::int64_t>(box.y) + y1,
+                        box, frame_w, frame_h);
   }
-  const std::int64_t n = static_cast<std::int64_t>(cx.size());
+  std::vector<int> inside_at;  // the candidates' offset indices (unless all_inside)
+  if (!all_inside) {
+    inside_at.reserve(static_cast<std::size_t>(n_off));
+    for (int i = 0; i < n_off; ++i) {
+      if (inside(static_cast<std::int64_t>(box.x) + spec.neg[2 * i],
+                 static_cast<std::int64_t>(box.y) + spec.neg[2 * i + 1], box, frame_w, frame_h)) {
+        inside_at.push_back(i);
+      }
+    }
+  }
+  const std::int64_t n = all_inside ? n_off : static_cast<std::int64_t>(inside_at.size());
   std::vector<std::int64_t> keep;
   if (spec.exact) {
     if (n > spec.neg_count) {
@@ -138,9 +157,12 @@ Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h,
   } else {
     keep = bernoulli_first(bits, n, spec.keep_prob, spec.neg_count);
   }
-  for (const std::int64_t i : keep) {
-    bags.xs.push_back(cx[static_cast<std::size_t>(i)]);
-    bags.ys.push_back(cy[static_cast<std::size_t>(i)]);
+  bags.xs.reserve(bags.xs.size() + keep.size());
+  bags.ys.reserve(bags.ys.size() + keep.size());
+  for (const std::int64_t k : keep) {
+    const int i = all_inside ? static_cast<int>(k) : inside_at[static_cast<std::size_t>(k)];
+    bags.xs.push_back(static_cast<std::int32_t>(box.x + spec.neg[2 * i]));
+    bags.ys.push_back(static_cast<std::int32_t>(box.y + spec.neg[2 * i + 1]));
   }
   return bags;
 }
