@@ -440,6 +440,15 @@ def test_the_cores_draws_continue_numpys_stream(seed: int) -> None:
         a, b = np.random.default_rng(seed), np.random.default_rng(seed)
         assert _core.numpy_bernoulli_first(b, n, p, limit) == np.flatnonzero(a.random(n) < p)[:limit].tolist()
         assert a.bit_generator.state == b.bit_generator.state
+    # numpy's PCG64 is stepped in the core, four draws in flight: every count around the
+    # groups of four, and another bit generator (drawn through numpy's next_double) alike.
+    assert _core.numpy_pcg64_stepped_here(np.random.default_rng(seed))
+    assert not _core.numpy_pcg64_stepped_here(np.random.Generator(np.random.PCG64DXSM(seed)))
+    for make in (np.random.default_rng, lambda s: np.random.Generator(np.random.PCG64DXSM(s))):
+        a, b = make(seed), make(seed)
+        for n in (1, 2, 3, 4, 5, 7, 8, 9, 4171):
+            assert _core.numpy_bernoulli_first(b, n, 0.3, 4000) == np.flatnonzero(a.random(n) < 0.3).tolist()
+            assert a.bit_generator.state == b.bit_generator.state
     with pytest.raises(ValueError):
         _core.numpy_choice_sorted(np.random.default_rng(0), 5, 6)
     with pytest.raises(TypeError, match="Generator"):

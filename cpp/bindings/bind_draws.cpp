@@ -6,14 +6,87 @@
 
 namespace wmiltrack::bindings {
 
+namespace {
+
+// numpy's bitgen_t (numpy/random/bitgen.h), as the "BitGenerator" capsule holds it.
+struct NumpyBitgen {
+  void* state;
+  std::uint64_t (*next_uint64)(void* st);
+  std::uint32_t (*next_uint32)(void* st);
+  double (*next_double)(void* st);
+  std::uint64_t (*next_raw)(void* st);
+};
+
+// numpy's pcg64_state (numpy/random/src/pcg64/pcg64.h): its 128-bit LCG state and increment
+// (low word first where numpy uses the compiler's 128-bit integers), then a buffered 32-bit half.
+struct NumpyPcg64State {
+  std::uint64_t* pcg_state;
+  int has_uint32;
+  std::uint32_t uinteger;
+};
+
+const NumpyBitgen* bitgen_of(const py::object& bit_generator) {
+  const py::object cap = py::getattr(bit_generator, "capsule", py::none());
+  const char* name = py::isinstance<py::capsule>(cap) ? cap.cast<py::capsule>().name() : nullptr;
+  if (name == nullptr || std::string(name) != "BitGenerator") return nullptr;
+  return cap.cast<py::capsule>().get_pointer<NumpyBitgen>();
+}
+
+// numpy's PCG64 next_double, if a PCG64 of our own shows the layout above: its state words
+// equal to what bit_generator.state reports, and 8 doubles stepped here equal to its own (and
+// its state after them); null otherwise, and generators then draw through next_double. Checked
+// once: every PCG64 shares that function.
+void* checked_pcg64_next_double() {
+  static void* const fn = []() -> void* {
+#if defined(__SIZEOF_INT128__)
+    try {
+      const py::object gen = py::module_::import("numpy.random").attr("PCG64")(20261126);
+      const NumpyBitgen* bg = bitgen_of(gen);
+      if (bg == nullptr) return nullptr;
+      const std::uint64_t* w = static_cast<const NumpyPcg64State*>(bg->state)->pcg_state;
+      const py::dict state = gen.attr("state");
+      const auto as_int = [](const std::uint64_t* v) -> py::object {
+        return py::int_(v[1]).attr("__lshift__")(64).attr("__or__")(py::int_(v[0]));
+      };
+      const py::object name = state["bit_generator"];
+      const py::dict words = state["state"];
+      if (!name.equal(py::str("PCG64")) || !py::object(words["state"]).equal(as_int(w)) ||
+          !py::object(words["inc"]).equal(as_int(w + 2))) {
+        return nullptr;
+      }
+      std::uint64_t ours[4] = {w[0], w[1], w[2], w[3]};
+      for (int k = 0; k < 8; ++k) {
+        if (pcg64_next_double(ours) != bg->next_double(bg->state)) return nullptr;
+      }
+      for (int k = 0; k < 4; ++k) {
+        if (ours[k] != w[k]) return nullptr;
+      }
+      return reinterpret_cast<void*>(bg->next_double);
+    } catch (const py::error_already_set&) {
+      return nullptr;
+    }
+#else
+    return nullptr;
+#endif
+  }();
+  return fn;
+}
+
+}  // namespace
+
 NumpyBits::NumpyBits(const py::object& rng) {
   const py::object bitgen = py::getattr(rng, "bit_generator", py::none());
-  const py::object cap = bitgen.is_none() ? py::none() : py::getattr(bitgen, "capsule", py::none());
-  const char* name = py::isinstance<py::capsule>(cap) ? cap.cast<py::capsule>().name() : nullptr;
-  if (name == nullptr || std::string(name) != "BitGenerator") {
-    throw py::type_error("rng must be a numpy.random.Generator");
+  const NumpyBitgen* bg = bitgen.is_none() ? nullptr : bitgen_of(bitgen);
+  if (bg == nullptr) throw py::type_error("rng must be a numpy.random.Generator");
+  bits_.state = bg->state;
+  bits_.next_uint64 = bg->next_uint64;
+  bits_.next_uint32 = bg->next_uint32;
+  bits_.next_double = bg->next_double;
+  bits_.next_raw = bg->next_raw;
+  void* const pcg64 = checked_pcg64_next_double();
+  if (pcg64 != nullptr && reinterpret_cast<void*>(bg->next_double) == pcg64) {
+    bits_.pcg64_state = static_cast<NumpyPcg64State*>(bg->state)->pcg_state;
   }
-  bits_ = *cap.cast<py::capsule>().get_pointer<BitSource>();
   lock_ = bitgen.attr("lock");
   lock_.attr("acquire")();
 }
@@ -81,6 +154,17 @@ void bind_draws(py::module_& m) {
       .def_readonly("exact", &BagRequest::exact)
       .def_readonly("neg_count", &BagRequest::neg_count)
       .def_readonly("keep_prob", &BagRequest::keep_prob);
+
+  m.def(
+      "numpy_pcg64_stepped_here",
+      [](const py::object& rng) {
+        NumpyBits bits(rng);
+        return bits.bits().pcg64_state != nullptr;
+      },
+      py::arg("rng"),
+      "Whether the core's Bernoulli draws from this numpy Generator step its PCG64 state in C++\n"
+      "(numpy's PCG64, its state layout checked once) rather than calling numpy's next_double\n"
+      "for each number; the numbers are the same either way.");
 
   m.def(
       "numpy_choice_sorted",

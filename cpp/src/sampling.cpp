@@ -80,12 +80,80 @@ std::vector<std::int64_t> choice_sorted(BitSource& bits, std::int64_t n, std::in
   return picks;
 }
 
+#if defined(__SIZEOF_INT128__)
+namespace {
+__extension__ typedef unsigned __int128 U128;  // (GCC and Clang)
+// PCG64's LCG multiplier (PCG_DEFAULT_MULTIPLIER_128).
+constexpr U128 kPcgMult = (static_cast<U128>(0x2360ED051FC65DA4ULL) << 64) | 0x4385DF649FCCF645ULL;
+
+U128 load128(const std::uint64_t* w) { return (static_cast<U128>(w[1]) << 64) | w[0]; }
+void store128(U128 v, std::uint64_t* w) {
+  w[0] = static_cast<std::uint64_t>(v);
+  w[1] = static_cast<std::uint64_t>(v >> 64);
+}
+
+// The double numpy makes of PCG64's output at state s (XSL-RR, then the top 53 bits).
+double pcg_double(U128 s) {
+  const std::uint64_t hi = static_cast<std::uint64_t>(s >> 64);
+  const std::uint64_t x = hi ^ static_cast<std::uint64_t>(s);
+  const unsigned rot = static_cast<unsigned>(hi >> 58);
+  const std::uint64_t out = (x >> rot) | (x << ((64u - rot) & 63u));
+  return static_cast<double>(out >> 11) * (1.0 / 9007199254740992.0);
+}
+}  // namespace
+
+double pcg64_next_double(std::uint64_t* s) {
+  const U128 next = load128(s) * kPcgMult + load128(s + 2);
+  store128(next, s);
+  return pcg_double(next);
+}
+#else
+double pcg64_next_double(std::uint64_t* /*s*/) {
+  throw std::logic_error("pcg64_next_double: no 128-bit integers on this build");
+}
+#endif
+
 std::vector<std::int64_t> bernoulli_first(BitSource& bits, std::int64_t n, double p, std::int64_t limit) {
   std::vector<std::int64_t> kept;
-  for (std::int64_t i = 0; i < n; ++i) {
-    const double u = bits.next_double(bits.state);
+  const auto take = [&](std::int64_t i, double u) {
     if (u < p && static_cast<std::int64_t>(kept.size()) < limit) kept.push_back(i);
+  };
+  std::int64_t i = 0;
+#if defined(__SIZEOF_INT128__)
+  if (bits.pcg64_state != nullptr) {
+    // Four interleaved chains, each a jump of four steps (s -> m4 s + c4), so that four
+    // 128-bit multiplies are in flight; then single steps, and the state after the n-th draw
+    // written back.
+    const U128 inc = load128(bits.pcg64_state + 2);
+    U128 s = load128(bits.pcg64_state);
+    if (n >= 4) {
+      const U128 m2 = kPcgMult * kPcgMult, m4 = m2 * m2;
+      const U128 c4 = inc * (m2 * kPcgMult + m2 + kPcgMult + 1);
+      U128 a = s * kPcgMult + inc;
+      U128 b = a * kPcgMult + inc;
+      U128 c = b * kPcgMult + inc;
+      U128 d = c * kPcgMult + inc;
+      for (; i + 4 <= n; i += 4) {
+        take(i, pcg_double(a));
+        take(i + 1, pcg_double(b));
+        take(i + 2, pcg_double(c));
+        take(i + 3, pcg_double(d));
+        s = d;
+        a = a * m4 + c4;
+        b = b * m4 + c4;
+        c = c * m4 + c4;
+        d = d * m4 + c4;
+      }
+    }
+    for (; i < n; ++i) {
+      s = s * kPcgMult + inc;
+      take(i, pcg_double(s));
+    }
+    store128(s, bits.pcg64_state);
+    return kept;
   }
+#endif
+  for (; i < n; ++i) take(i, bits.next_double(bits.state));
   return kept;
 }
 

@@ -244,6 +244,9 @@ def frame_step_many(steps: Sequence[tuple[SearchRequest, LearnRequest, BagReques
                     threads: int) -> list[_FrameStep]:
     """frame_step() for several targets in one call, on up to `threads` threads."""
 
+def numpy_pcg64_stepped_here(rng: np.random.Generator) -> bool:
+    """Whether the core steps this generator's PCG64 state itself for Bernoulli draws."""
+
 def numpy_choice_sorted(rng: np.random.Generator, n: int, k: int) -> list[int]:
     """sorted(rng.choice(n, k, replace=False)), drawn as numpy draws it."""
 

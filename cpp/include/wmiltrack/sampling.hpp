@@ -18,14 +18,24 @@
 namespace wmiltrack {
 
 // A source of random bits with numpy's bitgen_t layout (numpy/random/bitgen.h), so that the
-// binding can hand numpy's generator over as it is.
+// binding can hand numpy's generator over as it is; plus, where the binding has checked that
+// the generator is numpy's PCG64 and found its 128-bit state, that state (pcg64_state):
+// bernoulli_first() then steps it here, four draws in flight, instead of calling next_double
+// once per number (the same numbers and final state; numpy's PCG64 at about 2 ns a draw was
+// most of a compressive tracker's bag sampling, some 4 000 draws a frame).
 struct BitSource {
   void* state;
   std::uint64_t (*next_uint64)(void* st);
   std::uint32_t (*next_uint32)(void* st);
   double (*next_double)(void* st);
   std::uint64_t (*next_raw)(void* st);
+  std::uint64_t* pcg64_state = nullptr;  // {state low, high, increment low, high}, or null
 };
+
+// numpy's PCG64 double after the state `s` (state and increment as in BitSource::pcg64_state):
+// the LCG steps s, the XSL-RR output of the new state, its top 53 bits / 2^53. Returns the
+// double and leaves the new state in s. (Exposed for the binding's layout check.)
+double pcg64_next_double(std::uint64_t* s);
 
 // Generator.choice(n, k, replace=False) for n <= 10000 or k <= n / 50 (Floyd's algorithm with
 // numpy's bounded draws, then the shuffle of the k picks that numpy makes), returned sorted.
