@@ -216,6 +216,37 @@ __attribute__((target("avx2"))) int luma_bgr_avx2(const std::uint8_t* src, int n
   }
   return c;
 }
+
+// accumulate_row's running sums (below), 32 pixels a step in 8-lane blocks: each block's
+// in-register prefix scan (within each 128-bit half, then the low half's total added to the
+// high half) plus the running sum, which grows by each block's total in a chain of one
+// addition a block. Returns the pixels done (a multiple of 32) and the running sum in
+// *row_sum. Integer sums modulo 2^32: the same entries as the other paths.
+__attribute__((target("avx2"))) int accumulate_row_avx2(const std::uint8_t* v, int w,
+                                                         const std::uint32_t* prev,
+                                                         std::uint32_t* out,
+                                                         std::uint32_t* row_sum) {
+  const __m256i last = _mm256_set1_epi32(7);
+  __m256i carry = _mm256_setzero_si256();
+  int c = 0;
+  for (; c + 32 <= w; c += 32) {
+    for (int j = 0; j < 4; ++j) {
+      const int at = c + 8 * j;
+      __m256i x = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(v + at)));
+      x = _mm256_add_epi32(x, _mm256_slli_si256(x, 4));
+      x = _mm256_add_epi32(x, _mm256_slli_si256(x, 8));
+      const __m256i low_total = _mm256_shuffle_epi32(x, 0xFF);
+      x = _mm256_add_epi32(x, _mm256_permute2x128_si256(low_total, low_total, 0x08));
+      const __m256i total = _mm256_permutevar8x32_epi32(x, last);
+      x = _mm256_add_epi32(x, carry);
+      carry = _mm256_add_epi32(carry, total);
+      const __m256i above = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(prev + at + 1));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + at + 1), _mm256_add_epi32(above, x));
+    }
+  }
+  *row_sum = static_cast<std::uint32_t>(_mm256_cvtsi256_si32(carry));
+  return c;
+}
 }  // namespace detail
 
 namespace {
@@ -274,9 +305,13 @@ void accumulate_row(const std::uint8_t* v, int w, const std::uint32_t* prev, std
   out[0] = 0;
   int c = 0;
   std::uint32_t row_sum = 0;
+#ifdef WMILTRACK_SSSE3_LUMA
+  if (vmath::avx2()) c = detail::accumulate_row_avx2(v, w, prev, out, &row_sum);
+#endif
 #ifdef WMILTRACK_SSE2_SCAN
   const __m128i zero = _mm_setzero_si128();
-  __m128i carry = zero;  // the running sum, in every lane
+  // the running sum, in every lane
+  __m128i carry = _mm_set1_epi32(static_cast<int>(row_sum));
   for (; c + 16 <= w; c += 16) {
     const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(v + c));
     const __m128i lo = _mm_unpacklo_epi8(bytes, zero), hi = _mm_unpackhi_epi8(bytes, zero);
@@ -286,8 +321,11 @@ void accumulate_row(const std::uint8_t* v, int w, const std::uint32_t* prev, std
       __m128i x = quads[j];
       x = _mm_add_epi32(x, _mm_slli_si128(x, 4));
       x = _mm_add_epi32(x, _mm_slli_si128(x, 8));
+      // The block's own total, broadcast, is added to the carry apart from x: the chain from
+      // block to block is one addition.
+      const __m128i total = _mm_shuffle_epi32(x, 0xFF);
       x = _mm_add_epi32(x, carry);
-      carry = _mm_shuffle_epi32(x, 0xFF);
+      carry = _mm_add_epi32(carry, total);
       const __m128i above = _mm_loadu_si128(reinterpret_cast<const __m128i*>(prev + c + 4 * j + 1));
       _mm_storeu_si128(reinterpret_cast<__m128i*>(out + c + 4 * j + 1), _mm_add_epi32(above, x));
     }
