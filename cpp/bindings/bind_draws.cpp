@@ -8,15 +8,6 @@ namespace wmiltrack::bindings {
 
 namespace {
 
-// numpy's bitgen_t (numpy/random/bitgen.h), as the "BitGenerator" capsule holds it.
-struct NumpyBitgen {
-  void* state;
-  std::uint64_t (*next_uint64)(void* st);
-  std::uint32_t (*next_uint32)(void* st);
-  double (*next_double)(void* st);
-  std::uint64_t (*next_raw)(void* st);
-};
-
 // numpy's pcg64_state (numpy/random/src/pcg64/pcg64.h): its 128-bit LCG state and increment
 // (low word first where numpy uses the compiler's 128-bit integers), then a buffered 32-bit half.
 struct NumpyPcg64State {
@@ -25,11 +16,11 @@ struct NumpyPcg64State {
   std::uint32_t uinteger;
 };
 
-const NumpyBitgen* bitgen_of(const py::object& bit_generator) {
+const Bitgen* bitgen_of(const py::object& bit_generator) {
   const py::object cap = py::getattr(bit_generator, "capsule", py::none());
   const char* name = py::isinstance<py::capsule>(cap) ? cap.cast<py::capsule>().name() : nullptr;
   if (name == nullptr || std::string(name) != "BitGenerator") return nullptr;
-  return cap.cast<py::capsule>().get_pointer<NumpyBitgen>();
+  return cap.cast<py::capsule>().get_pointer<Bitgen>();
 }
 
 // numpy's PCG64 next_double, if a PCG64 of our own shows the layout above: its state words
@@ -41,7 +32,7 @@ void* checked_pcg64_next_double() {
 #if defined(__SIZEOF_INT128__)
     try {
       const py::object gen = py::module_::import("numpy.random").attr("PCG64")(20261126);
-      const NumpyBitgen* bg = bitgen_of(gen);
+      const Bitgen* bg = bitgen_of(gen);
       if (bg == nullptr) return nullptr;
       const std::uint64_t* w = static_cast<const NumpyPcg64State*>(bg->state)->pcg_state;
       const py::dict state = gen.attr("state");
@@ -76,13 +67,9 @@ void* checked_pcg64_next_double() {
 
 NumpyBits::NumpyBits(const py::object& rng) {
   const py::object bitgen = py::getattr(rng, "bit_generator", py::none());
-  const NumpyBitgen* bg = bitgen.is_none() ? nullptr : bitgen_of(bitgen);
+  const Bitgen* bg = bitgen.is_none() ? nullptr : bitgen_of(bitgen);
   if (bg == nullptr) throw py::type_error("rng must be a numpy.random.Generator");
-  bits_.state = bg->state;
-  bits_.next_uint64 = bg->next_uint64;
-  bits_.next_uint32 = bg->next_uint32;
-  bits_.next_double = bg->next_double;
-  bits_.next_raw = bg->next_raw;
+  static_cast<Bitgen&>(bits_) = *bg;
   void* const pcg64 = checked_pcg64_next_double();
   if (pcg64 != nullptr && reinterpret_cast<void*>(bg->next_double) == pcg64) {
     bits_.pcg64_state = static_cast<NumpyPcg64State*>(bg->state)->pcg_state;

@@ -747,7 +747,7 @@ double splitmix_double(void* st) { return static_cast<double>(splitmix(st) >> 11
 
 void test_sampling() {
   std::uint64_t state = 42;
-  BitSource bits{&state, splitmix, splitmix32, splitmix_double, splitmix};
+  BitSource bits{{&state, splitmix, splitmix32, splitmix_double, splitmix}};
   for (int k : {0, 1, 7, 50}) {
     const std::vector<std::int64_t> picks = choice_sorted(bits, 60, k);
     bool ok = static_cast<int>(picks.size()) == k;

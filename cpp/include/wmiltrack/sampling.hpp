@@ -17,18 +17,22 @@
 
 namespace wmiltrack {
 
-// A source of random bits with numpy's bitgen_t layout (numpy/random/bitgen.h), so that the
-// binding can hand numpy's generator over as it is; plus, where the binding has checked that
-// the generator is numpy's PCG64 and found its 128-bit state, that state (pcg64_state):
-// bernoulli_first() then steps it here, four draws in flight, instead of calling next_double
-// once per number (the same numbers and final state; numpy's PCG64 at about 2 ns a draw was
-// most of a compressive tracker's bag sampling, some 4 000 draws a frame).
-struct BitSource {
+// numpy's bitgen_t (numpy/random/bitgen.h): a bit generator's state and its draws, as the
+// "BitGenerator" capsule of a numpy Generator's bit generator holds it.
+struct Bitgen {
   void* state;
   std::uint64_t (*next_uint64)(void* st);
   std::uint32_t (*next_uint32)(void* st);
   double (*next_double)(void* st);
   std::uint64_t (*next_raw)(void* st);
+};
+
+// A source of random bits: numpy's generator as it is, plus, where the binding has checked
+// that the generator is numpy's PCG64 and found its 128-bit state, that state (pcg64_state):
+// bernoulli_first() then steps it here, four draws in flight, instead of calling next_double
+// once per number (the same numbers and final state; numpy's PCG64 at about 2 ns a draw was
+// most of a compressive tracker's bag sampling, some 4 000 draws a frame).
+struct BitSource : Bitgen {
   std::uint64_t* pcg64_state = nullptr;  // {state low, high, increment low, high}, or null
 };
 
