@@ -38,7 +38,7 @@ py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
   require_threads(threads);
   const std::size_t n = steps.size();
   std::vector<SearchJob> searches;
-  std::vector<BagJob> bag_jobs;
+  std::vector<std::shared_ptr<const BagJob>> bag_jobs;
   searches.reserve(n);
   bag_jobs.reserve(n);
   for (const auto& [search, learn, bags] : steps) {
@@ -54,8 +54,8 @@ py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
               [&] { return "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
                   " share an IntegralImage that one of them computes"; });
       // (Two Generators may wrap one bit generator: it is its lock that each job takes.)
-      require(!py::getattr(bag_jobs[i].rng, "bit_generator", bag_jobs[i].rng)
-                   .is(py::getattr(bag_jobs[j].rng, "bit_generator", bag_jobs[j].rng)),
+      require(!py::getattr(bag_jobs[i]->rng, "bit_generator", bag_jobs[i]->rng)
+                   .is(py::getattr(bag_jobs[j]->rng, "bit_generator", bag_jobs[j]->rng)),
               [&] { return "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
                   " draw from the same generator"; });
     }
@@ -68,7 +68,7 @@ py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
   }
   std::vector<std::unique_ptr<NumpyBits>> rngs;
   rngs.reserve(n);
-  for (BagJob& job : bag_jobs) rngs.push_back(std::make_unique<NumpyBits>(job.rng));
+  for (const auto& job : bag_jobs) rngs.push_back(std::make_unique<NumpyBits>(job->rng));
   {
     py::gil_scoped_release release;
     parallel_for(static_cast<int>(n), threads, [&](int k) {
@@ -82,7 +82,7 @@ py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
           box.y += r.dy;
         }
       }
-      Bags bags = sample_bags(bag_jobs[i].spec, box, search.fw, search.fh, rngs[i]->bits());
+      Bags bags = sample_bags(bag_jobs[i]->spec, box, search.fw, search.fh, rngs[i]->bits());
       learns[i].take_bags(std::move(bags), *search.ii);  // on the table the search read
       learns[i].run();
     });

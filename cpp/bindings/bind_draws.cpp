@@ -80,8 +80,10 @@ NumpyBits::NumpyBits(const py::object& rng) {
 
 NumpyBits::~NumpyBits() { lock_.attr("release")(); }
 
-BagJob make_bags(const BagRequest& r) {
-  BagJob job;
+std::shared_ptr<const BagJob> make_bags(const BagRequest& r) {
+  if (r.checked) return r.checked;
+  auto made = std::make_shared<BagJob>();
+  BagJob& job = *made;
   job.rng = r.rng;
   const auto offsets = [](const py::handle& obj, const char* name) {
     const Int32Array a = int32_array(obj, name);
@@ -112,8 +114,10 @@ BagJob make_bags(const BagRequest& r) {
   require(spec.neg_count >= 0, "neg_count must be >= 0");
   spec.pos = job.pos.data();
   spec.neg = job.neg.data();
+  if (spec.n_neg_offsets > 0) spec.neg_extent = offsets_extent(spec.neg, spec.n_neg_offsets);
   spec.pos_terms = job.terms.empty() ? nullptr : job.terms.data();
-  return job;
+  r.checked = std::move(made);
+  return r.checked;
 }
 
 void bind_draws(py::module_& m) {
@@ -122,8 +126,8 @@ void bind_draws(py::module_& m) {
       "A BagSampler's draw, by name: the numpy Generator `rng` the negatives are drawn from;\n"
       "pos_offsets (n, 2) and their weight terms pos_terms for weights = 'exp', 'exp_sq',\n"
       "'uniform' or 'none'; neg_offsets (n, 2); exact (neg_count distinct offsets, as numpy's\n"
-      "choice) or a Bernoulli thinning with keep_prob truncated to neg_count. Checked when it\n"
-      "runs.")
+      "choice) or a Bernoulli thinning with keep_prob truncated to neg_count. Checked, and its\n"
+      "arrays copied, when it first runs: later changes to those arrays are not seen.")
       .def(py::init([](py::object rng, py::object pos_offsets, py::object pos_terms,
                        std::string weights, py::object neg_offsets, bool exact, int neg_count,
                        double keep_prob) {

@@ -52,6 +52,10 @@ struct LearnRequest {
 };
 
 // A BagSampler's draw (see _core.frame_step).
+struct BagJob;
+
+// A BagSampler's draw (see _core.frame_step). Its arrays are checked and copied on its first
+// run (`checked`), and read from that copy on every later one: a tracker makes its request once.
 struct BagRequest {
   py::object rng, pos_offsets, pos_terms;
   std::string weights = "none";
@@ -59,6 +63,7 @@ struct BagRequest {
   bool exact = false;
   int neg_count = 0;
   double keep_prob = 0.0;
+  mutable std::shared_ptr<const BagJob> checked;
 };
 
 // ---- jobs: requests checked and copied, run without the GIL --------------------------------
@@ -128,7 +133,7 @@ class NumpyBits {
   py::object lock_;
 };
 
-// BagSampler's offsets and draw settings, checked and copied.
+// BagSampler's offsets and draw settings, checked and copied (spec points into the copies).
 struct BagJob {
   py::object rng;
   std::vector<std::int32_t> pos, neg;
@@ -136,6 +141,7 @@ struct BagJob {
   BagSpec spec;
 };
 
-BagJob make_bags(const BagRequest& request);
+// The request's job, made on its first call (under the GIL) and shared from then on.
+std::shared_ptr<const BagJob> make_bags(const BagRequest& request);
 
 }  // namespace wmiltrack::bindings

@@ -157,6 +157,18 @@ std::vector<std::int64_t> bernoulli_first(BitSource& bits, std::int64_t n, doubl
   return kept;
 }
 
+Rect offsets_extent(const std::int32_t* xy, int n) {
+  if (n <= 0) throw std::invalid_argument("offsets_extent: no offsets");
+  std::int32_t x0 = xy[0], x1 = x0, y0 = xy[1], y1 = y0;
+  for (int i = 1; i < n; ++i) {
+    x0 = std::min(x0, xy[2 * i]);
+    x1 = std::max(x1, xy[2 * i]);
+    y0 = std::min(y0, xy[2 * i + 1]);
+    y1 = std::max(y1, xy[2 * i + 1]);
+  }
+  return Rect{x0, y0, x1 - x0, y1 - y0};
+}
+
 Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h, BitSource& bits) {
   Bags bags;
   std::vector<double> terms;
@@ -189,20 +201,14 @@ Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h,
   // the offsets' bounding box lies inside (the usual case, away from the frame's edges), that
   // is all of them, and they are not copied.
   const int n_off = spec.n_neg_offsets;
-  bool all_inside = n_off > 0;
-  if (all_inside) {
-    std::int32_t x0 = spec.neg[0], x1 = x0, y0 = spec.neg[1], y1 = y0;
-    for (int i = 1; i < n_off; ++i) {
-      x0 = std::min(x0, spec.neg[2 * i]);
-      x1 = std::max(x1, spec.neg[2 * i]);
-      y0 = std::min(y0, spec.neg[2 * i + 1]);
-      y1 = std::max(y1, spec.neg[2 * i + 1]);
-    }
-    all_inside = inside(static_cast<std::int64_t>(box.x) + x0, static_cast<std::int64_t>(box.y) + y0,
-                        box, frame_w, frame_h) &&
-                 inside(static_cast<std::int64_t>(box.x) + x1, static_cast<std::int64_t>(box.y) + y1,
-                        box, frame_w, frame_h);
-  }
+  const Rect e = spec.neg_extent ? *spec.neg_extent
+                                 : (n_off > 0 ? offsets_extent(spec.neg, n_off) : Rect{});
+  const bool all_inside =
+      n_off > 0 &&
+      inside(static_cast<std::int64_t>(box.x) + e.x, static_cast<std::int64_t>(box.y) + e.y, box,
+             frame_w, frame_h) &&
+      inside(static_cast<std::int64_t>(box.x) + e.x + e.w,
+             static_cast<std::int64_t>(box.y) + e.y + e.h, box, frame_w, frame_h);
   std::vector<int> inside_at;  // the candidates' offset indices (unless all_inside)
   if (!all_inside) {
     inside_at.reserve(static_cast<std::size_t>(n_off));

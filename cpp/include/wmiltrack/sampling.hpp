@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "wmiltrack/integral.hpp"
@@ -66,10 +67,17 @@ struct BagSpec {
   InstanceWeights weights = InstanceWeights::kNone;
   const std::int32_t* neg = nullptr;  // (n_neg_offsets, 2) dx, dy, row-major annulus order
   int n_neg_offsets = 0;
+  // The bounding box of the negatives' offsets (offsets_extent), made once with the spec:
+  // where it fits in the frame, every offset does. Without it each offset is checked.
+  std::optional<Rect> neg_extent;
   bool exact = true;      // exactly neg_count distinct offsets (choice); else Bernoulli
   int neg_count = 0;
   double keep_prob = 0.0;  // the Bernoulli probability
 };
+
+// The n > 0 offsets (dx, dy) of `xy` as a rectangle: (x, y) the smallest dx and dy, (x + w,
+// y + h) the largest.
+Rect offsets_extent(const std::int32_t* xy, int n);
 
 struct Bags {
   std::vector<std::int32_t> xs, ys;  // the positives' corners, then the negatives'
