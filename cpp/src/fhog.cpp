@@ -108,28 +108,15 @@ struct LumaCrop {
            int stride_y, Scratch& s)
       : r0(row0), c0(col0), rows(row1 - row0 + 1), cols(col1 - col0 + 1) {
     s.crop.resize(static_cast<std::size_t>(rows) * cols);
-    // A packed BGR frame's lattice columns are read out of the luma of the whole span of the
-    // row (luma_row's vector loop, about ten times faster a pixel than its loop over strided
-    // pixels, so cheaper up to a stride of 8); other frames' through a lattice view. The same
-    // luma either way.
-    const bool span = stride_x > 1 && stride_x <= 8 && frame.channels == 3 &&
-                      frame.col_stride == 3 && frame.channel_stride == 1;
-    const int width = span ? (cols - 1) * stride_x + 1 : cols;
-    s.luma_row.resize(static_cast<std::size_t>(width));
+    s.luma_row.resize(static_cast<std::size_t>(cols));
     ImageView lattice = frame;  // every stride_x-th column: luma_row reads them in a row
     lattice.col_stride *= stride_x;
     lattice.cols = (frame.cols - 1) / stride_x + 1;
     for (int r = 0; r < rows; ++r) {
+      luma_row(lattice, (r0 + r) * stride_y, c0, c0 + cols, s.luma_row.data());
       float* out = &s.crop[static_cast<std::size_t>(r) * cols];
       const std::uint8_t* in = s.luma_row.data();
-      if (span) {
-        const int x0 = c0 * stride_x;
-        luma_row(frame, (r0 + r) * stride_y, x0, x0 + width, s.luma_row.data());
-        for (int c = 0; c < cols; ++c) out[c] = static_cast<float>(in[static_cast<std::size_t>(c) * stride_x]);
-      } else {
-        luma_row(lattice, (r0 + r) * stride_y, c0, c0 + cols, s.luma_row.data());
-        for (int c = 0; c < cols; ++c) out[c] = static_cast<float>(in[c]);
-      }
+      for (int c = 0; c < cols; ++c) out[c] = static_cast<float>(in[c]);
     }
     values = s.crop.data();
   }

@@ -170,8 +170,9 @@ inline std::uint8_t bgr_to_gray(std::uint8_t b, std::uint8_t g, std::uint8_t r) 
 
 // bgr_to_gray() of frame row y, columns [xa, xb) (inside the frame), into out[0 .. xb - xa);
 // a 1-channel frame's bytes are copied. Packed BGR rows take SSSE3/AVX2 where the CPU has
-// them (the same bytes). The one conversion the integral image and the correlation filters'
-// patches share.
+// them (the same bytes), and so do views of every k-th column of one (k <= 8: the span is
+// converted, every k-th value kept). The one conversion the integral image and the
+// correlation filters' patches share.
 void luma_row(const ImageView& image, int y, int xa, int xb, std::uint8_t* out);
 
 }  // namespace wmiltrack
