@@ -303,11 +303,8 @@ WMILTRACK_KERNEL void fused_groups(const IntegralImage::Entry* b, const Compiled
       const V8f d = v[g] - f.centre;
       const V8f h = f.qc + d * (f.qb + f.qa * d);
       const auto exact = (d > f.lo) & (d < f.hi);
-      std::uint64_t m[4];
-      std::memcpy(m, &exact, sizeof m);
-      const bool all = ((m[0] & m[1]) & (m[2] & m[3])) == ~std::uint64_t{0};
       // Lanes outside the exact range: the guarded formula in float, lane by lane the same.
-      const V8f hf = all ? h : (exact ? h : guarded_of<V8f, V8i>(v[g], f));
+      const V8f hf = fmath::all_of(exact) ? h : (exact ? h : guarded_of<V8f, V8i>(v[g], f));
       typedef float V4f __attribute__((vector_size(16)));
       V4f h0, h1;
       std::memcpy(&h0, &hf, sizeof h0);
