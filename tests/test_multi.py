@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import multiprocessing
+import os
+
 import numpy as np
 import pytest
 
@@ -197,6 +200,18 @@ def test_one_integral_image_when_it_covers_fewer_pixels() -> None:
         mt.add(small[0], (x, y, 40, 40))
     mt.update(small[1])
     assert mt.last_shared
+    # With two threads the separate tables are built two at a time: these regions, whose union
+    # covers half their sum, are then as quick apart, and closer ones are still shared.
+    two = MultiTracker("rcwmil", seed=0, threads=2)
+    for x, y in [(100, 80), (130, 90), (110, 120)]:
+        two.add(small[0], (x, y, 40, 40))
+    two.update(small[1])
+    assert not two.last_shared
+    close = MultiTracker("rcwmil", seed=0, threads=2)
+    for x, y in [(100, 80), (105, 85), (110, 90), (102, 88)]:
+        close.add(small[0], (x, y, 40, 40))
+    close.update(small[1])
+    assert close.last_shared
     big = [rng.integers(0, 256, (720, 1280, 3), dtype=np.uint8) for _ in range(2)]
     far = MultiTracker("rcwmil", seed=0, threads=1)
     far.add(big[0], (40, 40, 40, 40))
@@ -292,3 +307,23 @@ def test_an_exact_draw_numpy_would_shuffle_stays_in_python(monkeypatch) -> None:
         mt.add(frames[0], box)
         together = [mt.update(f)[0] for f in frames[1:]]
     assert alone == together
+
+
+def _three_targets_boxes(frames: list[np.ndarray]) -> list[tuple[float, ...]]:
+    mt = MultiTracker("rcwmil", seed=0, threads=2, share="never")
+    for x, y in [(20, 20), (200, 150), (100, 80)]:
+        mt.add(frames[0], (x, y, 40, 40))
+    return [mt.update(f)[2].box for f in frames[1:]]
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork (POSIX)")
+def test_a_forked_process_gets_its_own_core_threads() -> None:
+    # The core keeps its worker threads between calls; a child forked after the parent used
+    # them has none of them and must start its own (not wait for the parent's forever).
+    rng = np.random.default_rng(0)
+    frames = [rng.integers(0, 256, (240, 320, 3), dtype=np.uint8) for _ in range(4)]
+    here = _three_targets_boxes(frames)
+    ctx = multiprocessing.get_context("fork")
+    with ctx.Pool(2) as pool:
+        there = pool.map_async(_three_targets_boxes, [frames, frames]).get(timeout=30)
+    assert there == [here, here]

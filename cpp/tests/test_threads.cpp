@@ -1,14 +1,18 @@
 // The shared-object rules of issue 12 under threads: one SharedIntegralImage recomputed by
 // writer threads while reader threads project and score on snapshots. Every reader result
-// must equal the result on one of the complete tables. Run under ThreadSanitizer by
-// scripts/sanitize.sh tsan (any data race is a report and a failure there).
+// must equal the result on one of the complete tables. Then parallel_for, whose threads stay
+// between calls, called from several threads at once: every index runs exactly once per call
+// and a job's exception reaches its caller. Run under ThreadSanitizer by scripts/sanitize.sh
+// tsan (any data race is a report and a failure there).
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
+#include "wmiltrack/frame.hpp"
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/scoring.hpp"
 #include "wmiltrack/shared.hpp"
@@ -37,6 +41,38 @@ Frame random_frame(int rows, int cols, unsigned seed) {
   Frame f{rows, cols, std::vector<std::uint8_t>(static_cast<std::size_t>(rows) * cols)};
   for (auto& p : f.pixels) p = static_cast<std::uint8_t>(d(rng));
   return f;
+}
+
+// Three threads each make 200 calls of parallel_for (n = 1..40 jobs on 1..4 threads): each call
+// must run each of its jobs once, and rethrow the exception of the job that throws. Returns the
+// number of calls that went wrong.
+int parallel_for_from_several_threads() {
+  std::atomic<int> errors{0};
+  const auto caller = [&](unsigned seed) {
+    std::mt19937 rng(seed);
+    for (int call = 0; call < 200; ++call) {
+      const int n = 1 + static_cast<int>(rng() % 40), threads = 1 + static_cast<int>(rng() % 4);
+      const int throwing = call % 7 == 0 ? static_cast<int>(rng() % static_cast<unsigned>(n)) : -1;
+      std::vector<std::atomic<int>> runs(static_cast<std::size_t>(n));
+      bool caught = false;
+      try {
+        parallel_for(n, threads, [&](int i) {
+          runs[static_cast<std::size_t>(i)]++;
+          if (i == throwing) throw std::runtime_error("job");
+        });
+      } catch (const std::runtime_error&) {
+        caught = true;
+      }
+      bool once = caught == (throwing >= 0);
+      for (const auto& r : runs) once = once && r.load() == 1;
+      if (!once) ++errors;
+    }
+  };
+  std::thread a(caller, 1u), b(caller, 2u), c(caller, 3u);
+  a.join();
+  b.join();
+  c.join();
+  return errors.load();
 }
 
 }  // namespace
@@ -96,5 +132,7 @@ int main() {
   stop = true;
   for (auto& t : threads) t.join();
   std::printf("test_threads: %d reads, %d inconsistent\n", reads.load(), bad.load());
-  return bad.load() == 0 && reads.load() > 0 ? EXIT_SUCCESS : EXIT_FAILURE;
+  const int pool_errors = parallel_for_from_several_threads();
+  std::printf("test_threads: parallel_for from 3 threads, %d errors\n", pool_errors);
+  return bad.load() == 0 && reads.load() > 0 && pool_errors == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
 }
