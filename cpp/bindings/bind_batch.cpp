@@ -48,14 +48,18 @@ py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
     searches.push_back(make_search(search_request, search));
     bag_jobs.push_back(make_bags(bags.cast<const BagRequest&>()));
   }
+  // (Two Generators may wrap one bit generator: it is its lock that each job takes.)
+  std::vector<py::object> bit_generators;
+  bit_generators.reserve(n);
+  for (const auto& job : bag_jobs) {
+    bit_generators.push_back(py::getattr(job->rng, "bit_generator", job->rng));
+  }
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = 0; j < i; ++j) {
       require(searches[i].ii != searches[j].ii || (!searches[i].frame && !searches[j].frame),
               [&] { return "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
                   " share an IntegralImage that one of them computes"; });
-      // (Two Generators may wrap one bit generator: it is its lock that each job takes.)
-      require(!py::getattr(bag_jobs[i]->rng, "bit_generator", bag_jobs[i]->rng)
-                   .is(py::getattr(bag_jobs[j]->rng, "bit_generator", bag_jobs[j]->rng)),
+      require(!bit_generators[i].is(bit_generators[j]),
               [&] { return "frame steps " + std::to_string(j) + " and " + std::to_string(i) +
                   " draw from the same generator"; });
     }

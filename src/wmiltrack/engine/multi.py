@@ -4,9 +4,9 @@ Target ``i`` (the ``i``-th successful :meth:`MultiTracker.add`) runs exactly the
 ``Tracker(variant, seed=seed + i)`` would, so its boxes are those of a single tracker started on
 the same frame with the same box. What the targets share is the per-frame work that does not
 depend on the target: the frame is checked and converted once; one integral image is built over
-the union of the targets' search regions when that covers fewer pixels than their separate
-regions (many or close targets: up to the whole frame), and every target reads it, with the
-same result as its own table; and the targets' calls into the compiled core are made together
+the union of the targets' search regions when that takes less time than their separate tables,
+which the threads build in parallel (many or close targets: up to the whole frame), and every
+target reads it, with the same result as its own table; and the targets' calls into the compiled core are made together
 (for a paper preset one call a frame for all targets, else one per step of the frame), which
 spreads them over ``threads`` threads with the GIL released
 (:func:`wmiltrack.engine.tracker.update_many`): the Python part of each target's step runs in
@@ -42,8 +42,10 @@ class MultiTracker:
         Threads for the targets' core work in :meth:`update`; ``None`` = one per core
         (``os.cpu_count()``), ``1`` = all in the calling thread.
     share : {"auto", "always", "never"}
-        One integral image for all targets: when it covers fewer pixels than the targets'
-        separate regions (``"auto"``), always, or never. Boxes are the same either way.
+        One integral image for all targets: when that takes less time than the targets'
+        separate ones (``"auto"``: the union covers fewer pixels than the separate regions
+        divided among the threads that build them), always, or never. Boxes are the same
+        either way.
     params : Params, optional
         Start from these parameters instead of the preset's defaults.
     **overrides
@@ -166,7 +168,8 @@ class MultiTracker:
     # -- internals -------------------------------------------------------------------------
     def _prepare(self, img: np.ndarray, trackers: list[Tracker]) -> _core.IntegralImage | None:
         """One luma integral image over the union of the targets' regions, or None when the
-        targets are better served by their own (fewer pixels apart, or other channels)."""
+        targets are better served by their own (their regions, divided among the threads,
+        cover fewer pixels than the union; or other channels)."""
         self.last_shared = False
         if self._share == "never" or len(trackers) < 2 or any(t.uses_channels for t in trackers):
             return None
@@ -181,8 +184,11 @@ class MultiTracker:
             return None
         ux0, uy0 = min(r[0] for r in rects), min(r[1] for r in rects)
         ux1, uy1 = max(r[2] for r in rects), max(r[3] for r in rects)
+        # The shared table is built in this thread alone; separate ones are built by each
+        # target's own core call, spread over the threads: compare what each costs in time.
         separate = sum((r[2] - r[0]) * (r[3] - r[1]) for r in rects)
-        if self._share == "auto" and (ux1 - ux0) * (uy1 - uy0) > separate:
+        workers = min(self._threads, len(rects))
+        if self._share == "auto" and (ux1 - ux0) * (uy1 - uy0) * workers > separate:
             return None
         self._shared.compute(img, (ux0, uy0, ux1 - ux0, uy1 - uy0))
         self.last_shared = True
