@@ -89,9 +89,12 @@ def milboost_select(const double[:, :] h_pos, const double[:, :] h_neg, int k,
         raise ValueError(f"k must be in 1..{M}, got {k}")
     _check_strides(h_pos, "h_pos")
     _check_strides(h_neg, "h_neg")
-    # exp(h) once per frame (numpy's exp), sample-major so the core's loops run over features.
-    Ep_a = np.exp(np.clip(np.asarray(h_pos).T, -300.0, 300.0)).copy()
-    En_a = np.exp(np.clip(np.asarray(h_neg).T, -300.0, 300.0)).copy()
+    # exp(h) once per frame (numpy's exp), sample-major so the core's loops run over features:
+    # clipped straight into the sample-major buffer, then exp in place (two passes, not four).
+    Ep_a = np.empty((h_pos.shape[1], M))
+    En_a = np.empty((h_neg.shape[1], M))
+    np.exp(np.clip(np.asarray(h_pos).T, -300.0, 300.0, out=Ep_a), out=Ep_a)
+    np.exp(np.clip(np.asarray(h_neg).T, -300.0, 300.0, out=En_a), out=En_a)
     selected = np.empty(k, dtype=np.int32)
     cdef int[::1] sel = selected
     cdef MatrixView vp = _view(h_pos), vn = _view(h_neg), ep = _view(Ep_a), en = _view(En_a)
