@@ -152,8 +152,10 @@ class MultiTracker:
         return results
 
     def close(self) -> None:
-        """Release what the tracker holds between frames: nothing since the core's threads live
-        for one call only (kept so that ``with MultiTracker(...)`` and ``close()`` still work)."""
+        """Release what the tracker holds between frames: nothing of its own. The core's
+        worker threads belong to the process (every MultiTracker and ``update_many`` call
+        shares them; they wait, idle, between calls). Kept so that ``with MultiTracker(...)``
+        and ``close()`` still work."""
 
     def __enter__(self) -> MultiTracker:
         return self
