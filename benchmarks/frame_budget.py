@@ -17,9 +17,11 @@ slightly above those of ``fps_compare.py``; the shares are what this script is f
 Stages: integral image, search (coarse and fine grids; the colour-merged grid for
 rcwmil-plus), scale search, bag sampling, projection (feature values of the bags), Gaussian
 update, log ratios, selection (the last four in one call, "learning (one call)", where the
-version has ``_core.learn``: the C++ benchmark splits it; and the search and the bag sampling
-with them, "search, bags and learning (one call)", where a paper preset's update is one
-``_core.frame_step``), colour model, glue.  The last row is the share of the update
+version has ``_core.learn``: the C++ benchmark splits it; with the bag sampling,
+"bags and learning (one call)", where the version has ``_core.learn_at`` and the preset is
+made of several parts; and the search and the bag sampling with them, "search, bags and
+learning (one call)", where a paper preset's update is one ``_core.frame_step``), colour
+model, the correlation filters' template and DSST, the lost state, glue.  The last row is the share of the update
 that holds the GIL (everything but the compiled calls that release it): what keeps two
 trackers in two threads from running twice as fast.  The same script runs on older versions of
 the package (stages it does not find are reported as 0), which is how the README's "before"
@@ -50,16 +52,18 @@ except ImportError:  # a checkout that was not installed
 import wmiltrack
 
 STAGES = ("integral", "search", "scale", "sampling", "projection", "gaussian update",
-          "log ratios", "selection", "learning (one call)", "search, bags and learning (one call)", "colour",
-          "template", "DSST", "lost state", "glue")
+          "log ratios", "selection", "learning (one call)", "bags and learning (one call)",
+          "search, bags and learning (one call)", "colour", "template", "DSST", "lost state", "glue")
 # Stages that run in compiled calls with the GIL released (the others hold it all or part of
 # the time: sampling and glue are Python and numpy, scale and colour mix both; MILBoost's
 # selection also takes numpy's exp of its inputs first, with the GIL).
 RELEASES_GIL = ("integral", "search", "projection", "gaussian update", "log ratios", "selection",
-                "learning (one call)", "search, bags and learning (one call)")
+                "learning (one call)", "bags and learning (one call)",
+                "search, bags and learning (one call)")
 # Compiled calls of wmiltrack._core and the stage each belongs to.
 CORE_STAGES = {"score_grid": "search", "search": "search", "project": "projection",
                "log_ratio": "log ratios", "learn": "learning (one call)",
+               "learn_at": "bags and learning (one call)",
                "frame_step": "search, bags and learning (one call)"}
 
 

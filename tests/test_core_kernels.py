@@ -357,6 +357,20 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     expected = _core.learn(learn(alone, np.concatenate((pos, neg)), len(pos), sampler.weights(dist, "exp")))
     for a, b in zip(learnt, expected):
         assert (a is None and b is None) or np.array_equal(a, b)
+    # learn_at: the same bags and learning at a box given by the caller (no search).
+    rng_at = np.random.default_rng(3)
+    learnt_at, (xs_at, ys_at, n_pos_at) = _core.learn_at(
+        learn(alone, empty, 0, None), _core.BagRequest(rng_at, *sampler.core_spec("exp")), landed,
+        (200, 160))
+    assert n_pos_at == n_pos and np.array_equal(xs_at, xs) and np.array_equal(ys_at, ys)
+    for a, b in zip(learnt_at, expected):
+        assert (a is None and b is None) or np.array_equal(a, b)
+    assert rng_at.bit_generator.state == rng.bit_generator.state
+    with pytest.raises(ValueError, match="same generator"):
+        same = _core.BagRequest(rng_at, *sampler.core_spec("exp"))
+        _core.learn_at_many([(learn(alone, empty, 0, None), same, landed, (200, 160))] * 2, 2)
+    with pytest.raises(ValueError, match="positive size"):
+        _core.learn_at(learn(alone, empty, 0, None), same, (0, 0, 0, 5), (200, 160))
     bags = _core.BagRequest(rng, *sampler.core_spec("exp"))
     # Without a frame the step reads the integral image as it is (one shared by several
     # targets): computed, it gives the same search; never computed, it is refused.

@@ -277,6 +277,48 @@ def test_fused_frame_step_gives_the_two_call_results(variant: str, size: tuple[i
     assert calls["frame_step_many"] == 2 * (len(frames) - 1)
 
 
+@pytest.mark.parametrize("variant", ["rcwmil-plus", "rcwmil-cf"])
+def test_learning_at_a_box_draws_the_bags_of_the_python_sampler(variant: str, monkeypatch) -> None:
+    """A preset of several parts learns with one core call that draws the bags around the
+    box it chose (``_core.learn_at``; ``learn_at_many`` for a MultiTracker's targets): the
+    same results every frame as bags sampled in Python, here with the box near the frame's
+    edges too (bags cut by them) and with the scale estimator's extra negatives."""
+    from wmiltrack.engine.sampling import BagSampler
+
+    seq = make_sequence(30, size=(120, 160), target_size=(40, 36), seed=3, occlusion=False)
+    frames = seq.load()
+    box = tuple(seq.groundtruth[0])
+    other = (4, 4, 30, 26)  # in the corner: its bags are cut by the frame
+
+    def results() -> tuple[list[wmiltrack.TrackResult], list[dict[int, wmiltrack.TrackResult]]]:
+        t = wmiltrack.Tracker(variant, seed=7)
+        t.init(frames[0], box)
+        alone = [t.update(f) for f in frames[1:]]
+        with MultiTracker(variant, seed=7, threads=2) as mt:
+            for b in (box, other):
+                mt.add(frames[0], b)
+            together = [mt.update(f) for f in frames[1:]]
+        return alone, together
+
+    calls = {"learn_at": 0, "learn_at_many": 0}
+    for name in calls:
+        original = getattr(wmiltrack._core, name)
+
+        def counting(*args, _name=name, _original=original):  # noqa: ANN001, ANN202
+            calls[_name] += 1
+            return _original(*args)
+
+        monkeypatch.setattr(wmiltrack._core, name, counting)
+    in_core = results()
+    assert calls["learn_at"] >= len(frames) - 2 and calls["learn_at_many"] >= len(frames) - 2
+    with monkeypatch.context() as m:  # the bags sampled in Python
+        m.setattr(BagSampler, "drawn_in_core", lambda self: False)
+        m.setattr(wmiltrack._core, "learn_at", None)  # must not be called
+        m.setattr(wmiltrack._core, "learn_at_many", None)
+        in_python = results()
+    assert in_core == in_python
+
+
 def test_a_numpy_whose_draws_differ_keeps_the_two_call_step(monkeypatch) -> None:
     """When the core's copies of numpy's draws do not match the installed numpy (checked once
     per process), Tracker.update samples in Python and makes two core calls: same boxes."""

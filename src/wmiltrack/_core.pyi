@@ -244,6 +244,18 @@ def frame_step_many(steps: Sequence[tuple[SearchRequest, LearnRequest, BagReques
                     threads: int) -> list[_FrameStep]:
     """frame_step() for several targets in one call, on up to `threads` threads."""
 
+_Bags = tuple[npt.NDArray[np.int32], npt.NDArray[np.int32], int]
+
+def learn_at(learn: LearnRequest, bags: BagRequest, box: tuple[int, int, int, int],
+             frame_size: tuple[int, int]) -> tuple[_Learnt, _Bags]:
+    """The bags sampled around box (numpy's draws from the request's rng), then the learning
+    on them (its extra negatives kept): (learn's result, (xs, ys, n_pos))."""
+
+def learn_at_many(steps: Sequence[tuple[LearnRequest, BagRequest, tuple[int, int, int, int],
+                                        tuple[int, int]]],
+                  threads: int) -> list[tuple[_Learnt, _Bags]]:
+    """learn_at() for several targets in one call, on up to `threads` threads."""
+
 def numpy_pcg64_stepped_here(rng: np.random.Generator) -> bool:
     """Whether the core steps this generator's PCG64 state itself for Bernoulli draws."""
 

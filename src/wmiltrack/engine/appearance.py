@@ -27,7 +27,7 @@ from .features import (
     scale_bank,
 )
 from .frames import IntBox
-from .requests import Learn, Search, Step, Steps
+from .requests import Learn, LearnAt, Search, Step, Steps
 from .sampling import BagSampler
 from .selection import milboost_select
 
@@ -207,10 +207,21 @@ class HaarAppearance:
                     extra: np.ndarray | None = None, n_extra: int = 0,
                     second: tuple[Any, ...] | None = None) -> Steps:
         """Sample the bags around ``box``, update the Gaussians and reselect the features, as
-        one core request (see :data:`~wmiltrack.engine.requests.Steps`). ``extra``: feature
+        one core request (see :data:`~wmiltrack.engine.requests.Steps`): with the tracking
+        sampler, where the core can draw as numpy would, the core samples the bags too. ``extra``: feature
         values of ``n_extra`` more negatives; ``second``: another target model the core
         updates from the same positives (``(mu, sigma, rate, first)``). Returns that model's
         ``(mu, sigma)`` (None without one)."""
+        if sampler is self.track and self.track.drawn_in_core():
+            # The core draws the bags (as the sampler would, from this model's generator) and
+            # learns in the same call.
+            select = self._select_kind(1)  # dropped by the core if no positive fits
+            request = self._learn_request(box, _NO_CORNERS, 0, select, None, extra, second)
+            learnt, (xs, ys, n_pos) = yield LearnAt(request, self._bag_request(select), box,
+                                                    frame_wh)
+            self.bags = (xs, ys, n_pos)  # split by corners() when asked
+            self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos + n_extra)
+            return learnt[6], learnt[7]
         fw, fh = frame_wh
         pos, dist = sampler.positives(box, fw, fh)
         neg = sampler.negatives(box, fw, fh, self.rng)

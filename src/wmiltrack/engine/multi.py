@@ -6,9 +6,9 @@ the same frame with the same box. What the targets share is the per-frame work t
 depend on the target: the frame is checked and converted once; one integral image is built over
 the union of the targets' search regions when that takes less time than their separate tables,
 which the threads build in parallel (many or close targets: up to the whole frame), and every
-target reads it, with the same result as its own table; and the targets' calls into the compiled core are made together
-(for a paper preset one call a frame for all targets, else one per step of the frame), which
-spreads them over ``threads`` threads with the GIL released
+target reads it, with the same result as its own table; and the targets' calls into the
+compiled core are made together (for a paper preset one call a frame for all targets, else one
+per step of the frame), which spreads them over ``threads`` threads with the GIL released
 (:func:`wmiltrack.engine.tracker.update_many`): the Python part of each target's step runs in
 the calling thread, the core's part in parallel.
 """

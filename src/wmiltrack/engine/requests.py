@@ -14,7 +14,7 @@ from typing import Any, NamedTuple
 
 from .. import _core
 
-__all__ = ["Learn", "Search", "Step", "Steps", "drive", "run", "run_batches"]
+__all__ = ["Learn", "LearnAt", "Search", "Step", "Steps", "drive", "run", "run_batches"]
 
 
 Search = _core.SearchRequest
@@ -33,15 +33,28 @@ class Step(NamedTuple):
     bags: _core.BagRequest
 
 
+class LearnAt(NamedTuple):
+    """A request for a learning step on bags the core draws around ``box``
+    (``_core.learn_at``): the second half of a :class:`Step`, for a tracker whose search and
+    scale estimate take several calls."""
+
+    learn: _core.LearnRequest
+    bags: _core.BagRequest
+    box: tuple[int, int, int, int]
+    frame_size: tuple[int, int]
+
+
 Steps = Generator[Any, Any, Any]
-"""A frame step: yields :data:`Search`, :data:`Learn` or :class:`Step` requests, receives
-their results, and returns the step's value."""
+"""A frame step: yields :data:`Search`, :data:`Learn`, :class:`Step` or :class:`LearnAt`
+requests, receives their results, and returns the step's value."""
 
 
 def run(request: Any) -> Any:
     """The core's answer to one request."""
     if isinstance(request, Step):
         return _core.frame_step(*request)
+    if isinstance(request, LearnAt):
+        return _core.learn_at(*request)
     if isinstance(request, Search):
         return _core.search(request)
     return _core.learn(request)
@@ -62,8 +75,8 @@ def run_batches(requests: dict[int, Any], threads: int) -> dict[int, Any]:
     on up to ``threads`` threads."""
     results: dict[int, Any] = {}
     order = list(requests)
-    for kind, run_many in ((Step, _core.frame_step_many), (Search, _core.search_many),
-                           (Learn, _core.learn_many)):
+    for kind, run_many in ((Step, _core.frame_step_many), (LearnAt, _core.learn_at_many),
+                           (Search, _core.search_many), (Learn, _core.learn_many)):
         batch = [i for i in order if isinstance(requests[i], kind)]
         if batch:
             results.update(zip(batch, run_many([requests[i] for i in batch], threads)))

@@ -536,7 +536,7 @@ class Tracker:
         learnt = yield from parts.appearance.learn_steps(self._box, self._frame_wh, sampler, extra,
                                                          n_extra, second)
         if parts.scale is not None:
-            parts.scale.take_learnt(learnt, len(parts.appearance.bags[0]))
+            parts.scale.take_learnt(learnt, len(parts.appearance.corners()[0]))
 
     def _check_frame(self, img: np.ndarray) -> None:
         wh = frame_size(img)
