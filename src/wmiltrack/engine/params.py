@@ -191,12 +191,13 @@ VARIANTS: dict[str, Params] = {
 }
 VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     variant="rcwmil-cf", colour_weight=0.65, template_weight=0.2, template_area=80.0**2,
-    template_cell=2, template_channels=10, template_reuse=True, scale_dsst=8.0,
-    scale_samples=17,
+    template_cell=2, template_channels=10, template_reuse=True, template_gate=0.4,
+    scale_dsst=8.0, scale_samples=17,
     description="rcwmil-plus with correlation filters on fHOG, for accuracy over speed (about "
     "half its frames per second): a translation filter over the target plus twice its mean side "
     "(Staple's template, 40 x 40 cells of 2 px, its 31 channels compressed to 10 as in ECO, "
-    "learning from its own search sample) merged into the search at 0.2 beside colour at 0.65, "
+    "learning from its own search sample on frames whose score is at least 0.4) merged into the "
+    "search at 0.2 beside colour at 0.65, "
     "and DSST's 1-D scale filter (17 samples over 1.02^-16 .. 1.02^16, as fDSST) voting, at 8 "
     "times its response divided by its peak, in rcwmil-plus's Haar scale search.",
 )
