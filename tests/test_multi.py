@@ -222,6 +222,20 @@ def test_one_integral_image_when_it_covers_fewer_pixels() -> None:
         MultiTracker("rcwmil", share="sometimes")
 
 
+def count_core_calls(monkeypatch: pytest.MonkeyPatch, *names: str) -> dict[str, int]:
+    """Calls of these ``wmiltrack._core`` functions from now on (they still run), by name."""
+    calls = dict.fromkeys(names, 0)
+    for name in names:
+        original = getattr(wmiltrack._core, name)
+
+        def counting(*args, _name=name, _original=original):  # noqa: ANN001, ANN202
+            calls[_name] += 1
+            return _original(*args)
+
+        monkeypatch.setattr(wmiltrack._core, name, counting)
+    return calls
+
+
 @pytest.mark.parametrize("size", [(360, 480), (120, 160)])
 @pytest.mark.parametrize("variant", ["rcwmil", "ct", "fct", "mil", "wmil", "osil"])
 def test_fused_frame_step_gives_the_two_call_results(variant: str, size: tuple[int, int],
@@ -261,15 +275,7 @@ def test_fused_frame_step_gives_the_two_call_results(variant: str, size: tuple[i
         m.setattr(wmiltrack._core, "frame_step", None)  # must not be called
         m.setattr(wmiltrack._core, "frame_step_many", None)
         separate, separate_two = alone(), run(2)
-    calls = {"frame_step": 0, "frame_step_many": 0}
-    for name in calls:
-        original = getattr(wmiltrack._core, name)
-
-        def counting(*args, _name=name, _original=original):  # noqa: ANN001, ANN202
-            calls[_name] += 1
-            return _original(*args)
-
-        monkeypatch.setattr(wmiltrack._core, name, counting)
+    calls = count_core_calls(monkeypatch, "frame_step", "frame_step_many")
     assert alone() == separate
     assert calls["frame_step"] == len(frames) - 1
     assert [r[0] for r in run(1)] == separate
@@ -300,15 +306,7 @@ def test_learning_at_a_box_draws_the_bags_of_the_python_sampler(variant: str, mo
             together = [mt.update(f) for f in frames[1:]]
         return alone, together
 
-    calls = {"learn_at": 0, "learn_at_many": 0}
-    for name in calls:
-        original = getattr(wmiltrack._core, name)
-
-        def counting(*args, _name=name, _original=original):  # noqa: ANN001, ANN202
-            calls[_name] += 1
-            return _original(*args)
-
-        monkeypatch.setattr(wmiltrack._core, name, counting)
+    calls = count_core_calls(monkeypatch, "learn_at", "learn_at_many")
     in_core = results()
     assert calls["learn_at"] >= len(frames) - 2 and calls["learn_at_many"] >= len(frames) - 2
     with monkeypatch.context() as m:  # the bags sampled in Python

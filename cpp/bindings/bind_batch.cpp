@@ -111,11 +111,24 @@ py::list run_bags_then_learn(std::vector<BagsThenLearn>& jobs, int threads) {
   return out;
 }
 
+// Each object of `requests` must be a T (a TypeError names the position otherwise).
+template <class T>
+void require_all(const std::vector<py::object>& requests, const char* kind) {
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    if (!py::isinstance<T>(requests[i])) {
+      throw py::type_error("request " + std::to_string(i) + " is not a " + kind);
+    }
+  }
+}
+
 py::list run_frame_steps(const std::vector<FrameStep>& steps, int threads) {
   require_threads(threads);
   std::vector<BagsThenLearn> jobs(steps.size());
   for (std::size_t i = 0; i < steps.size(); ++i) {
     const auto& [search, learn, bags] = steps[i];
+    require_all<SearchRequest>({search}, "SearchRequest");
+    require_all<LearnRequest>({learn}, "LearnRequest");
+    require_all<BagRequest>({bags}, "BagRequest");
     const auto& search_request = search.cast<const SearchRequest&>();
     const auto& learn_request = learn.cast<const LearnRequest&>();
     require(learn_request.ii.is(search_request.ii),
@@ -137,6 +150,8 @@ py::list run_learn_at(const std::vector<LearnAt>& steps, int threads) {
   std::vector<BagsThenLearn> jobs(steps.size());
   for (std::size_t i = 0; i < steps.size(); ++i) {
     const auto& [learn, bags, box, frame_size] = steps[i];
+    require_all<LearnRequest>({learn}, "LearnRequest");
+    require_all<BagRequest>({bags}, "BagRequest");
     const auto& learn_request = learn.cast<const LearnRequest&>();
     require(!learn_request.ii.is_none(), "a learning step needs an IntegralImage");
     BagsThenLearn& job = jobs[i];
@@ -149,16 +164,6 @@ py::list run_learn_at(const std::vector<LearnAt>& steps, int threads) {
     job.learn = make_learn(learn_request, learn, true);
   }
   return run_bags_then_learn(jobs, threads);
-}
-
-// Each object of `requests` must be a T (a TypeError names the position otherwise).
-template <class T>
-void require_all(const std::vector<py::object>& requests, const char* kind) {
-  for (std::size_t i = 0; i < requests.size(); ++i) {
-    if (!py::isinstance<T>(requests[i])) {
-      throw py::type_error("request " + std::to_string(i) + " is not a " + kind);
-    }
-  }
 }
 
 }  // namespace
@@ -204,9 +209,6 @@ void bind_batch(py::module_& m) {
   m.def(
       "frame_step",
       [](const py::object& search, const py::object& learn, const py::object& bags) {
-        require_all<SearchRequest>({search}, "SearchRequest");
-        require_all<LearnRequest>({learn}, "LearnRequest");
-        require_all<BagRequest>({bags}, "BagRequest");
         return py::tuple(run_frame_steps({FrameStep{search, learn, bags}}, 1)[0]);
       },
       py::arg("search"), py::arg("learn"), py::arg("bags"),
@@ -221,14 +223,7 @@ void bind_batch(py::module_& m) {
 
   m.def(
       "frame_step_many",
-      [](const std::vector<std::tuple<py::object, py::object, py::object>>& steps, int threads) {
-        for (const auto& [search, learn, bags] : steps) {
-          require_all<SearchRequest>({search}, "SearchRequest");
-          require_all<LearnRequest>({learn}, "LearnRequest");
-          require_all<BagRequest>({bags}, "BagRequest");
-        }
-        return run_frame_steps(steps, threads);
-      },
+      [](const std::vector<FrameStep>& steps, int threads) { return run_frame_steps(steps, threads); },
       py::arg("steps"), py::arg("threads"),
       "frame_step() for several targets in one call, on up to `threads` threads with the GIL\n"
       "released once: each step is a (SearchRequest, LearnRequest, BagRequest). Steps must not\n"
@@ -239,8 +234,6 @@ void bind_batch(py::module_& m) {
       "learn_at",
       [](const py::object& learn, const py::object& bags, const Box& box,
          const std::tuple<int, int>& frame_size) {
-        require_all<LearnRequest>({learn}, "LearnRequest");
-        require_all<BagRequest>({bags}, "BagRequest");
         return py::tuple(run_learn_at({LearnAt{learn, bags, box, frame_size}}, 1)[0]);
       },
       py::arg("learn"), py::arg("bags"), py::arg("box"), py::arg("frame_size"),
@@ -253,13 +246,7 @@ void bind_batch(py::module_& m) {
 
   m.def(
       "learn_at_many",
-      [](const std::vector<LearnAt>& steps, int threads) {
-        for (const auto& step : steps) {
-          require_all<LearnRequest>({std::get<0>(step)}, "LearnRequest");
-          require_all<BagRequest>({std::get<1>(step)}, "BagRequest");
-        }
-        return run_learn_at(steps, threads);
-      },
+      [](const std::vector<LearnAt>& steps, int threads) { return run_learn_at(steps, threads); },
       py::arg("steps"), py::arg("threads"),
       "learn_at() for several targets in one call, on up to `threads` threads with the GIL\n"
       "released once: each step is a (LearnRequest, BagRequest, box, frame_size). Steps must not\n"
