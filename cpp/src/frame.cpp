@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <exception>
@@ -86,11 +87,15 @@ void learn_step(const IntegralImage& ii, const FeatureBank& bank, const LearnSte
 namespace {
 
 // Threads that stay between calls of parallel_for: starting and joining a thread costs about
-// 18 us on the 2-core VM of the benchmarks, waking a waiting one about 4 us, and a
-// MultiTracker makes one to three such calls a frame. One pool serves the process; a caller
-// that finds it busy (parallel_for from two threads at once) starts its own threads, as
-// before. The pool is never destroyed (its threads wait on it until the process ends), and a
-// forked child starts a new one: the parent's threads do not exist there.
+// 18 us on the 2-core VM of the benchmarks, and waking one that sleeps on a condition variable
+// costs 20-40 us there when its core has gone idle, which is the usual case between two frames
+// of a MultiTracker (one to three such calls a frame, with the Python part of the frame in
+// between). So a waiting thread (a worker between calls, the caller waiting for the workers'
+// last jobs) first spins for up to kSpin, watching an atomic, and only then sleeps. One pool
+// serves the process; a caller that finds it busy (parallel_for from two threads at once)
+// starts its own threads, as before. The pool is never destroyed (its threads wait on it
+// until the process ends), and a forked child starts a new one: the parent's threads do not
+// exist there.
 class WorkerPool {
  public:
   // `work` on `extra` pool threads and the caller; returns once all have finished. False (and
@@ -105,22 +110,45 @@ class WorkerPool {
         ++started_;
       }
       job_ = &work;
-      wanted_ = running_ = extra;
+      wanted_ = extra;
+      running_.store(extra, std::memory_order_relaxed);
       ++generation_;
+      published_.store(generation_, std::memory_order_release);
     }
     wake_.notify_all();
     work();
-    std::unique_lock<std::mutex> lock(m_);
-    done_.wait(lock, [this] { return running_ == 0; });
+    if (!spin_until([this] { return running_.load(std::memory_order_acquire) == 0; })) {
+      std::unique_lock<std::mutex> lock(m_);
+      done_.wait(lock, [this] { return running_.load(std::memory_order_acquire) == 0; });
+    }
+    const std::lock_guard<std::mutex> lock(m_);
     job_ = nullptr;
     return true;
   }
 
  private:
+  static constexpr auto kSpin = std::chrono::microseconds(200);
+
+  // Whether done() became true within kSpin.
+  template <class Done>
+  static bool spin_until(const Done& done) {
+    const auto until = std::chrono::steady_clock::now() + kSpin;
+    for (;;) {
+      for (int i = 0; i < 64; ++i) {
+        if (done()) return true;
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+      }
+      if (std::chrono::steady_clock::now() > until) return done();
+    }
+  }
+
   void loop() {
     std::uint64_t seen = 0;
-    std::unique_lock<std::mutex> lock(m_);
     for (;;) {
+      spin_until([&] { return published_.load(std::memory_order_acquire) != seen; });
+      std::unique_lock<std::mutex> lock(m_);
       wake_.wait(lock, [&] { return generation_ != seen; });
       seen = generation_;
       if (wanted_ == 0) continue;  // enough threads took this call's work
@@ -128,8 +156,10 @@ class WorkerPool {
       const std::function<void()>* job = job_;
       lock.unlock();
       (*job)();
-      lock.lock();
-      if (--running_ == 0) done_.notify_one();
+      if (running_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+        const std::lock_guard<std::mutex> done_lock(m_);  // the caller may be about to sleep
+        done_.notify_one();
+      }
     }
   }
 
@@ -137,8 +167,10 @@ class WorkerPool {
   std::mutex m_;
   std::condition_variable wake_, done_;
   const std::function<void()>* job_ = nullptr;
-  std::uint64_t generation_ = 0;
-  int wanted_ = 0, running_ = 0;
+  std::uint64_t generation_ = 0;               // under m_
+  std::atomic<std::uint64_t> published_{0};    // generation_, for the spinning workers
+  int wanted_ = 0;                             // under m_
+  std::atomic<int> running_{0};
   unsigned started_ = 0;
 };
 
