@@ -246,7 +246,7 @@ def test_fused_frame_step_gives_the_two_call_results(variant: str, size: tuple[i
     sampled in Python instead (two core calls per target and frame) the results are the same
     every frame, in a large frame and in a small one where the bags are cut by the frame's
     edges."""
-    from wmiltrack.engine import tracker
+    from wmiltrack.engine import sampling
 
     seq = make_sequence(40, size=size, target_size=(40, 36), seed=3, occlusion=False)
     frames = seq.load()
@@ -271,7 +271,7 @@ def test_fused_frame_step_gives_the_two_call_results(variant: str, size: tuple[i
         return [t.update(f) for f in frames[1:]]
 
     with monkeypatch.context() as m:  # the two-call step: draws in Python
-        m.setattr(tracker, "core_draws_match_numpy", lambda: False)
+        m.setattr(sampling, "core_draws_match_numpy", lambda: False)
         m.setattr(wmiltrack._core, "frame_step", None)  # must not be called
         m.setattr(wmiltrack._core, "frame_step_many", None)
         separate, separate_two = alone(), run(2)
@@ -320,15 +320,30 @@ def test_learning_at_a_box_draws_the_bags_of_the_python_sampler(variant: str, mo
 def test_a_numpy_whose_draws_differ_keeps_the_two_call_step(monkeypatch) -> None:
     """When the core's copies of numpy's draws do not match the installed numpy (checked once
     per process), Tracker.update samples in Python and makes two core calls: same boxes."""
-    from wmiltrack.engine import tracker
+    from wmiltrack.engine import sampling
 
     seq = make_sequence(15, size=(240, 320), target_size=(40, 36), seed=4, occlusion=False)
     frames = seq.load()
     box = tuple(seq.groundtruth[0])
     expected = single("rcwmil", 2, frames, box)
-    monkeypatch.setattr(tracker, "core_draws_match_numpy", lambda: False)
+    monkeypatch.setattr(sampling, "core_draws_match_numpy", lambda: False)
     monkeypatch.setattr(wmiltrack._core, "frame_step", None)  # must not be called
     assert single("rcwmil", 2, frames, box) == expected
+
+
+def test_a_numpy_whose_draws_differ_samples_a_plus_preset_in_python(monkeypatch) -> None:
+    """The same rule for a preset of several parts: where the core's copies of numpy's draws
+    do not match, its learning steps take bags sampled in Python (no ``learn_at``), with the
+    same boxes as the core's draws give where they match."""
+    from wmiltrack.engine import sampling
+
+    seq = make_sequence(12, size=(240, 320), target_size=(40, 36), seed=4, occlusion=False)
+    frames = seq.load()
+    box = tuple(seq.groundtruth[0])
+    expected = single("rcwmil-plus", 2, frames, box)
+    monkeypatch.setattr(sampling, "core_draws_match_numpy", lambda: False)
+    monkeypatch.setattr(wmiltrack._core, "learn_at", None)  # must not be called
+    assert single("rcwmil-plus", 2, frames, box) == expected
 
 
 def test_an_exact_draw_numpy_would_shuffle_stays_in_python(monkeypatch) -> None:

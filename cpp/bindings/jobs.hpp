@@ -51,8 +51,7 @@ struct LearnRequest {
   py::object extra_neg = py::none(), second = py::none();
 };
 
-// A BagSampler's draw (see _core.frame_step).
-struct BagJob;
+struct BagJob;  // (below)
 
 // A BagSampler's draw (see _core.frame_step). Its arrays are checked and copied on its first
 // run (`checked`), and read from that copy on every later one: a tracker makes its request once.

@@ -109,9 +109,8 @@ class HaarAppearance:
     @property
     def can_fuse(self) -> bool:
         """Whether a whole frame step can run as one core call (:meth:`fused_step`): luma
-        features only, and negatives the core can draw exactly as numpy would (where the
-        core's copies of numpy's draws match the installed numpy:
-        :func:`~wmiltrack.engine.sampling.core_draws_match_numpy`)."""
+        features only, and negatives the core can draw exactly as numpy would
+        (:meth:`~wmiltrack.engine.sampling.BagSampler.drawn_in_core`)."""
         return self.chan_names is None and self.track.drawn_in_core()
 
     @property
@@ -215,12 +214,9 @@ class HaarAppearance:
         if sampler is self.track and self.track.drawn_in_core():
             # The core draws the bags (as the sampler would, from this model's generator) and
             # learns in the same call.
-            select = self._select_kind(1)  # dropped by the core if no positive fits
-            request = self._learn_request(box, _NO_CORNERS, 0, select, None, extra, second)
-            learnt, (xs, ys, n_pos) = yield LearnAt(request, self._bag_request(select), box,
-                                                    frame_wh)
-            self.bags = (xs, ys, n_pos)  # split by corners() when asked
-            self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos + n_extra)
+            request, bags = self._learning_on_core_bags(box, extra, second)
+            learnt, drawn = yield LearnAt(request, bags, box, frame_wh)
+            self._take_core_bags(learnt, drawn, n_extra)
             return learnt[6], learnt[7]
         fw, fh = frame_wh
         pos, dist = sampler.positives(box, fw, fh)
@@ -244,12 +240,26 @@ class HaarAppearance:
         exactly as :class:`~wmiltrack.engine.sampling.BagSampler` would) and learns. The same
         draws and state changes as a search then :meth:`learn_steps`; returns the search's
         per-stage results."""
-        select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
-        request = self._learn_request(frame_box, _NO_CORNERS, 0, select, None, None, None)
-        results, learnt, (xs, ys, n_pos) = yield Step(search, request, self._bag_request(select))
-        self.bags = (xs, ys, n_pos)  # split by corners() when asked
-        self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos)
+        request, bags = self._learning_on_core_bags(frame_box)
+        results, learnt, drawn = yield Step(search, request, bags)
+        self._take_core_bags(learnt, drawn)
         return results
+
+    def _learning_on_core_bags(self, box: IntBox, extra: np.ndarray | None = None,
+                               second: tuple[Any, ...] | None = None
+                               ) -> tuple[Learn, _core.BagRequest]:
+        """A learning request whose bags the core draws (for ``box``'s size), and that draw."""
+        select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
+        return (self._learn_request(box, _NO_CORNERS, 0, select, None, extra, second),
+                self._bag_request(select))
+
+    def _take_core_bags(self, learnt: tuple[Any, ...], drawn: tuple[Any, ...],
+                        n_extra: int = 0) -> None:
+        """Keep what a learning step on bags the core drew returned: the bags ``(xs, ys,
+        n_pos)`` (split by :meth:`corners` when asked) and the model."""
+        xs, _, n_pos = drawn
+        self.bags = drawn
+        self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos + n_extra)
 
     def _bag_request(self, select: str) -> _core.BagRequest:
         """The tracking bags' draw from this model's generator, for the core (made once)."""

@@ -134,8 +134,11 @@ class BagSampler:
     def drawn_in_core(self) -> bool:
         """Whether the core can draw this sampler's negatives as numpy would: a Bernoulli draw,
         or an exact one from at most 10 000 offsets (numpy's ``choice`` then always takes
-        Floyd's algorithm, which the core repeats; above that it may shuffle instead)."""
-        return self.mode != "exact" or self.neg_offsets.shape[0] <= 10_000
+        Floyd's algorithm, which the core repeats; above that it may shuffle instead), and
+        the core's copies of those draws match the installed numpy
+        (:func:`core_draws_match_numpy`)."""
+        small = self.mode != "exact" or self.neg_offsets.shape[0] <= 10_000
+        return small and core_draws_match_numpy()
 
     def core_spec(self, weights: str) -> tuple[Any, ...]:
         """This sampler for the core's ``frame_step`` (``bags`` without its leading ``rng``):

@@ -31,7 +31,6 @@ from .policy import ContrastScore, UpdatePolicy, confidence
 from .recovery import Redetector
 from .requests import Steps, drive, run_batches
 from .result import TrackResult
-from .sampling import core_draws_match_numpy
 from .scale import HaarScale
 from .template import CorrelationTemplate, DSSTScale
 
@@ -252,7 +251,7 @@ class Tracker:
         drive(self._learn_steps(model.first))
         self._search_log = []
         self._score = 1.0
-        self._fused = parts.appearance_only and model.can_fuse and core_draws_match_numpy()
+        self._fused = parts.appearance_only and model.can_fuse
         self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
 
