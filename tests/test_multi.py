@@ -317,33 +317,23 @@ def test_learning_at_a_box_draws_the_bags_of_the_python_sampler(variant: str, mo
     assert in_core == in_python
 
 
-def test_a_numpy_whose_draws_differ_keeps_the_two_call_step(monkeypatch) -> None:
+@pytest.mark.parametrize(("variant", "core_call"), [("rcwmil", "frame_step"),
+                                                  ("rcwmil-plus", "learn_at")])
+def test_a_numpy_whose_draws_differ_keeps_the_two_call_step(variant: str, core_call: str,
+                                                            monkeypatch) -> None:
     """When the core's copies of numpy's draws do not match the installed numpy (checked once
-    per process), Tracker.update samples in Python and makes two core calls: same boxes."""
+    per process), Tracker.update samples in Python and makes two core calls: same boxes. The
+    same for a preset of several parts: its learning steps take bags sampled in Python (no
+    ``learn_at``)."""
     from wmiltrack.engine import sampling
 
     seq = make_sequence(15, size=(240, 320), target_size=(40, 36), seed=4, occlusion=False)
     frames = seq.load()
     box = tuple(seq.groundtruth[0])
-    expected = single("rcwmil", 2, frames, box)
+    expected = single(variant, 2, frames, box)
     monkeypatch.setattr(sampling, "core_draws_match_numpy", lambda: False)
-    monkeypatch.setattr(wmiltrack._core, "frame_step", None)  # must not be called
-    assert single("rcwmil", 2, frames, box) == expected
-
-
-def test_a_numpy_whose_draws_differ_samples_a_plus_preset_in_python(monkeypatch) -> None:
-    """The same rule for a preset of several parts: where the core's copies of numpy's draws
-    do not match, its learning steps take bags sampled in Python (no ``learn_at``), with the
-    same boxes as the core's draws give where they match."""
-    from wmiltrack.engine import sampling
-
-    seq = make_sequence(12, size=(240, 320), target_size=(40, 36), seed=4, occlusion=False)
-    frames = seq.load()
-    box = tuple(seq.groundtruth[0])
-    expected = single("rcwmil-plus", 2, frames, box)
-    monkeypatch.setattr(sampling, "core_draws_match_numpy", lambda: False)
-    monkeypatch.setattr(wmiltrack._core, "learn_at", None)  # must not be called
-    assert single("rcwmil-plus", 2, frames, box) == expected
+    monkeypatch.setattr(wmiltrack._core, core_call, None)  # must not be called
+    assert single(variant, 2, frames, box) == expected
 
 
 def test_an_exact_draw_numpy_would_shuffle_stays_in_python(monkeypatch) -> None:
