@@ -12,6 +12,7 @@ import pytest
 import wmiltrack
 from wmiltrack import _core
 from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.correlation import ScaleEstimator
 from wmiltrack.engine.template import CorrelationTemplate, DSSTScale
 
 
@@ -112,6 +113,29 @@ def test_the_template_learns_only_above_its_gate(monkeypatch: pytest.MonkeyPatch
         calls.clear()
         wmiltrack.Tracker("rcwmil-plus", seed=0, template_weight=0.2, colour_weight=0.6,
                           template_gate=gate).track(frames, box)
+        assert len(calls) == expect, gate
+
+
+@pytest.mark.parametrize("scale", [{"scale_dsst": 8.0}, {"scale_model": "dsst"}],
+                         ids=["dsst vote", "dsst scale model"])
+def test_the_scale_filter_learns_only_above_the_gate(monkeypatch: pytest.MonkeyPatch,
+                                                     scale: dict[str, object]) -> None:
+    seq = make_sequence(10, size=(160, 200), target_size=(36, 30), seed=5, occlusion=False)
+    frames, box = seq.load(), tuple(seq.groundtruth[0])
+    calls: list[int] = []
+    real = ScaleEstimator.learn
+
+    def counted(self: ScaleEstimator, frame: object, centre: object, size: object,
+                rate: float | None = None, **kw: bool) -> None:
+        if rate is None:  # not init's first sample
+            calls.append(1)
+        real(self, frame, centre, size, rate, **kw)
+
+    monkeypatch.setattr(ScaleEstimator, "learn", counted)
+    for gate, expect in ((0.0, len(frames) - 1), (1.0, 0)):
+        calls.clear()
+        wmiltrack.Tracker("rcwmil-plus", seed=0, template_weight=0.2, colour_weight=0.6,
+                          template_gate=gate, **scale).track(frames, box)
         assert len(calls) == expect, gate
 
 

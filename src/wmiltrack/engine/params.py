@@ -199,7 +199,8 @@ VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     "learning from its own search sample on frames whose score is at least 0.4) merged into the "
     "search at 0.2 beside colour at 0.65, "
     "and DSST's 1-D scale filter (17 samples over 1.02^-16 .. 1.02^16, as fDSST) voting, at 8 "
-    "times its response divided by its peak, in rcwmil-plus's Haar scale search.",
+    "times its response divided by its peak, in rcwmil-plus's Haar scale search (learning, as "
+    "the translation filter, on frames whose score is at least 0.4).",
 )
 
 

@@ -57,7 +57,9 @@ class HaarScale:
         self.pool = (GaussianPool(params.replace(learning_rate=params.scale_learning_rate))
                      if params.scale_model != "ratio" else None)
         # DSST's vote on the size (scale_dsst), learnt at every template_every-th frame's box
+        # among those scored at least template_gate, as the translation filter
         self.dsst_updates, dsst = dsst_filter(params)
+        self.learn_above = params.template_gate
         self.dsst = dsst if params.scale_dsst > 0 else None
         self._voted: IntBox | None = None  # the box DSST's last vote was taken around
 

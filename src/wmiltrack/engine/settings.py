@@ -598,8 +598,9 @@ class TemplateSettings:
     template_learning_rate : float
         Weight of each new frame in the filter (Staple: 0.01).
     template_gate : float
-        The filter learns only from frames whose reported score is at least this (0: every
-        frame), so that an occluder or a drift the score notices stays out of the template.
+        The correlation filters (the template and DSST's scale filter) learn only from frames
+        whose reported score is at least this (0: every frame), so that an occluder or a drift
+        the score notices stays out of them.
     template_every : int
         The correlation filters (the template and DSST's scale filter) learn from every
         ``template_every``-th frame they may learn from (ECO's sparse updates: each learning

@@ -108,6 +108,7 @@ class DSSTScale:
         self.base_wh = base_wh
         self.frame_wh = frame_wh
         self.updates, self.estimator = dsst_filter(params)
+        self.learn_above = params.template_gate  # learns as the translation filter does
         self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
         self.given = base_wh  # the size of the box this part last gave
         self.tried: list[IntBox] = []

@@ -408,7 +408,7 @@ class Tracker:
         for cue in parts.cues:
             if score >= getattr(cue, "learn_above", 0.0):
                 cue.learn(img, self._box)
-        if parts.scale is not None:
+        if parts.scale is not None and score >= parts.scale.learn_above:
             parts.scale.learn(img, self._box)
         if parts.recovery is not None:
             parts.recovery.learn(img, self._box)
