@@ -228,6 +228,22 @@ def test_safe_name_and_ranking() -> None:
     assert ranked({"a": 0.2, "b": 0.5, "c": float("nan"), "d": 0.5}) == ["b", "d", "a", "c"]
 
 
+@pytest.mark.parametrize("n", [3, 12])
+def test_a_long_legend_goes_beside_the_curves(tmp_path: Path, n: int) -> None:
+    """With many trackers the legend would hide the curves inside the axes: the figure widens
+    and the legend moves to its right; a few keep OTB's legend inside."""
+    pytest.importorskip("matplotlib")
+    from wmiltrack.eval.metrics import SUCCESS_THRESHOLDS
+    from wmiltrack.eval.plots import plot_success
+
+    curves = {f"t{i}": np.linspace(1.0, 0.0, SUCCESS_THRESHOLDS.size) * (1 - i / 20)
+              for i in range(n)}
+    path = tmp_path / "s.png"
+    plot_success(curves, {k: float(v.mean()) for k, v in curves.items()}, path)
+    width = cv2.imread(str(path)).shape[1]
+    assert width == (592 if n > 6 else 400), width  # 7.4 or 5 inches at 80 dpi
+
+
 def test_missing_matplotlib_is_a_clear_error(
     monkeypatch: pytest.MonkeyPatch,
     dataset: tuple[Path, dict[str, np.ndarray]],

@@ -32,6 +32,10 @@ INSTALL_HINT = 'plots need matplotlib: pip install "wmiltrack[eval]"'
 
 FloatArray = npt.NDArray[np.float64]
 
+#: Up to this many curves the legend sits inside the axes (OTB's style); with more it would
+#: cover the curves, so it goes beside them.
+_LEGEND_INSIDE_MAX = 6
+
 
 def require_matplotlib() -> Any:
     """Import matplotlib's pyplot with the non-interactive Agg backend.
@@ -90,7 +94,8 @@ def _plot(
     dpi: int,
 ) -> None:
     plt = require_matplotlib()
-    fig, ax = plt.subplots(figsize=(5.0, 3.9))
+    outside = len(scores) > _LEGEND_INSIDE_MAX  # beside the axes, not over the curves
+    fig, ax = plt.subplots(figsize=(7.4 if outside else 5.0, 3.9))
     styles = ["-", "--", "-.", ":"]
     try:
         for i, name in enumerate(ranked(scores)):
@@ -108,7 +113,11 @@ def _plot(
         ax.set_ylabel(ylabel)
         ax.set_title(title, fontsize=10)
         ax.grid(True, linewidth=0.4, alpha=0.6)
-        ax.legend(loc=legend_loc, fontsize=8, framealpha=0.85)
+        if outside:
+            ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+                      fontsize=8, frameon=False)
+        else:
+            ax.legend(loc=legend_loc, fontsize=8, framealpha=0.85)
         fig.tight_layout()
         fig.savefig(os.fspath(path), dpi=dpi)
     finally:
