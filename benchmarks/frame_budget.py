@@ -21,10 +21,10 @@ version has ``_core.learn``: the C++ benchmark splits it; with the bag sampling,
 "bags and learning (one call)", where the version has ``_core.learn_at`` and the preset is
 made of several parts; and the search and the bag sampling with them, "search, bags and
 learning (one call)", where a paper preset's update is one ``_core.frame_step``), colour
-model, the correlation filters' template and DSST, the lost state, glue.  The last row is the share of the update
-that holds the GIL (everything but the compiled calls that release it): what keeps two
-trackers in two threads from running twice as fast.  The same script runs on older versions of
-the package (stages it does not find are reported as 0), which is how the README's "before"
+model, the correlation filters' template and DSST, the lost state, glue.  The last row is the
+share of the update that holds the GIL (everything but the compiled calls that release it):
+what keeps two trackers in two threads from running twice as fast.  The same script runs on
+older versions of the package (stages it does not find are reported as 0), which is how the README's "before"
 table was made.
 """
 
@@ -53,7 +53,8 @@ import wmiltrack
 
 STAGES = ("integral", "search", "scale", "sampling", "projection", "gaussian update",
           "log ratios", "selection", "learning (one call)", "bags and learning (one call)",
-          "search, bags and learning (one call)", "colour", "template", "DSST", "lost state", "glue")
+          "search, bags and learning (one call)", "colour", "template", "DSST", "lost state",
+          "glue")
 # Stages that run in compiled calls with the GIL released (the others hold it all or part of
 # the time: sampling and glue are Python and numpy, scale and colour mix both; MILBoost's
 # selection also takes numpy's exp of its inputs first, with the GIL).

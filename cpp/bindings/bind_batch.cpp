@@ -223,7 +223,9 @@ void bind_batch(py::module_& m) {
 
   m.def(
       "frame_step_many",
-      [](const std::vector<FrameStep>& steps, int threads) { return run_frame_steps(steps, threads); },
+      [](const std::vector<FrameStep>& steps, int threads) {
+        return run_frame_steps(steps, threads);
+      },
       py::arg("steps"), py::arg("threads"),
       "frame_step() for several targets in one call, on up to `threads` threads with the GIL\n"
       "released once: each step is a (SearchRequest, LearnRequest, BagRequest). Steps must not\n"

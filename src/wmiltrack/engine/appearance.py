@@ -207,10 +207,10 @@ class HaarAppearance:
                     second: tuple[Any, ...] | None = None) -> Steps:
         """Sample the bags around ``box``, update the Gaussians and reselect the features, as
         one core request (see :data:`~wmiltrack.engine.requests.Steps`): with the tracking
-        sampler, where the core can draw as numpy would, the core samples the bags too. ``extra``: feature
-        values of ``n_extra`` more negatives; ``second``: another target model the core
-        updates from the same positives (``(mu, sigma, rate, first)``). Returns that model's
-        ``(mu, sigma)`` (None without one)."""
+        sampler, where the core can draw as numpy would, the core samples the bags too.
+        ``extra``: feature values of ``n_extra`` more negatives; ``second``: another target
+        model the core updates from the same positives (``(mu, sigma, rate, first)``). Returns
+        that model's ``(mu, sigma)`` (None without one)."""
         if sampler is self.track and self.track.drawn_in_core():
             # The core draws the bags (as the sampler would, from this model's generator) and
             # learns in the same call.
