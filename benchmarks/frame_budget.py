@@ -24,8 +24,8 @@ learning (one call)", where a paper preset's update is one ``_core.frame_step``)
 model, the correlation filters' template and DSST, the lost state, glue.  The last row is the
 share of the update that holds the GIL (everything but the compiled calls that release it):
 what keeps two trackers in two threads from running twice as fast.  The same script runs on
-older versions of the package (stages it does not find are reported as 0), which is how the README's "before"
-table was made.
+older versions of the package (stages it does not find are reported as 0), which is how the
+README's "before" table was made.
 """
 
 from __future__ import annotations
