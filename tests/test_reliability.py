@@ -125,9 +125,12 @@ def track_checked(tracker: wmiltrack.Tracker, frames: Sequence[Frame], box: Any)
             return boxes, f"frame {i}: box size {(w, h)} outside the scale limits of {(w0, h0)}"
         if not (math.isfinite(r.score) and 0.0 <= r.score <= 1.0):
             return boxes, f"frame {i}: score {r.score} not in [0, 1]"
-        # ok is the score against the threshold, except in the lost state (score 0, ok False)
+        # ok is the score against the threshold (or, with a judge, its verdict), except in
+        # the lost state (score 0, ok False)
         lost = tracker.parts.lost
-        if r.ok != (r.score >= tracker.params.lost_threshold and not lost) or (lost and r.score):
+        judge = tracker.parts.judge
+        tracked = r.score >= tracker.params.lost_threshold if judge is None else not judge.lost
+        if r.ok != (tracked and not lost) or (lost and r.score):
             return boxes, f"frame {i}: ok={r.ok} disagrees with score {r.score} (lost: {lost})"
     return boxes, None
 

@@ -23,6 +23,7 @@ from .settings import (
     ClassifierSettings,
     ColourSettings,
     FeatureSettings,
+    JudgeSettings,
     MotionSettings,
     RecoverySettings,
     ScaleSettings,
@@ -37,7 +38,7 @@ __all__ = ["CONFIDENCE_OFFSET", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_
 #: The part settings a :class:`Params` is made of, in the order their fields are listed.
 PARTS: tuple[type[Any], ...] = (FeatureSettings, BagSettings, ClassifierSettings, SearchSettings,
                            ScaleSettings, MotionSettings, ColourSettings, ScoreSettings,
-                           TemplateSettings, RecoverySettings)
+                           TemplateSettings, RecoverySettings, JudgeSettings)
 
 
 @dataclass(frozen=True)
@@ -46,7 +47,7 @@ class _Named:
 
 
 @dataclass(frozen=True)
-class Params(RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings, MotionSettings, ScaleSettings,
+class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings, MotionSettings, ScaleSettings,
              SearchSettings, ClassifierSettings, BagSettings, FeatureSettings, _Named):
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
 
@@ -59,9 +60,10 @@ class Params(RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings, 
     :class:`~wmiltrack.engine.settings.MotionSettings` (the motion model),
     :class:`~wmiltrack.engine.settings.ColourSettings` (the colour cue),
     :class:`~wmiltrack.engine.settings.ScoreSettings` (the reported score and lost state),
-    :class:`~wmiltrack.engine.settings.TemplateSettings` (the correlation-filter template) and
-    :class:`~wmiltrack.engine.settings.RecoverySettings` (the lost state and re-detection).
-    The defaults of the last six leave their part out, so the paper presets run the paper's
+    :class:`~wmiltrack.engine.settings.TemplateSettings` (the correlation-filter template),
+    :class:`~wmiltrack.engine.settings.RecoverySettings` (the lost state and re-detection) and
+    :class:`~wmiltrack.engine.settings.JudgeSettings` (the judge of ``ok``).
+    The defaults of the last seven leave their part out, so the paper presets run the paper's
     code path.
 
     Attributes
@@ -84,6 +86,9 @@ class Params(RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings, 
         if self.colour_weight + self.template_weight > 1.0 + 1e-12:
             raise ValueError("colour_weight + template_weight must be <= 1 (the cues' share of the "
                              f"merged score), got {self.colour_weight} + {self.template_weight}")
+        if self.judge_memory > 0 and not (self.template_weight > 0 or self.template_motion):
+            raise ValueError("judge_memory > 0 needs the correlation-filter template "
+                             "(template_weight > 0 or template_motion)")
 
     # -- derived values ---------------------------------------------------------------------
     @property
@@ -192,7 +197,7 @@ VARIANTS: dict[str, Params] = {
 VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     variant="rcwmil-cf", colour_weight=0.65, template_weight=0.2, template_area=80.0**2,
     template_cell=2, template_channels=10, template_reuse=True, template_gate=0.4,
-    scale_dsst=8.0, scale_samples=17,
+    scale_dsst=8.0, scale_samples=17, judge_memory=3.0,
     description="rcwmil-plus with correlation filters on fHOG, for accuracy over speed (about "
     "half its frames per second): a translation filter over the target plus twice its mean side "
     "(Staple's template, 40 x 40 cells of 2 px, its 31 channels compressed to 10 as in ECO, "
@@ -200,7 +205,9 @@ VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     "search at 0.2 beside colour at 0.65, "
     "and DSST's 1-D scale filter (17 samples over 1.02^-16 .. 1.02^16, as fDSST) voting, at 8 "
     "times its response divided by its peak, in rcwmil-plus's Haar scale search (learning, as "
-    "the translation filter, on frames whose score is at least 0.4).",
+    "the translation filter, on frames whose score is at least 0.4); ok is judged with the "
+    "first frame's filter as a memory of the target: logistic(8 (score - 0.5) + 3 ln(its peak "
+    "/ 0.082)), lost after 3 frames below 0.4, found after 2 above 0.9 (boxes as without it).",
 )
 
 

@@ -55,9 +55,15 @@ class CorrelationTemplate:
             compressed=settings.template_channels, cell=settings.template_cell))
         self._searched: Location | None = None  # this frame's search, for table()
         self.confidence = math.nan
+        # The first frame's filter, never trained again, when the judge of ``ok`` reads it.
+        self.remembers = settings.judge_memory > 0
+        self._first: CorrelationFilter | None = None
+        self.first_peak = math.nan  # its peak on this frame's search sample
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
         self.filter.init(frame, box)
+        if self.remembers:
+            self._first = self.filter.copy()
 
     # -- motion model ---------------------------------------------------------------------
     def origin(self, box: IntBox, frame: np.ndarray | None = None) -> IntBox:
@@ -69,6 +75,8 @@ class CorrelationTemplate:
         loc = self.filter.locate(frame, _centre(box), (box[2], box[3]))
         self._searched = loc
         self.confidence = loc.peak
+        if self._first is not None:
+            self.first_peak = self._first.recall(self.filter)[0]
         if not self.moves:
             return box
         return centred(box, box[2], box[3], loc.dx, loc.dy)

@@ -25,6 +25,7 @@ from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
 from .cues import ColourCue, Cue
 from .frames import IntBox, as_frame, clip_box, frame_size
+from .judge import LostJudge
 from .motion import VelocityMotion
 from .params import Params
 from .policy import ContrastScore, UpdatePolicy, confidence
@@ -69,13 +70,15 @@ class Parts:
     motion: VelocityMotion | CorrelationTemplate | None
     policy: UpdatePolicy
     recovery: Redetector | None = None
+    judge: LostJudge | None = None
+    template: CorrelationTemplate | None = None  # (the judge reads its first-frame filter)
 
     @property
     def appearance_only(self) -> bool:
         """Whether nothing but the appearance model (and the paper's policy) makes up the
         tracker, so that a frame can run as one core call."""
         return (not self.cues and self.scale is None and self.motion is None
-                and self.recovery is None and self.policy.plain)
+                and self.recovery is None and self.policy.plain and self.judge is None)
 
     @property
     def lost(self) -> bool:
@@ -122,7 +125,9 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
     if (params.score_colour > 0 and colour is not None) or params.score_luma > 0:
         report = ContrastScore(params, colour.model if colour is not None else None, None)
     recovery = Redetector(params) if params.redetect else None
-    return Parts(appearance, all_cues, scale, motion, UpdatePolicy(params, report), recovery)
+    judge = LostJudge(params, params) if params.judge_memory > 0 else None
+    return Parts(appearance, all_cues, scale, motion, UpdatePolicy(params, report), recovery,
+                 judge, template)
 
 
 def _start_report(report: ContrastScore, params: Params, frame: np.ndarray, box: IntBox) -> None:
@@ -251,6 +256,7 @@ class Tracker:
         drive(self._learn_steps(model.first))
         self._search_log = []
         self._score = 1.0
+        self._ok = True
         self._fused = parts.appearance_only and model.can_fuse
         self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
@@ -346,9 +352,11 @@ class Tracker:
         parts, p, wh = self._parts, self._params, self._frame_wh
         model = parts.appearance
         previous = self._box
+        if parts.template is not None:
+            parts.template.first_peak = math.nan  # until its search on this frame
         if parts.lost:
             self._score = yield from self._redetect_steps(img, previous)
-            return self._result()
+            return self._report()
         origin = self._origin(img)
         margin = self._margin()
         roi = roi_around(origin, margin)
@@ -372,13 +380,23 @@ class Tracker:
             self._score = score
         finally:
             model.ii = own  # a shared table is only borrowed for this frame
+        return self._report()
+
+    def _report(self) -> TrackResult:
+        """The end of a frame: whether it counts as tracked (the policy's threshold, or the
+        judge's verdict), and the result."""
+        parts = self._parts
+        if parts.judge is not None and parts.template is not None:
+            tracked = parts.judge.verdict(self._score, parts.template.first_peak)
+        else:
+            tracked = parts.policy.tracked(self._score)
+        self._ok = tracked and not parts.lost
         return self._result()
 
     def _result(self) -> TrackResult:
         """The last frame's result: the box, the score, and whether it counts as tracked."""
         x, y, w, h = self._box
-        ok = self._parts.policy.tracked(self._score) and not self._parts.lost
-        return TrackResult((float(x), float(y), float(w), float(h)), self._score, ok)
+        return TrackResult((float(x), float(y), float(w), float(h)), self._score, self._ok)
 
     def _composed_steps(self, img: np.ndarray, search: Any, origin: IntBox,
                         previous: IntBox) -> Steps:

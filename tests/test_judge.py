@@ -1,0 +1,68 @@
+"""The judge of ``ok`` (rcwmil-cf): a first-frame filter as a memory of the target, blended
+with the reported score, with hysteresis; only ``ok`` changes, never a box."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import wmiltrack
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.judge import LostJudge
+from wmiltrack.engine.settings import JudgeSettings, ScoreSettings
+
+
+def _judge(**kw: float) -> LostJudge:
+    return LostJudge(JudgeSettings(judge_memory=3.0, **kw), ScoreSettings())  # type: ignore[arg-type]
+
+
+def test_judged_confidence_is_the_documented_logistic() -> None:
+    j = _judge()
+    assert j.judged(0.5, 0.082) == pytest.approx(0.5)
+    z = 8.0 * (0.7 - 0.5) + 3.0 * math.log(0.2 / 0.082)
+    assert j.judged(0.7, 0.2) == pytest.approx(1.0 / (1.0 + math.exp(-z)))
+    assert math.isnan(j.judged(0.7, math.nan))
+
+
+def test_lost_after_three_low_frames_in_a_row_and_back_after_two_high() -> None:
+    j = _judge()
+    low, high, middling = (0.1, 0.01), (0.9, 0.5), (0.55, 0.09)
+    assert j.verdict(*low) and j.verdict(*low)
+    assert j.verdict(*middling)  # breaks the run: not lost yet
+    assert j.verdict(*low) and j.verdict(*low)
+    assert not j.verdict(*low)  # the third low frame in a row
+    assert not j.verdict(*middling) and not j.verdict(*high)
+    assert not j.verdict(*low)  # a low frame breaks the run of high ones
+    assert not j.verdict(*high)
+    assert j.verdict(*high)  # the second high frame in a row
+    assert j.verdict(0.9, math.nan)  # a frame without the filter's search changes nothing
+
+
+def test_settings_are_checked() -> None:
+    with pytest.raises(ValueError, match="judge_low"):
+        JudgeSettings(judge_low=0.9, judge_high=0.4)
+    with pytest.raises(ValueError, match="judge_enter"):
+        JudgeSettings(judge_enter=0)
+    with pytest.raises(ValueError, match="needs the correlation-filter template"):
+        wmiltrack.Tracker("rcwmil-plus", judge_memory=3.0)
+
+
+def _run(seq: object, **kw: float) -> tuple[np.ndarray, np.ndarray]:
+    frames, gt = seq.load(), seq.groundtruth  # type: ignore[attr-defined]
+    t = wmiltrack.Tracker("rcwmil-cf", seed=0, **kw)
+    t.init(frames[0], tuple(gt[0]))
+    rs = [t.update(f) for f in frames[1:]]
+    return np.array([r.box for r in rs]), np.array([r.ok for r in rs])
+
+
+def test_the_judge_changes_ok_only_and_flags_a_target_out_of_view() -> None:
+    seq = make_sequence(120, seed=2, out_of_view=(50, 30))
+    boxes, ok = _run(seq)
+    plain_boxes, plain_ok = _run(seq, judge_memory=0.0)
+    assert np.array_equal(boxes, plain_boxes)
+    assert not np.array_equal(ok, plain_ok)  # the verdicts do differ
+    gone = ok[49 + 3:49 + 30]  # update i is frame i + 1; the judge waits 3 frames
+    assert (~gone).mean() >= 0.8
+    assert ok[:45].all()  # the target in view and tracked from the start
