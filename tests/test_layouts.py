@@ -14,7 +14,6 @@ import cv2
 import numpy as np
 import pytest
 
-from wmiltrack.data.layouts import uav
 from wmiltrack.data.layouts import (
     LayoutError,
     detect_layout,
@@ -22,6 +21,7 @@ from wmiltrack.data.layouts import (
     load_layout,
     parse_vot_region,
     polygon_to_box,
+    uav,
 )
 from wmiltrack.data.sequences import Sequence
 
