@@ -158,12 +158,6 @@ class _UavSubset:
     splits: dict[str, tuple[str, int, int]]
 
 
-_UAV_FAMILY = {
-    "uav123": _UavSubset("uav123", "UAV123", "UAV123", UAV123_SPLITS),
-    "uav123_10fps": _UavSubset("uav123_10fps", "UAV123_10fps", "UAV123_10fps", UAV123_10FPS_SPLITS),
-    # UAV20L annotates whole folders of the 30 fps release (configSeqs.m: startFrame 1).
-    "uav20l": _UavSubset("uav20l", "UAV20L", "UAV123", {}),
-}
 _CONFIG_SEQS = "configSeqs.m"
 
 
@@ -383,8 +377,7 @@ def _load_uav(root: Path, subset: _UavSubset, name: str) -> Sequence:
     return make_sequence(name, frames, gt, absent_rows(gt), meta)
 
 
-def _index_uav(key: str, root: Path) -> list[Entry] | None:
-    subset = _UAV_FAMILY[key]
+def _index_uav(subset: _UavSubset, root: Path) -> list[Entry] | None:
     r = _uav_root(root, subset)
     if r is None:
         return None
@@ -400,7 +393,7 @@ def _uav_layout(subset: _UavSubset, title: str, expected: str, aliases: tuple[st
             name=subset.layout,
             title=title,
             expected=expected,
-            index=partial(_index_uav, subset.layout),
+            index=partial(_index_uav, subset),
             aliases=aliases,
             order=10,  # the most specific structure: asked first, in this order
         )
@@ -408,21 +401,22 @@ def _uav_layout(subset: _UavSubset, title: str, expected: str, aliases: tuple[st
 
 
 UAV123 = _uav_layout(
-    _UAV_FAMILY["uav123"],
+    _UavSubset("uav123", "UAV123", "UAV123", UAV123_SPLITS),
     "UAV123",
     "data_seq/UAV123/<folder>/000001.jpg and anno/UAV123/<seq>.txt",
     ("uav",),
 )
 UAV123_10FPS = _uav_layout(
-    _UAV_FAMILY["uav123_10fps"],
+    _UavSubset("uav123_10fps", "UAV123_10fps", "UAV123_10fps", UAV123_10FPS_SPLITS),
     "UAV123_10fps",
     "data_seq/UAV123_10fps/<folder>/000001.jpg and anno/UAV123_10fps/<seq>.txt "
     "(configSeqs.m beside them gives each sequence's folder and frames)",
     ("uav123-10fps", "uav123_10", "uav10fps"),
 )
-# Found when the release has no anno/UAV123 (a folder with both is UAV123).
+# UAV20L annotates whole folders of the 30 fps release (configSeqs.m: startFrame 1). Detected
+# when the release has no anno/UAV123 (a folder with both is UAV123).
 UAV20L = _uav_layout(
-    _UAV_FAMILY["uav20l"],
+    _UavSubset("uav20l", "UAV20L", "UAV123", {}),
     "UAV20L",
     "data_seq/UAV123/<seq>/000001.jpg and anno/UAV20L/<seq>.txt",
     ("uav-20l",),
