@@ -101,14 +101,7 @@ def default_rows(preset: str = "rcwmil-plus") -> dict[str, str]:
     return rows
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ablation; print the markdown table; return the exit status."""
-    from wmiltrack.data.sequences import default_otb_root, list_otb_sequences, load_otb_sequence
-    from wmiltrack.eval.pipeline import run_eval
-    from wmiltrack.eval.runner import run_sequence
-    from wmiltrack.executors import set_cv_threads
-    from wmiltrack.trackers import available_opencv_trackers
-
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
     ap.add_argument("--otb", type=Path, default=None, help="OTB folder (default $WMILTRACK_OTB "
                     "or ../shared/data/otb)")
@@ -124,8 +117,57 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--fps-repeats", type=int, default=3)
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
-    args = ap.parse_args(argv)
+    return ap
 
+
+def _aucs(root: Path, rows: dict[str, str], seeds: list[int], names: list[str] | None,
+          args: argparse.Namespace) -> dict[str, list[float]]:
+    """Mean AUC over the sequences, per row and seed: one run_eval per seed over every row (the
+    pipeline's own conventions)."""
+    from wmiltrack.eval.pipeline import run_eval
+
+    auc: dict[str, list[float]] = {title: [] for title in rows}
+    with tempfile.TemporaryDirectory() as tmp:
+        for seed in seeds:
+            doc = run_eval(root, Path(tmp) / f"seed{seed}", trackers=list(rows.values()),
+                           sequences=names, jobs=args.jobs, repeats=1, seed=seed, plots=False,
+                           show_progress=not args.no_progress)
+            for title, s in rows.items():
+                per_seq = doc["results"][s]
+                auc[title].append(float(np.mean([v["runs"][0]["auc"] for v in per_seq.values()])))
+    return auc
+
+
+def _fps(paths: list[Path], timed: dict[str, str], args: argparse.Namespace) -> dict[str, float]:
+    """Update FPS of every configuration on the same frames, in this process, interleaved."""
+    from wmiltrack.data.sequences import load_otb_sequence
+    from wmiltrack.eval.runner import run_sequence
+
+    clips = []
+    for path in paths:
+        if path.name in args.fps_sequences.split(","):
+            seq = load_otb_sequence(path)
+            frames = seq.load()[: args.fps_frames]
+            clips.append((frames, np.asarray(seq.groundtruth, dtype=np.float64)[0]))
+    if not clips:
+        return {}
+    per: dict[str, list[float]] = {t: [] for t in timed}
+    for _ in range(args.fps_repeats):
+        for title, s in timed.items():
+            n = sum(len(f) - 1 for f, _ in clips)
+            seconds = sum((len(f) - 1) / run_sequence(s, f, box, seed=0, raise_errors=True).fps
+                          for f, box in clips)
+            per[title].append(n / seconds)
+    return {t: statistics.median(v) for t, v in per.items()}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ablation; print the markdown table; return the exit status."""
+    from wmiltrack.data.sequences import default_otb_root, list_otb_sequences
+    from wmiltrack.executors import set_cv_threads
+    from wmiltrack.trackers import available_opencv_trackers
+
+    args = _parser().parse_args(argv)
     root = args.otb or default_otb_root()
     paths = list_otb_sequences(root)
     if not paths:
@@ -142,37 +184,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     seeds = [int(s) for s in args.seeds.split(",")]
     names = [s.strip() for s in args.sequences.split(",")] if args.sequences else None
 
-    # AUC: one run_eval per seed over every row (the pipeline's own conventions)
-    auc: dict[str, list[float]] = {title: [] for title in rows}
-    with tempfile.TemporaryDirectory() as tmp:
-        for seed in seeds:
-            doc = run_eval(root, Path(tmp) / f"seed{seed}", trackers=list(rows.values()),
-                           sequences=names, jobs=args.jobs, repeats=1, seed=seed, plots=False,
-                           show_progress=not args.no_progress)
-            for title, s in rows.items():
-                per_seq = doc["results"][s]
-                auc[title].append(float(np.mean([v["runs"][0]["auc"] for v in per_seq.values()])))
-
-    # FPS: the same frames for every configuration, in this process, interleaved
+    auc = _aucs(root, rows, seeds, names, args)
     set_cv_threads(1)
     peers = [f"opencv:{n}" for n in ("MIL", "CSRT") if n in available_opencv_trackers()]
-    timed = {**rows, **{p: p for p in peers}}
-    clips = []
-    for path in paths:
-        if path.name in args.fps_sequences.split(","):
-            seq = load_otb_sequence(path)
-            frames = seq.load()[: args.fps_frames]
-            clips.append((frames, np.asarray(seq.groundtruth, dtype=np.float64)[0]))
-    fps: dict[str, float] = {}
-    if clips:
-        per: dict[str, list[float]] = {t: [] for t in timed}
-        for _ in range(args.fps_repeats):
-            for title, s in timed.items():
-                n = sum(len(f) - 1 for f, _ in clips)
-                seconds = sum((len(f) - 1) / run_sequence(s, f, box, seed=0, raise_errors=True).fps
-                              for f, box in clips)
-                per[title].append(n / seconds)
-        fps = {t: statistics.median(v) for t, v in per.items()}
+    fps = _fps(paths, {**rows, **{p: p for p in peers}}, args)
 
     print(f"\nrcwmil-plus ablation: {len(paths) if names is None else len(names)} sequences of "
           f"{root}, seeds {args.seeds}; mean AUC over sequences, then over seeds; update FPS on "

@@ -25,7 +25,6 @@ import argparse
 import importlib.util
 import math
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -45,6 +44,7 @@ from wmiltrack.engine.correlation import (
 )
 from wmiltrack.eval.metrics import iou, ope_metrics
 from wmiltrack.progress import progress
+from wmiltrack.timing import gc_paused, timed
 
 CONFIDENCES = ("peak", "psr", "apce")
 RELATIVE_RATE = 0.05  # running mean of a confidence over earlier frames, for the "rel" rows
@@ -155,10 +155,9 @@ def main(argv: list[str] | None = None) -> int:
         gt = seq.groundtruth
         if gt is None:
             ap.error(f"{seq.name} has no ground truth")
-        t0 = time.perf_counter()
-        boxes, conf = track(frames, np.asarray(seq.init_box), settings, scale_settings,
-                            not args.no_scale, args.learn_every)
-        dt = time.perf_counter() - t0
+        with gc_paused():
+            (boxes, conf), dt = timed(track, frames, np.asarray(seq.init_box), settings,
+                                      scale_settings, not args.no_scale, args.learn_every)
         ious.append(iou(boxes[1:], gt[1:]))
         rel = np.stack([relative(conf[:, k]) for k in range(conf.shape[1])], axis=1)
         confs.append(np.concatenate([conf, rel], axis=1)[1:])

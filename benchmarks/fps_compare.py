@@ -43,7 +43,9 @@ import statistics
 import sys
 import time
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -76,8 +78,7 @@ def _fmt(v: float, spec: str = ".0f") -> str:
     return "-" if v is None or math.isnan(v) else format(v, spec)
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the comparison; return the exit status."""
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
     ap.add_argument(
         "--quick",
@@ -120,6 +121,141 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="with --otb: comma-separated sequence names (default %(default)s)",
     )
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    return ap
+
+
+def _trackers(ap: argparse.ArgumentParser, chosen: str | None) -> list[str]:
+    """The trackers to run: every variant and available OpenCV tracker, or the --trackers
+    subset (checked) plus the reference."""
+    cv_names = available_opencv_trackers()
+    for n in OPENCV_TRACKERS:
+        if n not in cv_names:
+            print(f"note: opencv:{n} skipped (not in this cv2)", file=sys.stderr)
+    trackers = list(VARIANTS) + [f"opencv:{n}" for n in cv_names]
+    if not chosen:
+        return trackers
+    wanted = split_specs(chosen)
+    known = list(VARIANTS) + [f"opencv:{n}" for n in OPENCV_TRACKERS]
+
+    def valid(spec: str) -> bool:
+        if spec in known or spec.startswith("opencv:"):
+            return spec in known
+        try:  # a variant with settings, e.g. rcwmil-plus:template_weight=0.2
+            name, _ = parse_spec(spec)
+        except ValueError:
+            return False
+        return name in VARIANTS
+
+    unknown = [t for t in wanted if not valid(t)]  # unavailable OpenCV ones: noted above
+    if unknown:
+        ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)} "
+                 "(a variant may carry settings: variant:name=value:...)")
+    specs = [t for t in wanted if not t.startswith("opencv:")]
+    return specs + [t for t in trackers if t.startswith("opencv:") and (t in wanted or t == REFERENCE)]
+
+
+def _clips(ap: argparse.ArgumentParser, args: argparse.Namespace, n_frames: int) -> list[tuple[str, Any]]:
+    """(column name, sequence) pairs: the --otb sequences, or generated ones per size."""
+    from wmiltrack.data.synthetic import make_sequence
+
+    if args.otb is not None:
+        from wmiltrack.data.sequences import default_otb_root, load_otb_sequence
+
+        root = Path(args.otb) if args.otb else default_otb_root()
+        names = [n.strip() for n in args.sequences.split(",") if n.strip()]
+        missing = [n for n in names if not (root / n).is_dir()]
+        if missing:
+            ap.error(f"--otb: no sequence {', '.join(missing)} under {root}")
+        return [(n, load_otb_sequence(root / n)) for n in names]
+    sizes_txt = args.sizes or ("320x240,640x480" if args.quick else "320x240,640x480,1280x720")
+    boxes_txt = args.boxes or ("32,64" if args.quick else "32,64,128")
+    sizes = [tuple(int(v) for v in s.lower().split("x")) for s in sizes_txt.split(",")]
+    box_sizes = [int(b) for b in boxes_txt.split(",")]
+    return [
+        (f"{w}x{h}/{b}",
+         make_sequence(n_frames, size=(h, w), target_size=(b, b), seed=1,
+                       name=f"synthetic-{w}x{h}/{b}"))
+        for (w, h) in sizes for b in box_sizes
+    ]
+
+
+@dataclass
+class _Figures:
+    """Per tracker and column: median FPS, mean IoU of the first round, every round's FPS."""
+
+    fps: dict[str, dict[str, float]]
+    ious: dict[str, dict[str, float]]
+    runs: dict[str, dict[str, list[float]]]
+    lengths: dict[str, int]
+
+
+def _measure(clips: list[tuple[str, Any]], trackers: list[str], n_frames: int, repeats: int,
+             gray: bool, t_start: float) -> _Figures:
+    """Every tracker over every clip's first n_frames, repeats rounds, trackers interleaved."""
+    import cv2
+
+    from wmiltrack.eval.metrics import ope_metrics
+    from wmiltrack.eval.runner import run_sequence
+    from wmiltrack.eval.scoring import scored_boxes
+
+    out = _Figures({t: {} for t in trackers}, {t: {} for t in trackers}, {t: {} for t in trackers}, {})
+    for key, seq in clips:
+        frames = list(itertools.islice(seq, n_frames))  # a real sequence: only these decoded
+        out.lengths[key] = len(frames)
+        if gray:
+            frames = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
+        assert seq.groundtruth is not None
+        gt = np.asarray(seq.groundtruth, dtype=np.float64)[: len(frames)]
+        per: dict[str, list[float]] = {t: [] for t in trackers}
+        for r in range(repeats):
+            for t in trackers:
+                run = run_sequence(t, frames, gt[0], seed=0, raise_errors=True)
+                per[t].append(run.fps)
+                if r == 0:  # same seed every round: the rounds repeat the timing only
+                    boxes = scored_boxes(run.boxes, run.oks, missing="hold")
+                    out.ious[t][key] = ope_metrics(boxes[1:], gt[1:]).mean_iou
+        for t in trackers:
+            vals = [v for v in per[t] if not math.isnan(v)]
+            out.fps[t][key] = statistics.median(vals) if vals else math.nan
+            out.runs[t][key] = per[t]
+        print(f"  {key}: done ({time.perf_counter() - t_start:.0f} s)", file=sys.stderr)
+    return out
+
+
+def _add_all_column(fig: _Figures, trackers: list[str], keys: list[str]) -> None:
+    """Every sequence's frames over every sequence's update time (each at its median)."""
+    frames_total = sum(fig.lengths[k] - 1 for k in keys)
+    for t in trackers:
+        secs = [(fig.lengths[k] - 1) / fig.fps[t][k] for k in keys]
+        fig.fps[t]["all"] = frames_total / sum(secs) if all(x > 0 for x in secs) else math.nan
+        fig.ious[t]["all"] = float(np.mean([fig.ious[t][k] for k in keys]))
+
+
+def _print_tables(fig: _Figures, trackers: list[str], keys: list[str], by_sequence: bool) -> None:
+    head = "| Tracker | " + " | ".join(keys) + " |"
+    rule = "|---|" + "---:|" * len(keys)
+    print("\nUpdate-only FPS (median of runs) and, in brackets, mean IoU on the same frames,")
+    print("by sequence:\n" if by_sequence else "by frame size / box size:\n")
+    print(head)
+    print(rule)
+    for t in trackers:
+        cells = [f"{_fmt(fig.fps[t][k])} ({_fmt(fig.ious[t][k], '.2f')})" for k in keys]
+        print(f"| {t} | " + " | ".join(cells) + " |")
+    if REFERENCE in fig.fps:
+        print("\nRatio to OpenCV TrackerMIL on the same frames, same process, same run:\n")
+        print(head)
+        print(rule)
+        for t in trackers:
+            ref = fig.fps[REFERENCE]
+            ratios = [fig.fps[t][k] / ref[k] if ref[k] > 0 else math.nan for k in keys]
+            print(f"| {t} | " + " | ".join(_fmt(x, ".1f") for x in ratios) + " |")
+    else:
+        print(f"\n(no ratios: {REFERENCE} is not available)")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the comparison; return the exit status."""
+    ap = _parser()
     args = ap.parse_args(argv)
     if args.portable:
         from wmiltrack import _core
@@ -130,46 +266,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     import cv2
 
-    from wmiltrack.data.synthetic import make_sequence
-    from wmiltrack.eval.metrics import ope_metrics
     from wmiltrack.eval.report import cpu_model
-    from wmiltrack.eval.runner import run_sequence
-    from wmiltrack.eval.scoring import scored_boxes
     from wmiltrack.executors import set_cv_threads
 
     set_cv_threads(args.cv_threads)
     n_frames = args.frames or (120 if args.otb is not None else 30 if args.quick else 60)
     repeats = args.repeats or (2 if args.quick else 3)
-    sizes_txt = args.sizes or ("320x240,640x480" if args.quick else "320x240,640x480,1280x720")
-    boxes_txt = args.boxes or ("32,64" if args.quick else "32,64,128")
-    sizes = [tuple(int(v) for v in s.lower().split("x")) for s in sizes_txt.split(",")]
-    box_sizes = [int(b) for b in boxes_txt.split(",")]
-
-    cv_names = available_opencv_trackers()
-    for n in OPENCV_TRACKERS:
-        if n not in cv_names:
-            print(f"note: opencv:{n} skipped (not in this cv2)", file=sys.stderr)
-    trackers = list(VARIANTS) + [f"opencv:{n}" for n in cv_names]
-    if args.trackers:
-        wanted = split_specs(args.trackers)
-        known = list(VARIANTS) + [f"opencv:{n}" for n in OPENCV_TRACKERS]
-
-        def valid(spec: str) -> bool:
-            if spec in known or spec.startswith("opencv:"):
-                return spec in known
-            try:  # a variant with settings, e.g. rcwmil-plus:template_weight=0.2
-                name, _ = parse_spec(spec)
-            except ValueError:
-                return False
-            return name in VARIANTS
-
-        unknown = [t for t in wanted if not valid(t)]  # unavailable OpenCV ones: noted above
-        if unknown:
-            ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)} "
-                     "(a variant may carry settings: variant:name=value:...)")
-        specs = [t for t in wanted if not t.startswith("opencv:")]
-        trackers = specs + [t for t in trackers if t.startswith("opencv:")
-                            and (t in wanted or t == REFERENCE)]
+    trackers = _trackers(ap, args.trackers)
 
     dist, ver = installed_opencv()
     simd = simd_path()
@@ -182,75 +285,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         "update-only FPS; every tracker timed in this process"
     )
 
-    if args.otb is not None:
-        from wmiltrack.data.sequences import default_otb_root, load_otb_sequence
-
-        root = Path(args.otb) if args.otb else default_otb_root()
-        names = [n.strip() for n in args.sequences.split(",") if n.strip()]
-        missing = [n for n in names if not (root / n).is_dir()]
-        if missing:
-            ap.error(f"--otb: no sequence {', '.join(missing)} under {root}")
-        clips = [(n, load_otb_sequence(root / n)) for n in names]
-    else:
-        clips = [
-            (f"{w}x{h}/{b}",
-             make_sequence(n_frames, size=(h, w), target_size=(b, b), seed=1,
-                           name=f"synthetic-{w}x{h}/{b}"))
-            for (w, h) in sizes for b in box_sizes
-        ]
-    fps: dict[str, dict[str, float]] = {t: {} for t in trackers}
-    ious: dict[str, dict[str, float]] = {t: {} for t in trackers}
-    runs: dict[str, dict[str, list[float]]] = {t: {} for t in trackers}
-    lengths: dict[str, int] = {}
+    clips = _clips(ap, args, n_frames)
     t_start = time.perf_counter()
-    for key, seq in clips:
-        frames = list(itertools.islice(seq, n_frames))  # a real sequence: only these decoded
-        lengths[key] = len(frames)
-        if args.gray:
-            frames = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in frames]
-        assert seq.groundtruth is not None
-        gt = np.asarray(seq.groundtruth, dtype=np.float64)[: len(frames)]
-        per: dict[str, list[float]] = {t: [] for t in trackers}
-        for r in range(repeats):
-            for t in trackers:
-                run = run_sequence(t, frames, gt[0], seed=0, raise_errors=True)
-                per[t].append(run.fps)
-                if r == 0:  # same seed every round: the rounds repeat the timing only
-                    boxes = scored_boxes(run.boxes, run.oks, missing="hold")
-                    ious[t][key] = ope_metrics(boxes[1:], gt[1:]).mean_iou
-        for t in trackers:
-            vals = [v for v in per[t] if not math.isnan(v)]
-            fps[t][key] = statistics.median(vals) if vals else math.nan
-            runs[t][key] = per[t]
-        print(f"  {key}: done ({time.perf_counter() - t_start:.0f} s)", file=sys.stderr)
-
+    fig = _measure(clips, trackers, n_frames, repeats, args.gray, t_start)
     keys = [key for key, _ in clips]
-    if args.otb is not None:  # every sequence's frames over every sequence's update time
-        frames_total = sum(lengths[k] - 1 for k in keys)
-        for t in trackers:
-            secs = [(lengths[k] - 1) / fps[t][k] for k in keys]
-            fps[t]["all"] = frames_total / sum(secs) if all(x > 0 for x in secs) else math.nan
-            ious[t]["all"] = float(np.mean([ious[t][k] for k in keys]))
+    if args.otb is not None:
+        _add_all_column(fig, trackers, keys)
         keys.append("all")
-    head = "| Tracker | " + " | ".join(keys) + " |"
-    rule = "|---|" + "---:|" * len(keys)
-    print("\nUpdate-only FPS (median of runs) and, in brackets, mean IoU on the same frames,")
-    print("by sequence:\n" if args.otb is not None else "by frame size / box size:\n")
-    print(head)
-    print(rule)
-    for t in trackers:
-        cells = [f"{_fmt(fps[t][k])} ({_fmt(ious[t][k], '.2f')})" for k in keys]
-        print(f"| {t} | " + " | ".join(cells) + " |")
-    if REFERENCE in fps:
-        print("\nRatio to OpenCV TrackerMIL on the same frames, same process, same run:\n")
-        print(head)
-        print(rule)
-        for t in trackers:
-            ref = fps[REFERENCE]
-            ratios = [fps[t][k] / ref[k] if ref[k] > 0 else math.nan for k in keys]
-            print(f"| {t} | " + " | ".join(_fmt(x, ".1f") for x in ratios) + " |")
-    else:
-        print(f"\n(no ratios: {REFERENCE} is not available)")
+    _print_tables(fig, trackers, keys, by_sequence=args.otb is not None)
     print(f"\n(wall time {time.perf_counter() - t_start:.0f} s)")
     if args.json is not None:
         doc = {
@@ -264,9 +306,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             "frames": n_frames,
             "gray": args.gray,
             "repeats": repeats,
-            "fps_median": fps,
-            "mean_iou": ious,
-            "fps_runs": runs,
+            "fps_median": fig.fps,
+            "mean_iou": fig.ious,
+            "fps_runs": fig.runs,
         }
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(

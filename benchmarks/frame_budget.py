@@ -50,6 +50,7 @@ except ImportError:  # a checkout that was not installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 import wmiltrack
+from wmiltrack.timing import gc_paused, timed
 
 STAGES = ("integral", "search", "scale", "sampling", "projection", "gaussian update",
           "log ratios", "selection", "learning (one call)", "bags and learning (one call)",
@@ -102,6 +103,28 @@ class _TimedModule:
         return self._timed.get(name) or getattr(self._module, name)
 
 
+def _patch_optional_parts(patch: Callable[[Any, str, str], None]) -> None:
+    """The parts that not every version has: the colour model, the correlation filters
+    (rcwmil-cf) and the lost state."""
+    try:
+        from wmiltrack.engine import colour
+        for name in ("integral", "learn"):
+            patch(colour.ColourModel, name, "colour")
+    except ImportError:  # versions without the colour model
+        pass
+    try:  # the correlation filters (rcwmil-cf) and the lost state
+        from wmiltrack.engine import correlation, recovery
+        for name in ("locate", "learn"):
+            patch(correlation.CorrelationFilter, name, "template")
+        patch(correlation.Location, "map", "template")
+        for name in ("estimate", "learn"):
+            patch(correlation.ScaleEstimator, name, "DSST")
+        for name in ("judge", "learn"):
+            patch(recovery.Redetector, name, "lost state")
+    except (ImportError, AttributeError):  # versions without them
+        pass
+
+
 @contextlib.contextmanager
 def instrumented(clock: _Clock) -> Iterator[None]:
     """Wrap the stage functions of the installed wmiltrack for the duration of the block."""
@@ -140,23 +163,7 @@ def instrumented(clock: _Clock) -> Iterator[None]:
     patch(tracker.Tracker, "_scale_by_ratio", "scale")
     patch(tracker.Tracker, "_scale_by_likelihood", "scale")
     patch(tracker.Tracker, "_colour_stage", "search")
-    try:
-        from wmiltrack.engine import colour
-        for name in ("integral", "learn"):
-            patch(colour.ColourModel, name, "colour")
-    except ImportError:  # versions without the colour model
-        pass
-    try:  # the correlation filters (rcwmil-cf) and the lost state
-        from wmiltrack.engine import correlation, recovery
-        for name in ("locate", "learn"):
-            patch(correlation.CorrelationFilter, name, "template")
-        patch(correlation.Location, "map", "template")
-        for name in ("estimate", "learn"):
-            patch(correlation.ScaleEstimator, name, "DSST")
-        for name in ("judge", "learn"):
-            patch(recovery.Redetector, name, "lost state")
-    except (ImportError, AttributeError):  # versions without them
-        pass
+    _patch_optional_parts(patch)
     try:
         yield
     finally:
@@ -168,15 +175,13 @@ def budget(variant: str, frames: Sequence[np.ndarray], box: Any, repeats: int) -
     """Median per-frame time of each stage (us) and of the whole update, over all runs."""
     clock = _Clock()
     per_frame: list[dict[str, float]] = []
-    with instrumented(clock):
+    with instrumented(clock), gc_paused():
         for _ in range(repeats):
             t = wmiltrack.Tracker(variant, seed=0)
             t.init(frames[0], box)
             for f in frames[1:]:
                 clock.frame = defaultdict(float)
-                t0 = time.perf_counter()
-                t.update(f)
-                total = time.perf_counter() - t0
+                _, total = timed(t.update, f)
                 row = dict(clock.frame)
                 row["glue"] = total - sum(row.values())
                 row["total"] = total

@@ -24,7 +24,6 @@ import argparse
 import os
 import platform
 import statistics
-import time
 from collections.abc import Callable, Sequence
 
 import cv2
@@ -32,6 +31,7 @@ import numpy as np
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.timing import gc_paused, timed
 
 Box = tuple[float, float, float, float]
 
@@ -51,12 +51,16 @@ def run_multi(variant: str, frames: Sequence[np.ndarray], boxes: Sequence[Box],
     mt = wmiltrack.MultiTracker(variant, seed=0, threads=threads)
     for b in boxes:
         mt.add(frames[0], b)
-    out: list[list[Box]] = []
-    t0 = time.perf_counter()
-    for f in frames[1:]:
-        res = mt.update(f)
-        out.append([res[i].box for i in range(len(boxes))])
-    dt = time.perf_counter() - t0
+
+    def loop() -> list[list[Box]]:
+        out: list[list[Box]] = []
+        for f in frames[1:]:
+            res = mt.update(f)
+            out.append([res[i].box for i in range(len(boxes))])
+        return out
+
+    with gc_paused():
+        out, dt = timed(loop)
     mt.close()
     return dt, out
 
@@ -68,11 +72,9 @@ def run_singles(variant: str, frames: Sequence[np.ndarray],
         t = wmiltrack.Tracker(variant, seed=i)
         t.init(frames[0], b)
         trackers.append(t)
-    out: list[list[Box]] = []
-    t0 = time.perf_counter()
-    for f in frames[1:]:
-        out.append([t.update(f).box for t in trackers])
-    return time.perf_counter() - t0, out
+    with gc_paused():
+        out, dt = timed(lambda: [[t.update(f).box for t in trackers] for f in frames[1:]])
+    return dt, out
 
 
 def run_opencv(name: str, frames: Sequence[np.ndarray], boxes: Sequence[Box]) -> float:
@@ -82,11 +84,15 @@ def run_opencv(name: str, frames: Sequence[np.ndarray], boxes: Sequence[Box]) ->
         t = factory()
         t.init(frames[0], tuple(int(round(v)) for v in b))  # type: ignore[attr-defined]
         trackers.append(t)
-    t0 = time.perf_counter()
-    for f in frames[1:]:
-        for t in trackers:
-            t.update(f)  # type: ignore[attr-defined]
-    return time.perf_counter() - t0
+
+    def loop() -> None:
+        for f in frames[1:]:
+            for t in trackers:
+                t.update(f)  # type: ignore[attr-defined]
+
+    with gc_paused():
+        _, dt = timed(loop)
+    return dt
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -14,12 +14,12 @@ from __future__ import annotations
 import argparse
 import statistics
 import threading
-import time
 
 import numpy as np
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.timing import gc_paused, timed
 
 Seq = tuple[list[np.ndarray], tuple[float, ...]]
 
@@ -33,9 +33,9 @@ def track(variant: str, seq: Seq) -> list[tuple[float, float, float, float]]:
 
 
 def sequential(variant: str, seqs: list[Seq]) -> tuple[float, list[object]]:
-    t0 = time.perf_counter()
-    out = [track(variant, s) for s in seqs]
-    return time.perf_counter() - t0, out
+    with gc_paused():
+        out, dt = timed(lambda: [track(variant, s) for s in seqs])
+    return dt, out
 
 
 def threaded(variant: str, seqs: list[Seq]) -> tuple[float, list[object]]:
@@ -47,13 +47,17 @@ def threaded(variant: str, seqs: list[Seq]) -> tuple[float, list[object]]:
         out[i] = track(variant, seqs[i])
 
     threads = [threading.Thread(target=work, args=(i,)) for i in range(len(seqs))]
-    for th in threads:
-        th.start()
-    barrier.wait()
-    t0 = time.perf_counter()
-    for th in threads:
-        th.join()
-    return time.perf_counter() - t0, out
+
+    def join_all() -> None:
+        for th in threads:
+            th.join()
+
+    with gc_paused():
+        for th in threads:
+            th.start()
+        barrier.wait()
+        _, dt = timed(join_all)
+    return dt, out
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -92,3 +92,37 @@ def reference_update(mu: np.ndarray, sigma: np.ndarray, values: np.ndarray, lam:
     new_sigma = np.sqrt(lam * sigma**2 + (1.0 - lam) * std**2 + lam * (1.0 - lam) * (mu - mean) ** 2)
     new_mu = lam * mu + (1.0 - lam) * mean
     return new_mu, np.maximum(new_sigma, p.sigma_floor)
+
+
+# ---------------------------------------------------------------------- colour contrast
+def box_means(table: np.ndarray, x0: int, y0: int, xs: np.ndarray, ys: np.ndarray, w: int, h: int) -> np.ndarray:
+    """Mean over the ``w x h`` boxes with top-left corners ``(xs, ys)`` (frame coordinates, inside
+    the region) of an integral table whose region starts at ``(x0, y0)``."""
+    cx = np.asarray(xs, dtype=np.intp) - x0
+    cy = np.asarray(ys, dtype=np.intp) - y0
+    s = table[cy + h, cx + w] - table[cy, cx + w] - table[cy + h, cx] + table[cy, cx]
+    return s / float(w * h)
+
+
+def box_sums_clipped(table: np.ndarray, x0: int, y0: int, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sums and areas of boxes ``(n, 4)`` (x, y, w, h in frame coordinates) clipped to the
+    table's region."""
+    th, tw = table.shape[0] - 1, table.shape[1] - 1
+    b = np.asarray(boxes, dtype=np.intp)
+    xa = np.clip(b[:, 0] - x0, 0, tw)
+    ya = np.clip(b[:, 1] - y0, 0, th)
+    xb = np.clip(b[:, 0] + b[:, 2] - x0, 0, tw)
+    yb = np.clip(b[:, 1] + b[:, 3] - y0, 0, th)
+    s = table[yb, xb] - table[ya, xb] - table[yb, xa] + table[ya, xa]
+    return s, ((xb - xa) * (yb - ya)).astype(np.float64)
+
+
+def colour_contrast(table: np.ndarray, x0: int, y0: int, boxes: np.ndarray, ring: float = 0.25) -> np.ndarray:
+    """Vectorised ``engine.colour.box_contrast`` of every box: mean ``P(target | colour)`` inside
+    minus its mean over a ring ``ring * (w + h) / 2`` wide, both clipped to the table's region."""
+    b = np.asarray(boxes, dtype=np.intp)
+    pad = np.maximum(1, np.rint(ring * (b[:, 2] + b[:, 3]) / 2.0)).astype(np.intp)
+    outer = np.stack([b[:, 0] - pad, b[:, 1] - pad, b[:, 2] + 2 * pad, b[:, 3] + 2 * pad], axis=1)
+    s_in, a_in = box_sums_clipped(table, x0, y0, b)
+    s_out, a_out = box_sums_clipped(table, x0, y0, outer)
+    return s_in / np.maximum(a_in, 1.0) - (s_out - s_in) / np.maximum(a_out - a_in, 1.0)

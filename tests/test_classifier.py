@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import gaussian_pool_update
 
 from wmiltrack.engine.classifier import GaussianPool
 from wmiltrack.engine.params import Params
@@ -18,11 +19,11 @@ def test_direct_first_update_then_blend_with_lambda_weighting_the_old_model() ->
     p = Params(num_features=3, num_selected=3)
     pool = GaussianPool(p)
     a_pos, a_neg = rng.normal(5, 2, (3, 45)), rng.normal(-1, 3, (3, 50))
-    pool.update(a_pos, a_neg)
+    gaussian_pool_update(pool, a_pos, a_neg)
     m, s = stats(a_pos)
     assert np.allclose(pool.mu1, m) and np.allclose(pool.sigma1, s)
     b_pos, b_neg = rng.normal(7, 1, (3, 45)), rng.normal(0, 1, (3, 50))
-    pool.update(b_pos, b_neg)
+    gaussian_pool_update(pool, b_pos, b_neg)
     lam = 0.9
     m2, s2 = stats(b_pos)
     sigma = np.sqrt(lam * s**2 + (1 - lam) * s2**2 + lam * (1 - lam) * (m - m2) ** 2)  # old mu
@@ -37,7 +38,7 @@ def test_reference_blend_at_init_shrinks_the_mean() -> None:
     p = Params(num_features=2, num_selected=2, first_update="blend", learning_rate=0.85)
     pool = GaussianPool(p)
     v = np.array([[10.0, 12.0, 14.0], [1.0, 1.0, 1.0]])
-    pool.update(v, v)
+    gaussian_pool_update(pool, v, v)
     assert np.allclose(pool.mu1, 0.15 * v.mean(axis=1))
     m, s = stats(v)
     assert np.allclose(pool.sigma1, np.sqrt(0.85 * 1 + 0.15 * s**2 + 0.85 * 0.15 * m**2))
@@ -45,7 +46,7 @@ def test_reference_blend_at_init_shrinks_the_mean() -> None:
 
 def test_sigma_floor() -> None:
     pool = GaussianPool(Params(num_features=1, num_selected=1))
-    pool.update(np.full((1, 45), 3.0), np.full((1, 50), 3.0))
+    gaussian_pool_update(pool, np.full((1, 45), 3.0), np.full((1, 50), 3.0))
     assert pool.sigma1[0] == pytest.approx(1e-6)
 
 
@@ -54,12 +55,12 @@ def test_miltrack_rule_stores_a_variance_around_the_updated_mean() -> None:
     p = Params.for_variant("mil").replace(num_features=2, num_selected=2)
     pool = GaussianPool(p)
     a = rng.normal(3, 2, (2, 40))
-    pool.update(a, a)
+    gaussian_pool_update(pool, a, a)
     assert np.allclose(pool.mu1, a.mean(axis=1))
     assert np.allclose(pool.sigma1**2, a.var(axis=1) + 1e-9)
     b = rng.normal(4, 1, (2, 40))
     v_old = pool.sigma1**2
-    pool.update(b, b)
+    gaussian_pool_update(pool, b, b)
     mu = 0.85 * a.mean(axis=1) + 0.15 * b.mean(axis=1)
     assert np.allclose(pool.mu1, mu)
     assert np.allclose(pool.sigma1**2, 0.85 * v_old + 0.15 * ((b - mu[:, None]) ** 2).mean(axis=1))
@@ -67,7 +68,7 @@ def test_miltrack_rule_stores_a_variance_around_the_updated_mean() -> None:
 
 def test_a_class_without_samples_keeps_its_model() -> None:
     pool = GaussianPool(Params(num_features=2, num_selected=2))
-    pool.update(np.ones((2, 5)), np.zeros((2, 0)))
+    gaussian_pool_update(pool, np.ones((2, 5)), np.zeros((2, 0)))
     assert np.all(pool.mu0 == 0) and np.all(pool.sigma0 == 1)
 
 

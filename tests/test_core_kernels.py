@@ -291,30 +291,51 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
                     mil=False, sigma_floor=1e-6, guard=1e-30, select="milboost"))
 
 
-def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table() -> None:
-    """search_many / learn_many: the results of search / learn called one by one, whatever
-    the threads; two jobs may not compute into one IntegralImage; threads >= 1."""
-    import wmiltrack
+class _Batch:
+    """Three rcwmil trackers started on one random frame, and the requests that the tests of
+    the batched core calls make for them (searches around each target; learning steps with the
+    second target's bank and model, its bag sampler)."""
 
-    rng = np.random.default_rng(5)
-    frame = rng.integers(0, 256, (160, 200, 3), dtype=np.uint8)
-    trackers = []
-    for i, box in enumerate([(30, 30, 30, 26), (120, 90, 28, 32), (80, 50, 24, 24)]):
-        t = wmiltrack.Tracker("rcwmil", seed=i)
-        t.init(frame, box)
-        trackers.append(t)
+    def __init__(self) -> None:
+        import wmiltrack
+        from wmiltrack.engine.sampling import BagSampler
 
-    def job_args(t, ii):  # noqa: ANN001, ANN202
+        rng = np.random.default_rng(5)
+        self.frame = rng.integers(0, 256, (160, 200, 3), dtype=np.uint8)
+        self.trackers = []
+        for i, box in enumerate([(30, 30, 30, 26), (120, 90, 28, 32), (80, 50, 24, 24)]):
+            t = wmiltrack.Tracker("rcwmil", seed=i)
+            t.init(self.frame, box)
+            self.trackers.append(t)
+        self.t = self.trackers[1]
+        self.sampler = BagSampler(self.t.params)
+        self.empty = np.zeros((0, 2), np.int32)
+
+    def job_args(self, t, ii):  # noqa: ANN001, ANN201
         p, model = t.params, t.parts.appearance
         pool = model.pool
         roi = (t.box[0] - 40, t.box[1] - 40, t.box[2] + 80, t.box[3] + 80)
         return (ii, model.bank(int(t.box[2]), int(t.box[3])), model.selected, pool.mu1, pool.sigma1,
                 pool.mu0, pool.sigma0, p.guard, tuple(int(v) for v in t.box), [(25, 4), (10, 1)],
-                (200, 160), frame, tuple(int(v) for v in roi), None)
+                (200, 160), self.frame, tuple(int(v) for v in roi), None)
 
-    def job(t, ii):  # noqa: ANN001, ANN202
-        return _core.SearchRequest(*job_args(t, ii))
+    def job(self, t, ii):  # noqa: ANN001, ANN201
+        return _core.SearchRequest(*self.job_args(t, ii))
 
+    def learn(self, ii, corners, n_pos, w):  # noqa: ANN001, ANN201
+        t, pool = self.t, self.t.parts.appearance.pool
+        return _core.LearnRequest(ii, t.parts.appearance.bank(int(t.box[2]), int(t.box[3])),
+                                  corners[:, 0], corners[:, 1], n_pos, pool.mu1, pool.sigma1,
+                                  pool.mu0, pool.sigma0, lam=0.85, first_pos=False,
+                                  first_neg=False, direct_first=True, mil=False, sigma_floor=1e-3,
+                                  guard=1e-30, select="wmil", w_pos=w, k=20)
+
+
+def test_batched_searches_equal_single_calls_and_refuse_a_shared_target_table() -> None:
+    """search_many / learn_many: the results of search / learn called one by one, whatever
+    the threads; two jobs may not compute into one IntegralImage; threads >= 1."""
+    setup = _Batch()
+    trackers, job = setup.trackers, setup.job
     single = [_core.search(job(t, _core.IntegralImage())) for t in trackers]
     for threads in (1, 2, 3):
         many = _core.search_many([job(t, _core.IntegralImage()) for t in trackers], threads)
@@ -327,25 +348,18 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     assert _core.search_many([], 2) == []
     assert _core.learn_many([], 2) == []
 
-    # frame_step: search, bags sampled where it landed (numpy's draws), learning on them.
-    from wmiltrack.engine.sampling import BagSampler
 
-    t = trackers[1]
-    pool = t.parts.appearance.pool
-    sampler = BagSampler(t.params)
-
-    def learn(ii, corners, n_pos, w):  # noqa: ANN001, ANN202
-        return _core.LearnRequest(ii, t.parts.appearance.bank(int(t.box[2]), int(t.box[3])),
-                                  corners[:, 0], corners[:, 1], n_pos, pool.mu1, pool.sigma1,
-                                  pool.mu0, pool.sigma0, lam=0.85, first_pos=False,
-                                  first_neg=False, direct_first=True, mil=False, sigma_floor=1e-3,
-                                  guard=1e-30, select="wmil", w_pos=w, k=20)
-
-    empty = np.zeros((0, 2), np.int32)
+def test_frame_step_and_learn_at_equal_their_separate_calls() -> None:
+    """frame_step: search, bags sampled where it landed (numpy's draws), learning on them, as
+    the separate calls give them; learn_at: the same at a box the caller gives; misuse refused."""
+    setup = _Batch()
+    t, sampler, empty, job, job_args, learn = (setup.t, setup.sampler, setup.empty, setup.job,
+                                               setup.job_args, setup.learn)
+    single_1 = _core.search(job(t, _core.IntegralImage()))
     ii, rng = _core.IntegralImage(), np.random.default_rng(3)
     found, learnt, (xs, ys, n_pos) = _core.frame_step(job(t, ii), learn(ii, empty, 0, None),
                                                       _core.BagRequest(rng, *sampler.core_spec("exp")))
-    assert found == single[1]
+    assert found == single_1
     landed = tuple(int(v) for v in t.box)
     landed = (landed[0] + sum(r[0] for r in found), landed[1] + sum(r[1] for r in found), *landed[2:])
     alone, rng_alone = _core.IntegralImage(), np.random.default_rng(3)
@@ -389,6 +403,14 @@ def test_batched_core_calls_equal_single_calls_and_refuse_a_shared_target_table(
     fresh = _core.IntegralImage()  # never computed before: the search computes it first
     assert _core.frame_step(job(t, fresh), learn(fresh, empty, 0, None), bags)[0] == found
 
+
+
+def test_frame_step_many_equals_frame_step_alone_whatever_the_threads() -> None:
+    """frame_step_many: each job as frame_step alone gives it, its generator left in the same
+    state, whatever the number of threads; shared generators or tables and a failing job."""
+    setup = _Batch()
+    trackers, sampler, empty, job, job_args, learn = (setup.trackers, setup.sampler, setup.empty,
+                                                      setup.job, setup.job_args, setup.learn)
     # frame_step_many: each job as frame_step alone gives it, its generator left in the same
     # state, whatever the number of threads.
     tables: list[_core.IntegralImage] = []

@@ -14,7 +14,6 @@ import cv2
 import numpy as np
 import pytest
 
-from wmiltrack.data import layouts
 from wmiltrack.data.layouts import (
     LayoutError,
     detect_layout,
@@ -22,6 +21,7 @@ from wmiltrack.data.layouts import (
     load_layout,
     parse_vot_region,
     polygon_to_box,
+    uav,
 )
 from wmiltrack.data.sequences import Sequence
 
@@ -252,7 +252,7 @@ def test_uav123_layout_nan_lines_and_split_sequences(tmp_path: Path, monkeypatch
     )
     # A sequence that covers frames 5..8 of a shared folder (the real table has hundreds of
     # frames per part; a tiny stand-in entry exercises the same code).
-    monkeypatch.setitem(layouts._UAV123_SPLITS, "bird1_2", ("bird1", 5, 8))
+    monkeypatch.setitem(uav.UAV123_SPLITS, "bird1_2", ("bird1", 5, 8))
     _uav_frames(inner, "bird1", list(range(1, 11)))
     _write_lines(inner / "anno" / "UAV123" / "bird1_2.txt", [_box(k) for k in range(4, 8)])
 
@@ -269,7 +269,7 @@ def test_uav123_layout_nan_lines_and_split_sequences(tmp_path: Path, monkeypatch
 
 def test_uav123_split_table_matches_published_ranges() -> None:
     # got10k-toolkit got10k/datasets/uav123.json; pytracking's uavdataset.py agrees.
-    table = layouts._UAV123_SPLITS
+    table = uav.UAV123_SPLITS
     assert len(table) == 51
     assert table["bird1_2"] == ("bird1", 775, 1477)
     assert table["car1_2"] == ("car1", 751, 1627)
@@ -278,7 +278,7 @@ def test_uav123_split_table_matches_published_ranges() -> None:
 
 
 def test_uav123_refuses_missing_frames_and_count_mismatch(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setitem(layouts._UAV123_SPLITS, "car1_2", ("car1", 3, 6))
+    monkeypatch.setitem(uav.UAV123_SPLITS, "car1_2", ("car1", 3, 6))
     _uav_frames(tmp_path, "car1", [1, 2, 3, 4, 6])  # 5 missing
     _write_lines(tmp_path / "anno" / "UAV123" / "car1_2.txt", [_box(k) for k in range(2, 6)])
     with pytest.raises(LayoutError, match=r"frames 3-6 of .* are needed but 1 are missing \(first: 000005\)"):
@@ -380,7 +380,7 @@ def test_uav123_10fps_release_configseqs_ranges_and_nan_lines(tmp_path: Path) ->
 def test_uav123_10fps_without_configseqs_uses_the_published_table(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setitem(layouts._UAV123_10FPS_SPLITS, "car1_2", ("car1", 4, 7))
+    monkeypatch.setitem(uav.UAV123_10FPS_SPLITS, "car1_2", ("car1", 4, 7))
     _uav10_frames(tmp_path, "car1", list(range(1, 10)))
     _write_lines(tmp_path / "anno" / "UAV123_10fps" / "car1_2.txt", [_box(k) for k in range(3, 7)])
     (seq,) = load_layout(tmp_path)
@@ -396,9 +396,9 @@ def test_uav123_10fps_without_configseqs_uses_the_published_table(
 
 def test_uav123_10fps_split_table_matches_published_ranges() -> None:
     # the seqUAV123_10fps cell array of the UAV123_10fps release's configSeqs.m
-    table = layouts._UAV123_10FPS_SPLITS
+    table = uav.UAV123_10FPS_SPLITS
     assert len(table) == 51
-    assert set(table) == set(layouts._UAV123_SPLITS)  # the same sequences are split at 30 and 10 fps
+    assert set(table) == set(uav.UAV123_SPLITS)  # the same sequences are split at 30 and 10 fps
     assert table["bird1_2"] == ("bird1", 259, 493)
     assert table["car6_5"] == ("car6", 1309, 1621)
     assert table["uav1_3"] == ("uav1", 825, 1157)
@@ -892,3 +892,59 @@ def test_wmiltrack_eval_runs_on_the_new_layouts(tmp_path: Path, layout: str) -> 
         assert got.shape == (10, 4)
         np.testing.assert_array_equal(got[1:], expected[1:])
         np.testing.assert_array_equal(got[0], seq.groundtruth[0])
+
+
+# ---------------------------------------------------------------------- a layout from outside
+def _index_toy(root: Path):
+    """A made-up benchmark: a TOY marker file, then <seq>/frames/*.jpg and <seq>/boxes.csv."""
+    from wmiltrack.data.layouts import Entry
+    from wmiltrack.data.layouts.files import absent_rows, images_in, make_sequence, read_box_file, subdirs
+
+    if not (root / "TOY").is_file():
+        return None
+
+    def load(d: Path) -> Sequence:
+        gt = read_box_file(d / "boxes.csv")
+        meta = {"layout": "toy", "absent_policy": "exclude"}
+        return make_sequence(d.name, images_in(d / "frames"), gt, absent_rows(gt), meta)
+
+    dirs = [d for d in subdirs(root) if (d / "boxes.csv").is_file()]
+    return [Entry(d.name, lambda d=d: load(d)) for d in dirs] or None
+
+
+def test_a_layout_registered_from_a_test_module_is_detected_and_loaded(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Adding a benchmark needs no edit of wmiltrack: a Layout and one register_layout call."""
+    from wmiltrack.data.layouts import Layout, register_layout, registry
+
+    root = tmp_path / "toybench"
+    (root / "b").mkdir(parents=True)
+    (root / "TOY").write_text("")
+    for name, n in (("a", 3), ("b", 4)):
+        _write_frames(root / name / "frames", list(range(n)))
+        _write_lines(root / name / "boxes.csv", [_box(k) for k in range(n)])
+    with pytest.raises(LayoutError, match="any known layout"):
+        detect_layout(root)
+
+    with monkeypatch.context() as mp:
+        mp.setattr(registry, "LAYOUT_REGISTRY", dict(registry.LAYOUT_REGISTRY))  # undone on exit
+        toy = Layout(name="toy", title="Toy", expected="TOY and <seq>/frames/", index=_index_toy,
+                     aliases=("toy-bench",))
+        assert register_layout(toy) is toy
+        assert detect_layout(root) == "toy"
+        assert list_layout(root) == ["a", "b"]
+        seqs = load_layout(root, layout="Toy-Bench", sequences=["b", "a"])
+        assert [s.name for s in seqs] == ["b", "a"]
+        _assert_aligned(seqs[0], 4)
+        _assert_aligned(seqs[1], 3)
+        assert seqs[0].meta["layout"] == "toy" and seqs[0].meta["absent"].tolist() == [False] * 4
+        # The other layouts name it in their errors, and a second "toy" is refused.
+        with pytest.raises(LayoutError, match=r"it looks like a Toy dataset \(layout 'toy'\)"):
+            load_layout(root, layout="lasot")
+        with pytest.raises(ValueError, match="already registered: toy"):
+            register_layout(Layout(name="other", title="O", expected="-", index=_index_toy, aliases=("toy",)))
+        # Nothing is registered by a failed call.
+        assert "other" not in registry.LAYOUT_REGISTRY
+    with pytest.raises(ValueError, match="unknown layout 'toy'"):
+        load_layout(root, layout="toy")

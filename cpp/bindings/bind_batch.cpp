@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "jobs.hpp"
+#include "wmiltrack/worker_pool.hpp"
 
 namespace wmiltrack::bindings {
 

@@ -1,5 +1,7 @@
 // Bindings of the correlation-filter kernels: gray patches, fHOG, the translation and scale
-// filters (correlation.hpp). Arguments are checked here; the work runs without the GIL.
+// filters (correlation.hpp), one function per bound class (module.cpp calls them, the classes
+// a method returns before the classes that return them, so that signatures name Python types).
+// Arguments are checked here; the work runs without the GIL.
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -136,7 +138,8 @@ cf::TranslationResponse respond_locked(LockedTranslation& t, const Sample& z, in
 
 }  // namespace
 
-void bind_cf(py::module_& m) {
+// The free functions: gray patches, fHOG and scale samples of a frame region.
+void bind_cf_features(py::module_& m) {
   m.attr("FHOG_CHANNELS") = cf::kFhogChannels;
   m.def(
       "cf_gray_patch",
@@ -216,7 +219,9 @@ void bind_cf(py::module_& m) {
       py::arg("model_size"), py::arg("cell") = 4,
       "For each factor f: fHOG (cell) of the region of size (w f, h f) around centre,\n"
       "resampled to model_size = (w, h); float32 (len(factors), dims), one sample a row.");
+}
 
+void bind_translation_response(py::module_& m) {
   py::class_<cf::TranslationResponse>(
       m, "TranslationResponse",
       "A translation filter's response to one sample and the confidences of its peak.")
@@ -257,7 +262,9 @@ void bind_cf(py::module_& m) {
           "centre, for a search centred at centre = (cx, cy) with cells of cell = (w, h) frame\n"
           "pixels: bilinear between cells (wrapping around), divided by the peak when it is\n"
           "positive, clipped to [0, 1]; float64 (y1 - y0, x1 - x0).");
+}
 
+void bind_spectrum(py::module_& m) {
   py::class_<cf::Spectrum>(
       m, "Spectrum",
       "A sample as one translation filter takes it (its windowed, possibly compressed\n"
@@ -265,7 +272,9 @@ void bind_cf(py::module_& m) {
       .def_readonly("channels", &cf::Spectrum::channels)
       .def_readonly("rows", &cf::Spectrum::rows)
       .def_readonly("cols", &cf::Spectrum::cols);
+}
 
+void bind_translation_filter(py::module_& m) {
   py::class_<LockedTranslation>(
       m, "TranslationFilter",
       "A multi-channel linear correlation filter over rows x cols cells, trained and applied\n"
@@ -395,7 +404,9 @@ void bind_cf(py::module_& m) {
           py::arg("features"), py::arg("exclusion") = 5,
           "The response to a sample, its sub-cell peak and confidences (PSR leaves out the\n"
           "(2 exclusion + 1)^2 cells around the peak).");
+}
 
+void bind_scale_response(py::module_& m) {
   py::class_<cf::ScaleResponse>(m, "ScaleResponse", "A scale filter's response.")
       .def_property_readonly(
           "values",
@@ -406,7 +417,9 @@ void bind_cf(py::module_& m) {
       .def_readonly("best", &cf::ScaleResponse::best, "Index of the largest score.")
       .def_readonly("offset", &cf::ScaleResponse::offset,
                     "Sub-sample refinement of best, in [-0.5, 0.5] (0 at the ends).");
+}
 
+void bind_scale_filter(py::module_& m) {
   py::class_<LockedScale>(
       m, "ScaleFilter",
       "A 1-D correlation filter over num_scales samples of dims features (DSST): a Hann\n"

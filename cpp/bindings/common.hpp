@@ -53,7 +53,13 @@ void bind_search(py::module_& m);
 void bind_learn(py::module_& m);
 void bind_draws(py::module_& m);
 void bind_batch(py::module_& m);
-void bind_cf(py::module_& m);
+// The correlation-filter kernels (bind_cf.cpp), one function per bound class.
+void bind_cf_features(py::module_& m);
+void bind_translation_response(py::module_& m);
+void bind_spectrum(py::module_& m);
+void bind_translation_filter(py::module_& m);
+void bind_scale_response(py::module_& m);
+void bind_scale_filter(py::module_& m);
 
 // ValueError(message) unless ok. A message that formats values is passed as a callable that
 // makes it, so that it is built only on failure: these checks run on every frame, and building

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "common.hpp"
-#include "wmiltrack/frame.hpp"
+#include "wmiltrack/learn_step.hpp"
 #include "wmiltrack/sampling.hpp"
 #include "wmiltrack/scoring.hpp"
 

@@ -21,5 +21,10 @@ PYBIND11_MODULE(_core, m) {
   wmiltrack::bindings::bind_learn(m);
   wmiltrack::bindings::bind_draws(m);
   wmiltrack::bindings::bind_batch(m);
-  wmiltrack::bindings::bind_cf(m);
+  wmiltrack::bindings::bind_cf_features(m);
+  wmiltrack::bindings::bind_translation_response(m);
+  wmiltrack::bindings::bind_spectrum(m);
+  wmiltrack::bindings::bind_translation_filter(m);
+  wmiltrack::bindings::bind_scale_response(m);
+  wmiltrack::bindings::bind_scale_filter(m);
 }

@@ -12,7 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include "wmiltrack/frame.hpp"
+#include "wmiltrack/worker_pool.hpp"
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/scoring.hpp"
 #include "wmiltrack/shared.hpp"

@@ -26,7 +26,7 @@ import numpy.typing as npt
 
 from .. import _core
 
-__all__ = ["ColourModel", "box_contrast", "box_sums_clipped", "colour_contrast", "is_colour"]
+__all__ = ["ColourModel", "box_contrast", "is_colour"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -133,13 +133,13 @@ class ColourModel:
         return table, x0, y0
 
     def contrast(self, frame: np.ndarray, box: tuple[int, int, int, int], ring: float = 0.25) -> float:
-        """:func:`colour_contrast` of one box (inside and ring clipped to the frame), from the
-        likelihood sums over the box and its ring alone (one pass, no integral image; over
-        a sample of them, see ``sample``)."""
+        """The colour contrast (:func:`_contrast_of_sums`) of one box, the box and its ring
+        clipped to the frame, from the likelihood sums over them alone (one pass over the frame,
+        no integral image; over a sample of the pixels, see ``sample``)."""
         if not self._hist.learnt:
             raise ValueError("call learn() before contrast()")
         x, y, w, h = box
-        pad = max(1, int(np.rint(ring * (w + h) / 2.0)))
+        pad = _ring_pad(w, h, ring)
         fh, fw = frame.shape[:2]
         if min(fw, x + w + pad) <= max(0, x - pad) or min(fh, y + h + pad) <= max(0, y - pad):
             return 0.0
@@ -150,58 +150,33 @@ class ColourModel:
         ya, yb = min(max(y - y0, 0), y1 - y0), min(max(y + h - y0, 0), y1 - y0)
         s_in, s_out, n_in, n_out = self._hist.likelihood_sums(
             frame, (x0, y0, x1 - x0, y1 - y0), (ya, yb, xa, xb), step=self._step(x1 - x0, y1 - y0))
-        return s_in / max(n_in, 1) - (s_out - s_in) / max(n_out - n_in, 1)
-
-    @staticmethod
-    def box_means(table: FloatArray, x0: int, y0: int, xs: npt.NDArray[np.integer],
-                  ys: npt.NDArray[np.integer], w: int, h: int) -> FloatArray:
-        """Mean probability over the ``w x h`` boxes with top-left corners ``(xs, ys)`` (frame
-        coordinates; every box must lie inside the table's region)."""
-        cx = np.asarray(xs, dtype=np.intp) - x0
-        cy = np.asarray(ys, dtype=np.intp) - y0
-        s = table[cy + h, cx + w] - table[cy, cx + w] - table[cy + h, cx] + table[cy, cx]
-        out: FloatArray = s / float(w * h)
-        return out
+        return _contrast_of_sums(s_in, n_in, s_out, n_out)
 
 
-def box_sums_clipped(table: FloatArray, x0: int, y0: int, boxes: npt.NDArray[np.integer]
-                     ) -> tuple[FloatArray, FloatArray]:
-    """Sums and areas of boxes ``(n, 4)`` (x, y, w, h in frame coordinates) clipped to the
-    table's region (see :meth:`ColourModel.integral`)."""
-    th, tw = table.shape[0] - 1, table.shape[1] - 1
-    b = np.asarray(boxes, dtype=np.intp)
-    xa = np.clip(b[:, 0] - x0, 0, tw)
-    ya = np.clip(b[:, 1] - y0, 0, th)
-    xb = np.clip(b[:, 0] + b[:, 2] - x0, 0, tw)
-    yb = np.clip(b[:, 1] + b[:, 3] - y0, 0, th)
-    s: FloatArray = table[yb, xb] - table[ya, xb] - table[yb, xa] + table[ya, xa]
-    area: FloatArray = ((xb - xa) * (yb - ya)).astype(np.float64)
-    return s, area
+def _ring_pad(w: int, h: int, ring: float = 0.25) -> int:
+    """Width of the ring around a ``w x h`` box that its colour contrast compares it with:
+    ``ring * (w + h) / 2`` rounded (half to even), at least 1."""
+    return max(1, int(round(ring * (w + h) / 2.0)))
 
 
-def colour_contrast(table: FloatArray, x0: int, y0: int, boxes: npt.NDArray[np.integer],
-                    ring: float = 0.25) -> FloatArray:
-    """Mean ``P(target | colour)`` inside each box minus its mean over a ring around it
-    ``ring * (w + h) / 2`` wide: largest for the box that holds the target's colours and no
-    more (a box too large lets background in, one too small leaves target in the ring)."""
-    b = np.asarray(boxes, dtype=np.intp)
-    pad = np.maximum(1, np.rint(ring * (b[:, 2] + b[:, 3]) / 2.0)).astype(np.intp)
-    outer = np.stack([b[:, 0] - pad, b[:, 1] - pad, b[:, 2] + 2 * pad, b[:, 3] + 2 * pad], axis=1)
-    s_in, a_in = box_sums_clipped(table, x0, y0, b)
-    s_out, a_out = box_sums_clipped(table, x0, y0, outer)
-    inner = s_in / np.maximum(a_in, 1.0)
-    ring_mean = (s_out - s_in) / np.maximum(a_out - a_in, 1.0)
-    out: FloatArray = inner - ring_mean
-    return out
+def _contrast_of_sums(s_in: float, n_in: float, s_out: float, n_out: float) -> float:
+    """The colour contrast of a box from ``P(target | colour)`` summed over ``n_in`` pixels of
+    the box and ``n_out`` of the box with its ring: the mean inside minus the mean over the
+    ring, largest for the box that holds the target's colours and no more (a box too large
+    lets background in, one too small leaves target in the ring). Both ways of computing the
+    contrast (:func:`box_contrast`, :meth:`ColourModel.contrast`) end here."""
+    return s_in / max(n_in, 1) - (s_out - s_in) / max(n_out - n_in, 1)
 
 
 def box_contrast(table: FloatArray, x0: int, y0: int, box: tuple[int, int, int, int],
                  ring: float = 0.25) -> float:
-    """:func:`colour_contrast` of one box ``(x, y, w, h)``, with the same result, computed with
-    scalars (eight reads of the table; numpy's per-call overhead would be most of the cost)."""
+    """The colour contrast (:func:`_contrast_of_sums`) of one box ``(x, y, w, h)`` and its
+    ring, both clipped to the region of an integral table of ``P(target | colour)`` (see
+    :meth:`ColourModel.integral`): eight scalar reads of the table (numpy's per-call overhead
+    would be most of the cost of one box)."""
     th, tw = table.shape[0] - 1, table.shape[1] - 1
     x, y, w, h = (int(v) for v in box)
-    pad = max(1, int(round(ring * (w + h) / 2.0)))
+    pad = _ring_pad(w, h, ring)
 
     def clipped(bx: int, by: int, bw: int, bh: int) -> tuple[float, float]:
         xa, ya = min(max(bx - x0, 0), tw), min(max(by - y0, 0), th)
@@ -211,4 +186,4 @@ def box_contrast(table: FloatArray, x0: int, y0: int, box: tuple[int, int, int, 
 
     s_in, a_in = clipped(x, y, w, h)
     s_out, a_out = clipped(x - pad, y - pad, w + 2 * pad, h + 2 * pad)
-    return s_in / max(a_in, 1.0) - (s_out - s_in) / max(a_out - a_in, 1.0)
+    return _contrast_of_sums(s_in, a_in, s_out, a_out)

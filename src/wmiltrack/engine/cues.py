@@ -86,7 +86,7 @@ class ColourCue:
         self.model.learn(frame, box)
 
     def contrast(self, box: IntBox) -> float:
-        """The box's colour contrast (:func:`~wmiltrack.engine.colour.colour_contrast`) read
+        """The box's colour contrast (:func:`~wmiltrack.engine.colour.box_contrast`) read
         from this frame's search table (the box and its ring clipped to the table's region)."""
         if self._table is None:
             raise ValueError("no search table this frame: call table() first")

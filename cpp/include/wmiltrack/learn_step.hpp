@@ -7,7 +7,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 
 #include "wmiltrack/haar.hpp"
 #include "wmiltrack/integral.hpp"
@@ -55,10 +54,5 @@ struct LearnStep {
 void learn_step(const IntegralImage& ii, const FeatureBank& bank, const LearnStep& step,
                 double* mu1, double* sigma1, double* mu0, double* sigma0,
                 std::int32_t* selected, double* h);
-
-// fn(i) for every i in [0, n), spread over up to `threads` threads (the calling one among
-// them; jobs are handed out one at a time, in order). The first exception a job throws is
-// rethrown once every thread has finished; the other jobs still run.
-void parallel_for(int n, int threads, const std::function<void(int)>& fn);
 
 }  // namespace wmiltrack
