@@ -49,7 +49,7 @@ def test_settings_are_checked() -> None:
         wmiltrack.Tracker("rcwmil-plus", judge_memory=3.0)
 
 
-def _run(seq: object, **kw: float) -> tuple[np.ndarray, np.ndarray]:
+def _run(seq: object, **kw: object) -> tuple[np.ndarray, np.ndarray]:
     frames, gt = seq.load(), seq.groundtruth  # type: ignore[attr-defined]
     t = wmiltrack.Tracker("rcwmil-cf", seed=0, **kw)
     t.init(frames[0], tuple(gt[0]))
@@ -59,10 +59,59 @@ def _run(seq: object, **kw: float) -> tuple[np.ndarray, np.ndarray]:
 
 def test_the_judge_changes_ok_only_and_flags_a_target_out_of_view() -> None:
     seq = make_sequence(120, seed=2, out_of_view=(50, 30))
-    boxes, ok = _run(seq)
-    plain_boxes, plain_ok = _run(seq, judge_memory=0.0)
+    boxes, ok = _run(seq, judge_gates=False, judge_holds=False)
+    plain_boxes, plain_ok = _run(seq, judge_memory=0.0, judge_gates=False, judge_holds=False)
     assert np.array_equal(boxes, plain_boxes)
     assert not np.array_equal(ok, plain_ok)  # the verdicts do differ
     gone = ok[49 + 3:49 + 30]  # update i is frame i + 1; the judge waits 3 frames
     assert (~gone).mean() >= 0.8
     assert ok[:45].all()  # the target in view and tracked from the start
+
+
+def test_gating_and_holding_need_the_judge_and_the_lost_state() -> None:
+    with pytest.raises(ValueError, match="need the judge"):
+        wmiltrack.Tracker("rcwmil-cf", judge_memory=0.0)
+    with pytest.raises(ValueError, match="redetect"):
+        wmiltrack.Tracker("rcwmil-cf", redetect=False)
+    wmiltrack.Tracker("rcwmil-cf", redetect=False, judge_holds=False)  # gating alone is fine
+
+
+def test_while_the_judge_holds_the_target_for_lost_nothing_learns() -> None:
+    """With ``judge_gates`` a frame the judge holds for lost teaches no part: the classifier's
+    bags are empty and the template's filter is left as it was."""
+    seq = make_sequence(100, seed=2, out_of_view=(40, 40))
+    frames, gt = seq.load(), seq.groundtruth
+    t = wmiltrack.Tracker("rcwmil-cf", seed=0, judge_holds=False)
+    t.init(frames[0], tuple(gt[0]))
+    judged_lost = 0
+    for f in frames[1:80]:
+        template = t.parts.template
+        assert template is not None
+        before = template.filter.copy()
+        t.update(f)
+        judge = t.parts.judge
+        assert judge is not None
+        if judge.lost and not judge.turned:
+            judged_lost += 1
+            pos, neg = t.samples()["positive"], t.samples()["negative"]
+            assert len(pos) == 0 and len(neg) == 0
+            probe = template.filter.locate(frames[0], (gt[0][0] + gt[0][2] / 2, gt[0][1] + gt[0][3] / 2))
+            old = before.locate(frames[0], (gt[0][0] + gt[0][2] / 2, gt[0][1] + gt[0][3] / 2))
+            assert probe.peak == old.peak
+    assert judged_lost >= 10
+
+
+def test_when_the_judge_turns_to_lost_the_tracker_enters_the_lost_state() -> None:
+    seq = make_sequence(100, seed=2, out_of_view=(40, 40))
+    frames, gt = seq.load(), seq.groundtruth
+    t = wmiltrack.Tracker("rcwmil-cf", seed=0)
+    t.init(frames[0], tuple(gt[0]))
+    entered = 0
+    for f in frames[1:]:
+        t.update(f)
+        judge = t.parts.judge
+        assert judge is not None
+        if judge.turned and judge.lost:
+            assert t.parts.lost  # the recovery looks for the target from the next frame
+            entered += 1
+    assert entered >= 1

@@ -166,7 +166,8 @@ def test_only_rcwmil_cf_has_the_correlation_filters() -> None:
     changed = {k for k, v in cf.as_dict().items() if plus.as_dict()[k] != v}
     assert changed == {"variant", "description", "colour_weight", "template_weight",
                        "template_area", "template_cell", "template_channels", "template_reuse",
-                       "template_gate", "scale_dsst", "scale_samples", "judge_memory"}
+                       "template_gate", "scale_dsst", "scale_samples", "judge_memory",
+                       "judge_gates", "judge_holds"}
     assert cf.template_weight > 0 and cf.scale_dsst > 0 and cf.scale_model == plus.scale_model
 
 

@@ -145,10 +145,6 @@ class CorrelationSettings:
     compressed : int
         Channels the 31 fHOG channels are projected onto (ECO: the principal axes of the
         first sample's features, fixed from then on); 0 keeps all of them.
-    min_region : float
-        The search region covers at least this many frame pixels (its aspect kept): a small
-        target gets a region wide enough for the motion of its frames (ECO holds its search
-        area at 150**2 pixels or more); 0 lets the region follow the target's size alone.
     """
 
     cell: int = 4
@@ -159,12 +155,9 @@ class CorrelationSettings:
     learning_rate: float = 0.01
     exclusion: int = 5
     compressed: int = 0
-    min_region: float = 0.0
 
     def __post_init__(self) -> None:
         """Check every value (ValueError naming the setting)."""
-        _need(math.isfinite(self.min_region) and self.min_region >= 0.0,
-              f"min_region must be >= 0, got {self.min_region!r}")
         _need(_is_int(self.cell) and 1 <= self.cell <= 16, f"cell must be an int in 1..16, got {self.cell!r}")
         _need(_is_int(self.exclusion) and self.exclusion >= 0,
               f"exclusion must be an int >= 0, got {self.exclusion!r}")
@@ -358,9 +351,6 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         s = self.settings
         extra = s.padding * (w + h) / 2.0
         rw, rh = w + extra, h + extra
-        if rw * rh < s.min_region:
-            grow = math.sqrt(s.min_region / (rw * rh))
-            rw, rh = rw * grow, rh * grow
         resize = math.sqrt(s.template_area / (rw * rh))
         cols = smooth_size(max(4, round(rw * resize / s.cell)))
         rows = smooth_size(max(4, round(rh * resize / s.cell)))

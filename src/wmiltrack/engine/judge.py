@@ -30,6 +30,7 @@ class LostJudge:
         self.settings = settings
         self.threshold = score.lost_threshold
         self.lost = False
+        self.turned = False  # whether the last frame changed the verdict
         self._run = 0  # frames in a row that argue for changing the verdict
         self.confidence = math.nan  # the last frame's judged confidence
 
@@ -48,7 +49,8 @@ class LostJudge:
         c = self.confidence = self.judged(score, first_peak)
         against = c < s.judge_low if not self.lost else c > s.judge_high  # False for NaN
         self._run = self._run + 1 if against else 0
-        if self._run >= (s.judge_leave if self.lost else s.judge_enter):
+        self.turned = self._run >= (s.judge_leave if self.lost else s.judge_enter)
+        if self.turned:
             self.lost = not self.lost
             self._run = 0
         return not self.lost

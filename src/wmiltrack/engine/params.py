@@ -89,6 +89,10 @@ class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, C
         if self.judge_memory > 0 and not (self.template_weight > 0 or self.template_motion):
             raise ValueError("judge_memory > 0 needs the correlation-filter template "
                              "(template_weight > 0 or template_motion)")
+        if (self.judge_gates or self.judge_holds) and self.judge_memory <= 0:
+            raise ValueError("judge_gates and judge_holds need the judge (judge_memory > 0)")
+        if self.judge_holds and not self.redetect:
+            raise ValueError("judge_holds needs the lost state and re-detection (redetect=True)")
 
     # -- derived values ---------------------------------------------------------------------
     @property
@@ -197,7 +201,7 @@ VARIANTS: dict[str, Params] = {
 VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     variant="rcwmil-cf", colour_weight=0.65, template_weight=0.2, template_area=80.0**2,
     template_cell=2, template_channels=10, template_reuse=True, template_gate=0.4,
-    scale_dsst=8.0, scale_samples=17, judge_memory=3.0,
+    scale_dsst=8.0, scale_samples=17, judge_memory=3.0, judge_gates=True, judge_holds=True,
     description="rcwmil-plus with correlation filters on fHOG, for accuracy over speed (about "
     "half its frames per second): a translation filter over the target plus twice its mean side "
     "(Staple's template, 40 x 40 cells of 2 px, its 31 channels compressed to 10 as in ECO, "
@@ -207,7 +211,9 @@ VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     "times its response divided by its peak, in rcwmil-plus's Haar scale search (learning, as "
     "the translation filter, on frames whose score is at least 0.4); ok is judged with the "
     "first frame's filter as a memory of the target: logistic(8 (score - 0.5) + 3 ln(its peak "
-    "/ 0.082)), lost after 3 frames below 0.4, found after 2 above 0.9 (boxes as without it).",
+    "/ 0.082)), lost after 3 frames below 0.4, found after 2 above 0.9; while the judge holds "
+    "the target for lost nothing learns, and when it turns to lost the tracker enters the lost "
+    "state and looks for the target over the whole frame.",
 )
 
 

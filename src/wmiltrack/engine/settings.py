@@ -748,6 +748,12 @@ class JudgeSettings:
         it counts for it, in (0, 1) with ``judge_low <= judge_high``.
     judge_enter, judge_leave : int
         Frames in a row that start and end the lost state (>= 1).
+    judge_gates : bool
+        While the judge holds the target for lost, no part learns (the boxes then change).
+    judge_holds : bool
+        When the judge's verdict turns to lost, the tracker enters the recovery's lost state
+        (``redetect``): the box is held, nothing learns, and the target is looked for over
+        the whole frame until the classifier or the re-detection finds it again.
     """
 
     judge_memory: float = 0.0
@@ -757,6 +763,8 @@ class JudgeSettings:
     judge_high: float = 0.9
     judge_enter: int = 3
     judge_leave: int = 2
+    judge_gates: bool = False
+    judge_holds: bool = False
 
     def __post_init__(self) -> None:
         JudgeSettings.check(self)
@@ -773,3 +781,7 @@ class JudgeSettings:
               f"{self.judge_low} and {self.judge_high}")
         _need(self.judge_enter >= 1, f"judge_enter must be >= 1, got {self.judge_enter}")
         _need(self.judge_leave >= 1, f"judge_leave must be >= 1, got {self.judge_leave}")
+        _need(isinstance(self.judge_gates, bool),
+              f"judge_gates must be True or False, got {self.judge_gates!r}")
+        _need(isinstance(self.judge_holds, bool),
+              f"judge_holds must be True or False, got {self.judge_holds!r}")

@@ -256,7 +256,7 @@ class Tracker:
         drive(self._learn_steps(model.first))
         self._search_log = []
         self._score = 1.0
-        self._ok = True
+        self._ok = self._tracked = True
         self._fused = parts.appearance_only and model.can_fuse
         self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
@@ -375,6 +375,7 @@ class Tracker:
                 results = yield from model.fused_step(search, origin)
                 score = confidence(self._move(origin, stages, results), model.k,
                                    p.confidence_offset)
+                self._verdict(score)
             else:
                 score = yield from self._composed_steps(img, search, origin, previous)
             self._score = score
@@ -382,15 +383,18 @@ class Tracker:
             model.ii = own  # a shared table is only borrowed for this frame
         return self._report()
 
-    def _report(self) -> TrackResult:
-        """The end of a frame: whether it counts as tracked (the policy's threshold, or the
-        judge's verdict), and the result."""
+    def _verdict(self, score: float) -> None:
+        """Whether the frame of this score counts as tracked: the policy's threshold, or the
+        judge's verdict (which keeps its own history). Once per frame, before learning."""
         parts = self._parts
         if parts.judge is not None and parts.template is not None:
-            tracked = parts.judge.verdict(self._score, parts.template.first_peak)
+            self._tracked = parts.judge.verdict(score, parts.template.first_peak)
         else:
-            tracked = parts.policy.tracked(self._score)
-        self._ok = tracked and not parts.lost
+            self._tracked = parts.policy.tracked(score)
+
+    def _report(self) -> TrackResult:
+        """The end of a frame: its result (``ok`` from its verdict and the lost state)."""
+        self._ok = self._tracked and not self._parts.lost
         return self._result()
 
     def _result(self) -> TrackResult:
@@ -413,15 +417,27 @@ class Tracker:
         if parts.recovery is not None and parts.recovery.judge(conf, img, self._box,
                                                                self._witnesses()):
             self._hold(previous)  # the target is lost from this frame on
+            self._verdict(0.0)
             return 0.0
+        self._verdict(score)
+        judge = parts.judge
+        if (judge is not None and judge.lost and judge.turned and self._params.judge_holds
+                and parts.recovery is not None):
+            parts.recovery.lost, parts.recovery.frames_lost = True, 1  # look for it again
+            self._hold(self._box)
+            return score
         yield from self._learn_all(img, score)
         if parts.motion is not None:
             parts.motion.follow(previous, self._box, parts.policy.tracked(conf))
         return score
 
     def _learn_all(self, img: np.ndarray, score: float) -> Steps:
-        """Every part learns from the frame at the current box."""
+        """Every part learns from the frame at the current box (none while the judge, with
+        ``judge_gates``, holds the target for lost)."""
         parts = self._parts
+        if parts.judge is not None and parts.judge.lost and self._params.judge_gates:
+            parts.appearance.skip_learning()
+            return
         yield from self._learn_steps(parts.appearance.track)
         for cue in parts.cues:
             if score >= getattr(cue, "learn_above", 0.0):
@@ -458,11 +474,13 @@ class Tracker:
             found = recovery.find(img)
             if found is None:
                 self._hold(previous)
+                self._verdict(0.0)
                 return 0.0
             stages = [(p.fine_radius, p.fine_step)] if p.fine_radius > 0 else self._stages
             raw = yield from self._search_from(img, found, stages)
             conf = confidence(raw, model.k, p.confidence_offset)
         score = parts.policy.score(conf, img, self._box)
+        self._verdict(score)
         yield from self._learn_all(img, score)
         if parts.motion is not None:  # a jump back is not a velocity
             parts.motion.follow(self._box, self._box, False)
