@@ -140,8 +140,8 @@ class Tracker:
     Parameters
     ----------
     variant : str
-        ``"rcwmil"`` (default, the paper's tracker), ``"ct"``, ``"fct"``, ``"mil"``,
-        ``"wmil"``, ``"osil"`` or ``"rcwmil-plus"``; see :func:`wmiltrack.variants`.
+        A preset: a key of :func:`wmiltrack.variants`, the preset registry (default
+        ``"rcwmil"``, the paper's tracker; ``wmiltrack variants`` lists them all).
     seed : int
         Seed of the random feature bank and negative sampling. The same seed and the same
         frames give identical boxes.
