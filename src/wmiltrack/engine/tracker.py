@@ -21,6 +21,7 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 
 from .. import _core
+from . import copying as _copying  # noqa: F401 (installs deepcopy for the core's objects)
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
 from .cues import ColourCue, Cue
@@ -195,6 +196,17 @@ class Tracker:
         self._box: IntBox = (0, 0, 0, 0)
         self._score = math.nan
         self._search_log: list[tuple[IntBox, int, int]] = []
+
+    # -- copies: copy.deepcopy(tracker) forks it ------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        """Everything but the lock that keeps two threads out (a copy gets its own)."""
+        state = self.__dict__.copy()
+        del state["_busy"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._busy = threading.Lock()
 
     # -- public API ------------------------------------------------------------------------
     @property
