@@ -79,10 +79,9 @@ class HaarAppearance:
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
-        self._bags_for = {}
+        self.__dict__.update(state, _bags_for={})
         if "bank_arrays" in state:  # started: the base bank again (the others on demand)
-            self._banks = {self.base_wh: self._core_bank(self.bank_arrays)}
+            self.__dict__["_banks"] = {self.base_wh: self._core_bank(self.bank_arrays)}
 
     # -- state -----------------------------------------------------------------------------
     def start(self, img: np.ndarray, box: IntBox) -> None:
