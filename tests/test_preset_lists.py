@@ -84,3 +84,13 @@ def test_front_pages_introduce_every_preset(page: str) -> None:
     intro = text.split("\n## ")[0]
     named = set(re.findall(r"\*\*(" + PRESET.pattern + r")\*\*", intro))
     assert {n[0] for n in named} == set(VARIANTS), page
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/integrations.md", "docs/api.md"])
+def test_pages_that_name_the_compat_classes_name_them_all(page: str) -> None:
+    from wmiltrack import compat
+
+    text = (ROOT / page).read_text(encoding="utf-8")
+    missing = [cls.__name__ for cls in compat.COMPAT_CLASSES.values()
+               if not re.search(rf"\b{cls.__name__}\b", text)]
+    assert not missing, f"{page} does not name {missing}"
