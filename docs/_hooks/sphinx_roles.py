@@ -12,7 +12,8 @@ import re
 from typing import Any
 
 #: A role as mkdocstrings leaves it in the page's HTML: ``:func:<code>target</code>``.
-ROLE = re.compile(r":(?:py:)?(?:class|func|meth|mod|data|attr|exc|obj|const|ref|term):<code>(~?)([^<]*)</code>")
+ROLE = re.compile(r":(?:py:)?(?:class|func|meth|mod|data|attr|exc|obj|const|ref|term):"
+                  r"<code>(~?)([^<]*)</code>")
 
 
 def _code(match: re.Match[str]) -> str:

@@ -35,30 +35,38 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         for spec in trackers:
             check_tracker_spec(spec)  # an unknown tracker or parameter: exit status 2
     set_model_paths(args)
-    from ..eval.pipeline import run_eval
+    from ..eval.pipeline import EvalArgumentError, run_eval
 
-    doc = run_eval(
-        args.dataset,
-        args.out,
-        trackers=trackers,
-        results=args.results,
-        protocol=args.protocol,
-        sequences=split_specs(args.sequences) or None,
-        jobs=args.jobs,
-        repeats=args.repeats,
-        seed=args.seed,
-        skip=args.skip,
-        burnin=args.burnin,
-        missing=args.missing,
-        plots=not args.no_plots,
-        cv_threads=args.cv_threads,
-        show_progress=not (args.no_progress or args.quiet),
-        executor=args.executor,
-        scheduler=args.scheduler,
-        resume=args.resume,
-        layout=args.layout,
-    )
+    try:
+        doc = run_eval(
+            args.dataset,
+            args.out,
+            trackers=trackers,
+            results=args.results,
+            protocol=args.protocol,
+            sequences=split_specs(args.sequences) or None,
+            jobs=args.jobs,
+            repeats=args.repeats,
+            seed=args.seed,
+            skip=args.skip,
+            burnin=args.burnin,
+            missing=args.missing,
+            plots=not args.no_plots,
+            cv_threads=args.cv_threads,
+            show_progress=not (args.no_progress or args.quiet),
+            executor=args.executor,
+            scheduler=args.scheduler,
+            resume=args.resume,
+            layout=args.layout,
+        )
+    except EvalArgumentError as exc:  # options that do not go together: exit status 2
+        raise UsageError(str(exc)) from None
     print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
+    return _report(args, doc)
+
+
+def _report(args: argparse.Namespace, doc: dict[str, Any]) -> int:
+    """Print the table (and, unless --quiet, the files written); the exit status."""
     if not args.quiet:
         print(f"(wall time {doc['wall_time']:.1f} s)")
         for key, path in doc["files"].items():
