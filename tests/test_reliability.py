@@ -21,6 +21,7 @@ import re
 import subprocess
 import sys
 import tracemalloc
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,14 @@ HERE = Path(__file__).resolve().parent
 Frame = np.ndarray
 Box = tuple[float, float, float, float]
 Check = Callable[[], "str | None"]
+
+
+def _as_matrix(a: np.ndarray) -> np.ndarray:
+    """``a`` as an ``np.matrix`` (numpy warns that the subclass is not recommended: users still
+    hand them in)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        return np.asmatrix(a)
 
 
 # ------------------------------------------------------------------------------ scenes
@@ -271,6 +280,9 @@ def _frame_cases() -> Iterator[Case]:
             "gray-transposed": [np.ascontiguousarray(g.T).T for g in gray],
             "gray-rows-reversed": [g[::-1] for g in gray],
             "gray-every-other-pixel": [np.repeat(np.repeat(g, 2, 0), 2, 1)[::2, ::2] for g in gray],
+            "gray-np-matrix": [_as_matrix(g) for g in gray],
+            "masked-array": [np.ma.masked_array(f, mask=False) for f in frames],
+            "big-endian-uint16": [f.astype(">u2") for f in frames],
         })
         for label, view in views.items():
             copies = [np.ascontiguousarray(x) for x in view]

@@ -17,7 +17,8 @@ def as_frame(frame: Any) -> np.ndarray:
     ``H x W x 4`` (BGRA; alpha ignored), any memory layout, read-only or not. A frame whose
     rows are contiguous (C order, or a crop of such a frame) is used without copying; another
     layout (Fortran order, a transposed or reversed view, every other column) is copied into C
-    order once, because OpenCV, which some cues use, refuses such arrays.
+    order once, because OpenCV, which some cues use, refuses such arrays. An ndarray subclass
+    (``np.matrix``, a masked array: its data, the mask ignored) is read as a plain array.
 
     * uint8: used as is.
     * other integer dtypes: accepted when every value is in 0..255 (the 8-bit scale),
@@ -30,6 +31,8 @@ def as_frame(frame: Any) -> np.ndarray:
     """
     if not isinstance(frame, np.ndarray):
         raise TypeError(f"frame must be a numpy array, got {type(frame).__name__}")
+    if type(frame) is not np.ndarray:  # a subclass (np.matrix, a masked array): its plain data,
+        frame = np.asarray(frame)      # which numpy's and OpenCV's functions read as expected
     if frame.ndim not in (2, 3):
         raise ValueError(f"frame must be H x W or H x W x C, got shape {frame.shape}")
     if frame.ndim == 3 and frame.shape[2] not in (1, 3, 4):
