@@ -45,6 +45,9 @@ class FakeNano:
         self.frames.append(img.shape)
         return True, self.box
 
+    def getTrackingScore(self) -> float:  # noqa: N802 (OpenCV's name)
+        return 0.75
+
 
 @pytest.fixture()
 def fake_nano(monkeypatch: pytest.MonkeyPatch) -> type[FakeNano]:
@@ -94,7 +97,7 @@ def test_model_paths_reach_opencv(fake_nano: type[FakeNano], tmp_path: Path, sou
     made = fake_nano.made[-1]
     assert (made.params.backbone, made.params.neckhead) == (str(backbone), str(head))
     assert made.frames == [(60, 80, 3), (60, 80, 3)]  # gray frames given as 3 channels
-    assert r.ok and r.box == (10.0, 10.0, 20.0, 20.0)
+    assert r.ok and r.box == (10.0, 10.0, 20.0, 20.0) and r.score == 0.75  # OpenCV's own score
 
 
 def test_track_takes_the_model_options(fake_nano: type[FakeNano], tmp_path: Path,

@@ -377,7 +377,8 @@ class OpenCVTracker:
         Returns
         -------
         TrackResult
-            ``score`` is always NaN (OpenCV gives none); ``ok`` is OpenCV's "found" flag;
+            ``score`` is the tracker's ``getTrackingScore()`` where it has one (Nano, Vit),
+            else NaN (the others give none); ``ok`` is OpenCV's "found" flag;
             ``box`` is NaN (or the last box, with ``lost_box="hold"``) when not found.
 
         Raises
@@ -389,11 +390,21 @@ class OpenCVTracker:
             raise RuntimeError(f"{self.name}: call init() before update()")
         found, rect = self._tracker.update(self._colour(_frame(frame)))
         found = bool(found)
+        score = self._score()
         if found:
             self._last = (float(rect[0]), float(rect[1]), float(rect[2]), float(rect[3]))
-            return TrackResult(self._last, math.nan, True)
+            return TrackResult(self._last, score, True)
         box: Box = self._last if self.lost_box == "hold" else (math.nan,) * 4
-        return TrackResult(box, math.nan, False)
+        return TrackResult(box, score, False)
+
+    def _score(self) -> float:
+        """The tracker's confidence of its last update where OpenCV gives one (Nano and Vit:
+        ``getTrackingScore()``), else NaN."""
+        get = getattr(self._tracker, "getTrackingScore", None)
+        if get is None:
+            return math.nan
+        value = float(get())
+        return value if math.isfinite(value) else math.nan
 
 
 def split_specs(text: str | None) -> list[str]:
