@@ -401,7 +401,7 @@ class OpenCVTracker:
         """The tracker's confidence of its last update where OpenCV gives one (Nano and Vit:
         ``getTrackingScore()``), else NaN."""
         get = getattr(self._tracker, "getTrackingScore", None)
-        if get is None:
+        if get is None or self.kind not in MODEL_ENV:  # only the networks' confidence is reported
             return math.nan
         value = float(get())
         return value if math.isfinite(value) else math.nan
