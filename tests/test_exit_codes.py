@@ -122,6 +122,12 @@ def test_a_write_failure_is_1_and_the_summary_does_not_claim_the_boxes(
     assert "cannot write the boxes" in err and "boxes in /dev/full" not in err
 
 
+def _default_sigint() -> None:
+    """In the child: Ctrl-C's default action, even when the tests run where SIGINT is ignored
+    (a shell's background job), which Python would otherwise inherit."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_eval_interrupted_is_130_in_one_line(tmp_path: Path) -> None:
     """Ctrl-C reaches the whole process group (the workers too): one line, no traceback."""
     root = tmp_path / "data"
@@ -131,7 +137,7 @@ def test_eval_interrupted_is_130_in_one_line(tmp_path: Path) -> None:
     proc = subprocess.Popen([sys.executable, "-m", "wmiltrack", "eval", str(root), "--trackers", "mil",
                              "--repeats", "4", "-j", "2", "--out", str(out), "--no-progress"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_default_sigint)
     deadline = time.monotonic() + 120
     while not (out / "boxes").exists() and proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)

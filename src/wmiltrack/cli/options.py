@@ -119,7 +119,7 @@ def trackers_help(default: str | None = "rcwmil", *, opencv: bool = True) -> str
     text = f"a preset: {', '.join(preset_names())}"
     if opencv:
         text += f"; or opencv:NAME, NAME one of {', '.join(OPENCV_TRACKERS)}"
-    text += " (`wmiltrack variants` lists the presets; docs/trackers.md says which to pick)"
+    text += " (`wmiltrack variants` lists the presets and their parameters)"
     if default is not None:
         text += f"; default {default}"
     return text
@@ -137,11 +137,12 @@ def check_tracker_spec(spec: str) -> None:
         if is_opencv_spec(name):
             parse_opencv_name(name)
             return
-        if name.lower() not in preset_names():
-            from ..trackers import make_tracker
+        if name.lower() in preset_names():
+            Params.for_variant(name, **overrides)  # an unknown parameter or a bad value
+            return
+        from ..trackers import make_tracker
 
-            make_tracker(spec)  # raises the registry's message, with its "did you mean"
-        Params.for_variant(name, **overrides)
+        make_tracker(spec)  # not a preset: the registry's own answer ("did you mean ...")
     except (ValueError, TypeError) as exc:
         raise UsageError(str(exc)) from None
 
