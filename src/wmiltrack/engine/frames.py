@@ -53,7 +53,8 @@ def as_frame(frame: Any) -> np.ndarray:
                 f"{frame.dtype} frame has values in [{lo}, {hi}]; wmiltrack reads integer frames on "
                 "the 8-bit scale 0..255 (convert it first, e.g. (frame >> 8).astype(np.uint8) for 16-bit)"
             )
-        return frame.astype(np.uint8, order="C")
+        converted: np.ndarray = frame.astype(np.uint8, order="C")
+        return converted
     if kind == "f":
         lo, hi = float(np.min(frame)), float(np.max(frame))
         if not (math.isfinite(lo) and math.isfinite(hi)):
@@ -68,7 +69,8 @@ def as_frame(frame: Any) -> np.ndarray:
                 f"float frame has values in [{lo:g}, {hi:g}]: ambiguous, a [0, 1] image would read "
                 "as black on wmiltrack's 0..255 float scale; pass (frame * 255) or a uint8 frame"
             )
-        return np.rint(frame).astype(np.uint8, order="C")
+        rounded: np.ndarray = np.rint(frame).astype(np.uint8, order="C")
+        return rounded
     raise TypeError(f"frame dtype {frame.dtype} is not supported: pass uint8 (or 0..255 ints/floats)")
 
 
