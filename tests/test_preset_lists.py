@@ -94,3 +94,11 @@ def test_pages_that_name_the_compat_classes_name_them_all(page: str) -> None:
     missing = [cls.__name__ for cls in compat.COMPAT_CLASSES.values()
                if not re.search(rf"\b{cls.__name__}\b", text)]
     assert not missing, f"{page} does not name {missing}"
+
+
+def test_the_trackers_pages_variant_table_has_every_preset() -> None:
+    text = (ROOT / "docs" / "trackers.md").read_text(encoding="utf-8")
+    table = text[text.index("| variant | features |"):]
+    table = table[:table.index("\n\n")]
+    names = re.findall(r"^\| \*\*([\w-]+)\*\* \|", table, flags=re.MULTILINE)
+    assert names == list(VARIANTS)
