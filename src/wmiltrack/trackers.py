@@ -51,6 +51,7 @@ from .engine.result import Box, Frame, TrackerLike, TrackResult
 
 __all__ = [
     "MODEL_ENV",
+    "MODEL_FILES",
     "OPENCV_TRACKERS",
     "OpenCVTracker",
     "installed_opencv",
@@ -89,11 +90,13 @@ MODEL_ENV: dict[str, dict[str, str]] = {
 """The model files of OpenCV's neural-network trackers: for each tracker, its ``Params``
 attribute and the environment variable read when the parameter is not given."""
 
-_MODEL_FILES = {  # what each model file is, for the messages
+MODEL_FILES: dict[tuple[str, str], str] = {
     ("Nano", "backbone"): "NanoTrack's backbone (nanotrack_backbone_sim.onnx)",
     ("Nano", "neckhead"): "NanoTrack's neck and head (nanotrack_head_sim.onnx)",
     ("Vit", "net"): "the Vit tracker's model (object_tracking_vittrack_2023sep.onnx)",
 }
+"""What each model file of :data:`MODEL_ENV` is, by (tracker, parameter), for messages and
+help."""
 
 _PREFIX = "opencv:"
 
@@ -204,7 +207,7 @@ def model_paths(kind: str, params: dict[str, Any]) -> dict[str, str]:
     out: dict[str, str] = {}
     for attr, env in MODEL_ENV.get(kind, {}).items():
         value = params.get(attr) or os.environ.get(env, "")
-        what = _MODEL_FILES[(kind, attr)]
+        what = MODEL_FILES[(kind, attr)]
         if not value:
             raise TrackerUnavailable(
                 f"opencv:{kind} needs {what}: give its path as opencv:{kind}:{attr}=FILE or in "

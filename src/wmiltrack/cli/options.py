@@ -150,14 +150,14 @@ def check_tracker_spec(spec: str) -> None:
 def add_model_options(p: argparse.ArgumentParser) -> None:
     """``--nano-backbone``, ``--nano-head`` and ``--vit-model``: the model files of OpenCV's
     neural-network trackers (``opencv:Nano``, ``opencv:Vit``), which no wheel ships."""
-    from ..trackers import MODEL_ENV
+    from ..trackers import MODEL_ENV, MODEL_FILES
 
     for kind, attrs in MODEL_ENV.items():
         for attr, env in attrs.items():
             option = _model_option(kind, attr)
             p.add_argument(option, type=Path, default=None, metavar="FILE",
-                           help=f"model file {attr} of opencv:{kind} (default: the environment "
-                           f"variable {env})")
+                           help=f"for opencv:{kind}: {MODEL_FILES[(kind, attr)]} (default: "
+                           f"the environment variable {env})")
 
 
 def _model_option(kind: str, attr: str) -> str:
