@@ -144,3 +144,17 @@ def test_list_clips_with_one_name_in_two_folders_get_two_box_files(tmp_path: Pat
     assert len(files) == 2 and all(p.endswith(".txt") for p in files)
     first = [np.loadtxt(out / f, delimiter=",")[0] for f in files]
     assert {tuple(b) for b in first} == {(10, 10, 20, 20), (12, 12, 20, 20)}
+
+
+def test_frames_behind_a_linked_img_folder_are_inputs_too(tmp_path: Path) -> None:
+    """An OTB folder whose ``img/`` is a link to the frames elsewhere: a frame reached through
+    the link is still one of the run's inputs."""
+    write_generated_otb(tmp_path / "store", "Seq", seed=2, n=6)
+    seq = tmp_path / "linked"
+    seq.mkdir()
+    (seq / "img").symlink_to(tmp_path / "store" / "Seq" / "img", target_is_directory=True)
+    (seq / "groundtruth_rect.txt").write_bytes((tmp_path / "store" / "Seq" / "groundtruth_rect.txt").read_bytes())
+    frame = tmp_path / "store" / "Seq" / "img" / "0002.jpg"
+    before = frame.read_bytes()
+    assert cli.main(["track", str(seq), "-o", str(frame)]) == 2
+    assert frame.read_bytes() == before

@@ -29,10 +29,12 @@ def same_file(a: Path, b: Path) -> bool:
 
 def _inside(path: Path, folder: Path) -> bool:
     """Whether the existing file ``path`` lies in ``folder`` or below it (a file a sequence
-    folder's reader may take: an image, the ground truth, ``start.txt``)."""
+    folder's reader may take: an image, the ground truth, ``start.txt``), its ``img/``
+    sub-folder included when that is a link to elsewhere."""
     if not folder.is_dir() or not path.exists():
         return False
-    return path.resolve().is_relative_to(folder.resolve())
+    target = path.resolve()
+    return any(target.is_relative_to(f.resolve()) for f in (folder, folder / "img") if f.is_dir())
 
 
 def check_outputs(outputs: Sequence[tuple[str, Path | None]], inputs: Iterable[Path]) -> None:
