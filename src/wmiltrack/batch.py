@@ -4,10 +4,11 @@ The list file has one line per clip, ``PATH x,y,w,h`` (the box's numbers separat
 semicolons or spaces; ``PATH`` a video or image folder, relative to the list file's folder;
 blank lines and lines starting with ``#`` are skipped). Every clip becomes one job
 (:func:`track_clip`) on one of :mod:`wmiltrack.executors` (this process, worker processes,
-Dask), and its box file, ``<output folder>/<clip name>.txt``, is written as soon as that clip
-is finished. A box file is written under a temporary name and renamed when complete, so a
-run that is stopped leaves either a complete file or none; the next run skips every clip
-whose file exists (resume) and tracks the others.
+Dask), and its box file, ``<output folder>/<clip name>.txt`` (for clips of one name in
+different folders ``<output folder>/<folders>_<clip name>.txt``, the folders from the list
+file's), is written as soon as that clip is finished. A box file is written under a
+temporary name and renamed when complete, so a run that is stopped leaves either a complete
+file or none; the next run skips every clip whose file exists (resume) and tracks the others.
 
 A clip's frames are read as ``wmiltrack track`` reads them: a frame that cannot be used is
 skipped with the last box held, and the first line is the first box as the tracker uses it

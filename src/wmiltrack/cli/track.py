@@ -501,7 +501,8 @@ def add_track(sub: Subparsers) -> None:
                    "clips' box files")
     p.add_argument("--list", type=Path, metavar="FILE",
                    help="track many clips: FILE holds one 'PATH x,y,w,h' line per clip (PATH "
-                   "relative to FILE's folder); each clip's boxes go to -o DIR/<clip name>.txt as "
+                   "relative to FILE's folder); each clip's boxes go to -o DIR/<clip name>.txt "
+                   "(clips of one name in different folders: DIR/<folder>_<clip name>.txt) as "
                    "soon as it is finished (written complete, then renamed), and a clip whose box "
                    "file exists is skipped, so running the command again resumes a stopped run")
     p.add_argument("--video", type=Path, help="write a video with the box, frame number and score "
