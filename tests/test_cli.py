@@ -72,4 +72,4 @@ def test_track_errors_are_messages_not_tracebacks(image_folder, tmp_path: Path) 
     res = run("track", str(folder), "--box", "1,2,3")
     assert res.returncode != 0 and "four numbers" in res.stderr
     res = run("track", str(folder), "--box", "5000,5000,30,30")
-    assert res.returncode == 1 and "outside" in res.stderr
+    assert res.returncode == 2 and "outside" in res.stderr  # a bad --box: bad input, 2

@@ -276,7 +276,7 @@ def test_bad_arguments(
                 str(tmp_path / "o"),
             ]
         )
-        == 1
+        == 2  # options that do not go together: a bad command line
     )
     assert "--results" in capsys.readouterr().err
     assert (

@@ -182,7 +182,7 @@ def test_track_cli_boxes_errors(tmp_path, capsys) -> None:
         cv2.imwrite(str(folder / f"{k + 1:04d}.png"), np.full((60, 80, 3), 40 * k, np.uint8))
     empty = tmp_path / "none.txt"
     empty.write_text("")
-    assert main(["track", str(folder), "--boxes", str(empty)]) == 1
+    assert main(["track", str(folder), "--boxes", str(empty)]) == 2  # bad input: 2
     assert "holds no box" in capsys.readouterr().err
     one = tmp_path / "one.txt"
     one.write_text("10,10,20,20\n")
@@ -372,3 +372,37 @@ def test_a_forked_process_gets_its_own_core_threads() -> None:
     with ctx.Pool(2) as pool:
         there = pool.map_async(_three_targets_boxes, [frames, frames]).get(timeout=30)
     assert there == [here, here]
+
+
+def test_add_refuses_a_frame_of_another_size(two_targets) -> None:
+    """All targets follow one video: a target started on frames of another size would make
+    every later update fail (for it, or for the others)."""
+    frames, boxes, _, _ = two_targets
+    mt = MultiTracker("rcwmil", seed=0)
+    mt.add(frames[0], boxes[0])
+    small = np.ascontiguousarray(frames[0][:, :200])
+    with pytest.raises(ValueError, match="live targets were started on 320x120"):
+        mt.add(small, (10, 10, 30, 30))
+    assert mt.ids == [0]
+    assert mt.add(frames[0], boxes[1]) == 1  # the refused add used up no id
+    got = [mt.update(f) for f in frames[1:4]]
+    assert [r[1].box for r in got] == single("rcwmil", 1, frames[:4], boxes[1])
+    mt.remove(0)
+    mt.remove(1)
+    assert mt.add(small, (10, 10, 30, 30)) == 2  # with no live target, any size starts anew
+    assert set(mt.update(small)) == {2}
+
+
+@pytest.mark.parametrize("variant", ["rcwmil", "rcwmil-cf"])
+def test_an_update_that_raises_changes_no_target(two_targets, variant: str) -> None:
+    frames, boxes, _, _ = two_targets
+    mt = MultiTracker(variant, seed=0)
+    for b in boxes:
+        mt.add(frames[0], b)
+    mt.update(frames[1])
+    for bad in (frames[2][:, :200], frames[2][:100], frames[2].astype(bool)):
+        with pytest.raises((ValueError, TypeError)):
+            mt.update(bad)
+    later = [mt.update(f) for f in frames[2:6]]
+    for i, b in enumerate(boxes):
+        assert [r[i].box for r in later] == single(variant, i, frames[:6], b)[1:]

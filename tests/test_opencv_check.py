@@ -55,7 +55,8 @@ def test_conflict_is_detected_and_the_fix_is_one_line(
     assert message is not None and "\n" not in message
     fix = message.split("fix: ", 1)[1]
     # every installed wheel is removed, then the one that covers them all is installed
-    assert fix == f"pip uninstall -y {' '.join(installed_opencv_distributions())} && pip install {keep}"
+    # ... at the installed version, so that the fix does not upgrade OpenCV too
+    assert fix == f"pip uninstall -y {' '.join(installed_opencv_distributions())} && pip install {keep}==4.10.0.84"
     assert record[0].filename == __file__  # points at the caller, not at wmiltrack's internals
 
 
@@ -88,3 +89,32 @@ def test_this_environment_imports_cleanly_and_a_second_wheel_is_reported(tmp_pat
     assert run.returncode == 0, run.stderr
     assert "OpenCVConflictWarning" in run.stderr
     assert f"fix: pip uninstall -y {' '.join(sorted([installed[0], extra], key=opencv_check.OPENCV_DISTRIBUTIONS.index))}" in run.stderr
+
+
+def test_the_fix_pins_the_kept_wheel_or_its_kind() -> None:
+    names = ["opencv-python-headless", "opencv-contrib-python-headless"]
+    msg = opencv_conflict_message(names, {"opencv-python-headless": "5.0.0.93",
+                                          "opencv-contrib-python-headless": "4.12.0.88"})
+    assert msg is not None and msg.endswith("pip install opencv-contrib-python-headless==4.12.0.88")
+    msg = opencv_conflict_message(["opencv-python", "opencv-contrib-python-headless"],
+                                  {"opencv-python": "5.0.0.93", "opencv-contrib-python-headless": "5.0.0.93"})
+    assert msg is not None and msg.endswith("pip install opencv-contrib-python==5.0.0.93")
+    assert opencv_conflict_message(names) is not None  # no versions known: no pin
+
+
+def test_every_command_shows_the_conflict_as_one_line(tmp_path: Path) -> None:
+    """``wmiltrack --help`` (and every other command) printed the warning and then the line of
+    wmiltrack's code that raised it; now it is one line, with a pinned fix."""
+    installed = installed_opencv_distributions()
+    extra = "opencv-contrib-python-headless" if "contrib" not in installed[0] else "opencv-python"
+    info = tmp_path / f"{extra.replace('-', '_')}-4.10.0.84.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {extra}\nVersion: 4.10.0.84\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")])}
+    env.pop("PYTHONWARNINGS", None)
+    for args in (["--help"], ["variants", "--json"]):
+        run = subprocess.run([sys.executable, "-m", "wmiltrack", *args], capture_output=True, text=True, env=env)
+        assert run.returncode == 0, run.stderr
+        lines = run.stderr.splitlines()
+        assert len(lines) == 1 and "OpenCVConflictWarning" in lines[0], run.stderr
+        assert "warn_" not in run.stderr and "==" in lines[0].split("fix: ")[1]

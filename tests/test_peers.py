@@ -12,6 +12,7 @@ cv2 = pytest.importorskip("cv2")
 from wmiltrack.engine.result import TrackResult
 from wmiltrack.eval.metrics import iou
 from wmiltrack.trackers import (
+    MODEL_ENV,
     OPENCV_TRACKERS,
     OpenCVTracker,
     TrackerLike,
@@ -173,7 +174,7 @@ def test_lost_box_policy() -> None:
             assert r.box == (50.0, 40.0, 24.0, 30.0)
 
 
-@pytest.mark.parametrize("name", [n for n in OPENCV_TRACKERS if n != "MIL"])
+@pytest.mark.parametrize("name", [n for n in OPENCV_TRACKERS if n != "MIL" and n not in MODEL_ENV])
 def test_contrib_trackers_run_when_installed(name: str) -> None:
     if name not in available_opencv_trackers():
         pytest.skip(f"{name} needs opencv-contrib-python-headless")

@@ -21,6 +21,7 @@ import re
 import subprocess
 import sys
 import tracemalloc
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,14 @@ HERE = Path(__file__).resolve().parent
 Frame = np.ndarray
 Box = tuple[float, float, float, float]
 Check = Callable[[], "str | None"]
+
+
+def _as_matrix(a: np.ndarray) -> np.ndarray:
+    """``a`` as an ``np.matrix`` (numpy warns that the subclass is not recommended: users still
+    hand them in)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        return np.asmatrix(a)
 
 
 # ------------------------------------------------------------------------------ scenes
@@ -242,7 +251,7 @@ def _frame_cases() -> Iterator[Case]:
     """Frame dtypes, shapes, layouts, sizes and misuse."""
     frames = _base_frames()
     gray = [np.ascontiguousarray(f[..., 1]) for f in frames]
-    for v in ("rcwmil", "ct", "mil"):
+    for v in VARIANTS:  # every preset: the colour and correlation cues read frames through OpenCV
         # documented conversions: identical boxes
         yield Case(f"{v}/frame-uint16-in-range", _same_boxes(v, frames, [f.astype(np.uint16) for f in frames]))
         yield Case(f"{v}/frame-int64-in-range", _same_boxes(v, frames, [f.astype(np.int64) for f in frames]))
@@ -268,6 +277,16 @@ def _frame_cases() -> Iterator[Case]:
             "from-bytes": [np.frombuffer(f.tobytes(), np.uint8).reshape(f.shape) for f in frames],
             "gray-col-strided": [np.ascontiguousarray(f)[..., 1] for f in frames],
         }
+        # gray frames: the colour cues read them as luma, through OpenCV
+        views.update({
+            "gray-fortran-order": [np.asfortranarray(g) for g in gray],
+            "gray-transposed": [np.ascontiguousarray(g.T).T for g in gray],
+            "gray-rows-reversed": [g[::-1] for g in gray],
+            "gray-every-other-pixel": [np.repeat(np.repeat(g, 2, 0), 2, 1)[::2, ::2] for g in gray],
+            "gray-np-matrix": [_as_matrix(g) for g in gray],
+            "masked-array": [np.ma.masked_array(f, mask=False) for f in frames],
+            "big-endian-uint16": [f.astype(">u2") for f in frames],
+        })
         for label, view in views.items():
             copies = [np.ascontiguousarray(x) for x in view]
             yield Case(f"{v}/frame-{label}-same-as-copy", _same_boxes(v, copies, view))
@@ -293,8 +312,9 @@ def _frame_cases() -> Iterator[Case]:
         ("float-inf", _poke(f0.astype(np.float32), math.inf), ValueError, "NaN or infinity"),
         ("float-unit-scale", f0.astype(np.float32) / 255.0, ValueError, "ambiguous"),
     ]
-    for label, frame, exc, match in bad:
-        yield Case(f"frame-{label}", _init("rcwmil", frame, BASE_BOX), exc, match)
+    for v in VARIANTS:
+        for label, frame, exc, match in bad:
+            yield Case(f"{v}/frame-{label}", _init(v, frame, BASE_BOX), exc, match)
     yield Case("frame-float-all-black-ok", _ok("rcwmil", [np.zeros((60, 80), np.float32)] * 3, (10, 10, 20, 20)))
     yield Case("update-before-init", _update_before_init, NotInitializedError, r"call init\(frame, box\)")
     yield Case("box-before-init", _box_before_init, NotInitializedError, "before update")

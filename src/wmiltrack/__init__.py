@@ -16,9 +16,9 @@ except PackageNotFoundError:  # running from a source tree that was never instal
     __version__ = "0+unknown"
 
 from .engine.result import TrackResult
-from .opencv_check import warn_if_opencv_conflict
+from .opencv_check import warn_at_import
 
-warn_if_opencv_conflict()  # two OpenCV wheels share one cv2: say how to fix it
+warn_at_import()  # two OpenCV wheels share one cv2: say how to fix it, in one line
 
 if TYPE_CHECKING:
     from .engine.cues import Cue

@@ -4,10 +4,11 @@ The list file has one line per clip, ``PATH x,y,w,h`` (the box's numbers separat
 semicolons or spaces; ``PATH`` a video or image folder, relative to the list file's folder;
 blank lines and lines starting with ``#`` are skipped). Every clip becomes one job
 (:func:`track_clip`) on one of :mod:`wmiltrack.executors` (this process, worker processes,
-Dask), and its box file, ``<output folder>/<clip name>.txt``, is written as soon as that clip
-is finished. A box file is written under a temporary name and renamed when complete, so a
-run that is stopped leaves either a complete file or none; the next run skips every clip
-whose file exists (resume) and tracks the others.
+Dask), and its box file, ``<output folder>/<clip name>.txt`` (for clips of one name in
+different folders ``<output folder>/<folders>_<clip name>.txt``, the folders from the list
+file's), is written as soon as that clip is finished. A box file is written under a
+temporary name and renamed when complete, so a run that is stopped leaves either a complete
+file or none; the next run skips every clip whose file exists (resume) and tracks the others.
 
 A clip's frames are read as ``wmiltrack track`` reads them: a frame that cannot be used is
 skipped with the last box held, and the first line is the first box as the tracker uses it
@@ -102,7 +103,8 @@ def read_clip_list(list_file: str | os.PathLike[str], out_dir: str | os.PathLike
     list_file:
         One ``PATH x,y,w,h`` line per clip (see the module's description).
     out_dir:
-        Folder of the box files: clip ``a/b.mp4`` gets ``out_dir/b.txt``.
+        Folder of the box files: clip ``a/b.mp4`` gets ``out_dir/b.txt``; clips of one name in
+        different folders get their folders in the name (``a/b.mp4``: ``out_dir/a_b.txt``).
 
     Returns
     -------
@@ -113,15 +115,14 @@ def read_clip_list(list_file: str | os.PathLike[str], out_dir: str | os.PathLike
     FileNotFoundError
         The list file is missing.
     ValueError
-        A line that is not ``PATH x,y,w,h``, a clip that does not exist, two clips with the same
-        name (their box files would collide), or no clip at all; the message names the line.
+        A line that is not ``PATH x,y,w,h``, a clip that does not exist, one clip listed twice
+        (their box files would collide), or no clip at all; the message names the line.
     """
     lf = Path(list_file)
     if not lf.is_file():
         raise FileNotFoundError(f"list file not found: {lf}")
     base, out = lf.resolve().parent, Path(out_dir).resolve()
-    clips: list[Clip] = []
-    by_output: dict[str, int] = {}
+    found: list[tuple[int, Path, tuple[float, float, float, float]]] = []
     for lineno, raw in enumerate(lf.read_text(encoding="utf-8-sig").splitlines(), start=1):
         text = raw.strip()
         if not text or text.startswith("#"):
@@ -133,15 +134,34 @@ def read_clip_list(list_file: str | os.PathLike[str], out_dir: str | os.PathLike
         path = (base / Path(name).expanduser()).resolve()
         if not path.exists():
             raise ValueError(f"{lf}:{lineno}: {path} does not exist")
-        output = str(out / f"{path.stem if path.is_file() else path.name}.txt")
+        found.append((lineno, path, box))
+    if not found:
+        raise ValueError(f"{lf} lists no clip: write one 'PATH x,y,w,h' line per clip")
+    names = [_clip_name(path) for _, path, _ in found]
+    clips: list[Clip] = []
+    by_output: dict[str, int] = {}
+    for (lineno, path, box), name in zip(found, names):
+        if names.count(name) > 1:  # clips of one name in different folders: name the folders too
+            name = _clip_name(path, base)
+        output = str(out / f"{name}.txt")
         if output in by_output:
             raise ValueError(f"{lf}:{lineno}: its box file {output} is also line "
-                             f"{by_output[output]}'s: give the clips different names")
+                             f"{by_output[output]}'s (the same clip twice?)")
         by_output[output] = lineno
         clips.append(Clip(str(path), box, lineno, output))
-    if not clips:
-        raise ValueError(f"{lf} lists no clip: write one 'PATH x,y,w,h' line per clip")
     return clips
+
+
+def _clip_name(path: Path, base: Path | None = None) -> str:
+    """The name of a clip's box file (without ``.txt``): the video's stem or the folder's name;
+    with ``base``, its path from ``base`` (or its full path), folders joined by ``_``, so that
+    ``cam1/clip.mp4`` and ``cam2/clip.mp4`` get ``cam1_clip`` and ``cam2_clip``."""
+    stem = path.stem if path.is_file() else path.name
+    if base is None:
+        return stem
+    parent = path.parent
+    folders = parent.relative_to(base).parts if parent.is_relative_to(base) else parent.parts[1:]
+    return "_".join([*folders, stem])
 
 
 def track_clip(job: ClipJob) -> ClipResult:

@@ -4,15 +4,17 @@ The stable public path of :mod:`wmiltrack.integrations.opencv`, where they are d
 """
 
 from .integrations.opencv import (
+    COMPAT_CLASSES,
     TrackerCompat,
     TrackerCT,
     TrackerFCT,
     TrackerMILBoost,
     TrackerOSIL,
     TrackerRCWMIL,
+    TrackerRCWMILCF,
     TrackerRCWMILPlus,
     TrackerWMIL,
 )
 
-__all__ = ["TrackerCT", "TrackerCompat", "TrackerFCT", "TrackerMILBoost", "TrackerOSIL",
-           "TrackerRCWMIL", "TrackerRCWMILPlus", "TrackerWMIL"]
+__all__ = ["COMPAT_CLASSES", "TrackerCT", "TrackerCompat", "TrackerFCT", "TrackerMILBoost",
+           "TrackerOSIL", "TrackerRCWMIL", "TrackerRCWMILCF", "TrackerRCWMILPlus", "TrackerWMIL"]

@@ -128,7 +128,7 @@ class ProcessExecutor:
         pool = ProcessPoolExecutor(
             max_workers=min(self.jobs, len(items)),
             mp_context=get_context("spawn"),
-            initializer=set_cv_threads,
+            initializer=_start_worker,
             initargs=(self.cv_threads,),
         )
         try:
@@ -137,6 +137,16 @@ class ProcessExecutor:
                 yield fut.result()
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _start_worker(cv_threads: int | None) -> None:
+    """A worker process's set-up: OpenCV's threads, and Ctrl-C left to the parent. A Ctrl-C at
+    a terminal reaches every process of the group; the parent stops the run and reports it in
+    one line, while a worker that took it would print its own traceback."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    set_cv_threads(cv_threads)
 
 
 def require_distributed() -> Any:

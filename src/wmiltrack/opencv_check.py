@@ -10,7 +10,9 @@ uninstalling either later leaves a broken ``cv2``.  pip does not stop this.
 (whose own ``cv2`` calls are the ones that break) and the command line (which imports the
 package) see it; it costs under a millisecond (four :mod:`importlib.metadata` look-ups after the
 one ``wmiltrack.__version__`` already made).  It emits :class:`OpenCVConflictWarning`, a
-:class:`UserWarning`, with a one-line fix; silence it with
+:class:`UserWarning`, as one line (at import it names ``wmiltrack`` as its source, not a line
+of wmiltrack's code, which would be printed after it) with a one-line fix that installs the
+matching version; silence it with
 ``warnings.filterwarnings("ignore", category=OpenCVConflictWarning)`` or
 ``python -W "ignore::UserWarning"``.  With only one OpenCV wheel installed nothing is emitted.
 """
@@ -18,7 +20,7 @@ one ``wmiltrack.__version__`` already made).  It emits :class:`OpenCVConflictWar
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from importlib import metadata
 
 __all__ = [
@@ -26,6 +28,7 @@ __all__ = [
     "OpenCVConflictWarning",
     "installed_opencv_distributions",
     "opencv_conflict_message",
+    "warn_at_import",
     "warn_if_opencv_conflict",
 ]
 
@@ -55,13 +58,16 @@ def installed_opencv_distributions() -> list[str]:
     return found
 
 
-def opencv_conflict_message(installed: Sequence[str]) -> str | None:
+def opencv_conflict_message(installed: Sequence[str],
+                            versions: Mapping[str, str] | None = None) -> str | None:
     """One line saying how to fix several OpenCV wheels installed together, or ``None`` for one.
 
     The fix removes every one of them (a lone uninstall would delete files the other needs) and
     installs the single wheel that covers what the installed ones offered: contrib modules if a
-    contrib wheel was there, GUI functions if a non-headless one was.  wmiltrack runs with any
-    of the four.
+    contrib wheel was there, GUI functions if a non-headless one was, at the version installed
+    (``versions``: each wheel's; the kept wheel's own, else that of an installed wheel of its
+    kind, contrib or not), so that the fix does not also upgrade OpenCV.  wmiltrack runs with
+    any of the four.
     """
     names = list(dict.fromkeys(installed))
     if len(names) < 2:
@@ -69,10 +75,25 @@ def opencv_conflict_message(installed: Sequence[str]) -> str | None:
     contrib = any("contrib" in n for n in names)
     gui = any(not n.endswith("-headless") for n in names)
     keep = "opencv" + ("-contrib" if contrib else "") + "-python" + ("" if gui else "-headless")
+    known = dict(versions or {})
+    same_kind = [n for n in names if ("contrib" in n) == contrib and n in known]
+    version = known.get(keep) or (known[same_kind[0]] if same_kind else None)
+    pin = f"=={version}" if version else ""
     return (
         f"{' and '.join(names)} are installed together and overwrite each other's cv2; "
-        f"fix: pip uninstall -y {' '.join(names)} && pip install {keep}"
+        f"fix: pip uninstall -y {' '.join(names)} && pip install {keep}{pin}"
     )
+
+
+def _versions(names: Sequence[str]) -> dict[str, str]:
+    """The installed version of each of ``names`` (metadata only)."""
+    out = {}
+    for name in names:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return out
 
 
 def warn_if_opencv_conflict(stacklevel: int = 1) -> str | None:
@@ -88,7 +109,21 @@ def warn_if_opencv_conflict(stacklevel: int = 1) -> str | None:
     str or None
         The warning's message, or ``None`` when at most one OpenCV wheel is installed.
     """
-    message = opencv_conflict_message(installed_opencv_distributions())
+    installed = installed_opencv_distributions()
+    message = opencv_conflict_message(installed, _versions(installed))
     if message is not None:
         warnings.warn(message, OpenCVConflictWarning, stacklevel=stacklevel + 1)
+    return message
+
+
+def warn_at_import() -> str | None:
+    """:func:`warn_if_opencv_conflict` as ``import wmiltrack`` runs it: the warning names
+    ``wmiltrack`` as its source, so that it prints as one line (``wmiltrack:0:
+    OpenCVConflictWarning: ...``) instead of being followed by a line of wmiltrack's own code,
+    in every command of the command line as in a user's program; filters by category and
+    module (``-W ignore::UserWarning``) work as before."""
+    installed = installed_opencv_distributions()
+    message = opencv_conflict_message(installed, _versions(installed))
+    if message is not None:
+        warnings.warn_explicit(message, OpenCVConflictWarning, "wmiltrack", 0, module="wmiltrack")
     return message

@@ -20,12 +20,19 @@ MOSSE         --                                         ``cv2.legacy.TrackerMOS
 MedianFlow    --                                         ``cv2.legacy.TrackerMedianFlow_create``
 TLD           --                                         ``cv2.legacy.TrackerTLD_create``
 Boosting      --                                         ``cv2.legacy.TrackerBoosting_create``
+Nano          ``cv2.TrackerNano_create``                 same
+Vit           ``cv2.TrackerVit_create``                  same
 ============  =========================================  ===================================
 
 Both wheels install the same ``cv2`` package, so only one can be installed at a time; a
 tracker missing from the installed one raises :class:`TrackerUnavailable` whose message
-gives the commands to swap wheels.  (The DNN trackers DaSiamRPN, Nano and Vit need model
-files and are not wrapped.)
+gives the commands to swap wheels.
+
+Nano (NanoTrack v2) and Vit are neural-network trackers: they need model files, which are
+not part of any wheel. Give their paths as parameters (``opencv:Nano:backbone=FILE:neckhead=FILE``,
+``opencv:Vit:net=FILE``) or in the environment variables of :data:`MODEL_ENV`
+(``WMILTRACK_NANO_BACKBONE``, ``WMILTRACK_NANO_HEAD``, ``WMILTRACK_VIT_MODEL``); without them
+the tracker raises :class:`TrackerUnavailable` saying which file is missing.
 """
 
 from __future__ import annotations
@@ -43,11 +50,14 @@ from .engine.frames import clip_box
 from .engine.result import Box, Frame, TrackerLike, TrackResult
 
 __all__ = [
+    "MODEL_ENV",
+    "MODEL_FILES",
     "OPENCV_TRACKERS",
     "OpenCVTracker",
     "installed_opencv",
     "TrackerUnavailable",
     "available_opencv_trackers",
+    "is_opencv_spec",
     "make_tracker",
     "parse_opencv_name",
     "parse_spec",
@@ -55,7 +65,8 @@ __all__ = [
 ]
 
 #: Names of the OpenCV trackers that :class:`OpenCVTracker` wraps.
-OPENCV_TRACKERS: tuple[str, ...] = ("MIL", "KCF", "CSRT", "MOSSE", "MedianFlow", "TLD", "Boosting")
+OPENCV_TRACKERS: tuple[str, ...] = ("MIL", "KCF", "CSRT", "MOSSE", "MedianFlow", "TLD", "Boosting",
+                                     "Nano", "Vit")
 
 # name -> (factories tried in order as dotted paths under cv2, Params class or None)
 _FACTORIES: dict[str, tuple[tuple[str, ...], str | None]] = {
@@ -66,9 +77,26 @@ _FACTORIES: dict[str, tuple[tuple[str, ...], str | None]] = {
     "MedianFlow": (("legacy.TrackerMedianFlow_create", "TrackerMedianFlow_create"), None),
     "TLD": (("legacy.TrackerTLD_create", "TrackerTLD_create"), None),
     "Boosting": (("legacy.TrackerBoosting_create", "TrackerBoosting_create"), None),
+    "Nano": (("TrackerNano_create",), "TrackerNano_Params"),
+    "Vit": (("TrackerVit_create",), "TrackerVit_Params"),
 }
 
-_CONTRIB_ONLY = frozenset(OPENCV_TRACKERS) - {"MIL"}
+_CONTRIB_ONLY = frozenset(OPENCV_TRACKERS) - {"MIL", "Nano", "Vit"}
+
+MODEL_ENV: dict[str, dict[str, str]] = {
+    "Nano": {"backbone": "WMILTRACK_NANO_BACKBONE", "neckhead": "WMILTRACK_NANO_HEAD"},
+    "Vit": {"net": "WMILTRACK_VIT_MODEL"},
+}
+"""The model files of OpenCV's neural-network trackers: for each tracker, its ``Params``
+attribute and the environment variable read when the parameter is not given."""
+
+MODEL_FILES: dict[tuple[str, str], str] = {
+    ("Nano", "backbone"): "NanoTrack's backbone (nanotrack_backbone_sim.onnx)",
+    ("Nano", "neckhead"): "NanoTrack's neck and head (nanotrack_head_sim.onnx)",
+    ("Vit", "net"): "the Vit tracker's model (object_tracking_vittrack_2023sep.onnx)",
+}
+"""What each model file of :data:`MODEL_ENV` is, by (tracker, parameter), for messages and
+help."""
 
 _PREFIX = "opencv:"
 
@@ -159,6 +187,39 @@ def parse_opencv_name(name: str) -> str:
     )
 
 
+def is_opencv_spec(spec: str) -> bool:
+    """Whether a tracker spec names one of OpenCV's trackers (``"opencv:..."``)."""
+    return spec.strip().lower().startswith(_PREFIX)
+
+
+def model_paths(kind: str, params: dict[str, Any]) -> dict[str, str]:
+    """The model files of OpenCV tracker ``kind`` (none for the trackers that need none):
+    each from ``params`` or else from its environment variable (:data:`MODEL_ENV`).
+
+    Raises
+    ------
+    TrackerUnavailable
+        A model file is not given or does not exist; the message names the parameter, the
+        environment variable and the file.
+    """
+    import os
+
+    out: dict[str, str] = {}
+    for attr, env in MODEL_ENV.get(kind, {}).items():
+        value = params.get(attr) or os.environ.get(env, "")
+        what = MODEL_FILES[(kind, attr)]
+        if not value:
+            raise TrackerUnavailable(
+                f"opencv:{kind} needs {what}: give its path as opencv:{kind}:{attr}=FILE or in "
+                f"the environment variable {env}. The model files are not part of OpenCV's wheels")
+        if not os.path.isfile(str(value)):
+            source = f"{attr}=" if params.get(attr) else f"{env}="
+            raise TrackerUnavailable(
+                f"opencv:{kind} needs {what}, and {source}{value} is not a file. Check the path")
+        out[attr] = str(value)
+    return out
+
+
 def _factory(name: str) -> Any:
     cv2 = _cv2()
     for path in _FACTORIES[name][0]:
@@ -247,6 +308,7 @@ class OpenCVTracker:
         self._create = _factory(self.kind)
         if self._create is None:
             raise TrackerUnavailable(_swap_hint(self.kind))
+        params = {**params, **model_paths(self.kind, params)}
         self._params = self._make_params(params)
         self._tracker: Any = None
         self._last: Box = (math.nan,) * 4
@@ -271,6 +333,14 @@ class OpenCVTracker:
     def __repr__(self) -> str:
         return f"OpenCVTracker({self.kind!r}, seed={self.seed})"
 
+    def _colour(self, img: Frame) -> Frame:
+        """The frame as the tracker reads it: the neural-network trackers take 3-channel
+        images only, so a gray frame is repeated into three channels for them."""
+        if self.kind in MODEL_ENV and (img.ndim == 2 or img.shape[2] == 1):
+            return np.ascontiguousarray(np.repeat(img.reshape(img.shape[0], img.shape[1], 1), 3,
+                                                  axis=2))
+        return img
+
     def init(self, frame: Frame, box: BoxLike) -> None:
         """Start tracking ``box`` in ``frame`` with a fresh OpenCV tracker.
 
@@ -289,7 +359,7 @@ class OpenCVTracker:
         RuntimeError
             OpenCV refused to initialise.
         """
-        img = _frame(frame)
+        img = self._colour(_frame(frame))
         ibox = _int_box(box, img.shape)
         _cv2().setRNGSeed(self.seed)
         tracker = self._create() if self._params is None else self._create(self._params)
@@ -310,7 +380,8 @@ class OpenCVTracker:
         Returns
         -------
         TrackResult
-            ``score`` is always NaN (OpenCV gives none); ``ok`` is OpenCV's "found" flag;
+            ``score`` is the tracker's ``getTrackingScore()`` where it has one (Nano, Vit),
+            else NaN (the others give none); ``ok`` is OpenCV's "found" flag;
             ``box`` is NaN (or the last box, with ``lost_box="hold"``) when not found.
 
         Raises
@@ -320,13 +391,23 @@ class OpenCVTracker:
         """
         if self._tracker is None:
             raise RuntimeError(f"{self.name}: call init() before update()")
-        found, rect = self._tracker.update(_frame(frame))
+        found, rect = self._tracker.update(self._colour(_frame(frame)))
         found = bool(found)
+        score = self._score()
         if found:
             self._last = (float(rect[0]), float(rect[1]), float(rect[2]), float(rect[3]))
-            return TrackResult(self._last, math.nan, True)
+            return TrackResult(self._last, score, True)
         box: Box = self._last if self.lost_box == "hold" else (math.nan,) * 4
-        return TrackResult(box, math.nan, False)
+        return TrackResult(box, score, False)
+
+    def _score(self) -> float:
+        """The tracker's confidence of its last update where OpenCV gives one (Nano and Vit:
+        ``getTrackingScore()``), else NaN."""
+        get = getattr(self._tracker, "getTrackingScore", None)
+        if get is None or self.kind not in MODEL_ENV:  # only the networks' confidence is reported
+            return math.nan
+        value = float(get())
+        return value if math.isfinite(value) else math.nan
 
 
 def split_specs(text: str | None) -> list[str]:
@@ -406,9 +487,8 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     ----------
     spec:
         ``"opencv:NAME"`` (NAME case-insensitive, one of :data:`OPENCV_TRACKERS`) for an
-        :class:`OpenCVTracker`; anything else is a wmiltrack variant name (``"rcwmil"``,
-        ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``, ``"rcwmil-plus"``) given to
-        ``wmiltrack.Tracker``;
+        :class:`OpenCVTracker`; anything else is one of wmiltrack's presets (a key of
+        :func:`wmiltrack.variants`, the preset registry) given to ``wmiltrack.Tracker``;
         either may end in ``:name=value`` overrides (``"rcwmil:num_selected=30"``, see
         :func:`parse_spec`), so a parameter sweep is a list of specs.
     seed:

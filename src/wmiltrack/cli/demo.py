@@ -4,13 +4,17 @@ from __future__ import annotations
 
 import argparse
 
-from .options import Subparsers
+from .options import EXIT_CODES_EPILOG, Subparsers, check_tracker_spec, trackers_help
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     from ..data.synthetic import make_preset
+    from ..trackers import split_specs
     from .eval import score_runs  # the demo's scores are the eval command's
 
+    trackers = split_specs(args.trackers)
+    for spec in trackers:
+        check_tracker_spec(spec)  # an unknown tracker or parameter: exit status 2
     seq = make_preset("all", seed=args.seed, n_frames=args.frames)
     frames = seq.load()
     gt = seq.groundtruth
@@ -18,7 +22,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     print(f"built-in sequence: {len(frames)} frames of {frames[0].shape[1]}x{frames[0].shape[0]}, "
           "moving textured target with partial occlusion, illumination change and clutter")
     print(f"{'tracker':<10} {'AUC':>6} {'SR@0.5':>7} {'P@20':>6} {'fps':>8}")
-    for name, scores, error in score_runs(args.trackers.split(","), frames, gt, args.seed):
+    for name, scores, error in score_runs(trackers, frames, gt, args.seed):
         if error:
             print(f"{name:<10} failed: {error}")
             continue
@@ -32,9 +36,12 @@ def add_demo(sub: Subparsers) -> None:
     p = sub.add_parser("demo", help="run the tracker on a built-in generated sequence",
                        description="Track the target of a generated sequence (moving textured target, "
                        "partial occlusion, illumination change, cluttered background) and print the "
-                       "success AUC, success rate, precision and update-only frames per second.")
+                       "success AUC, success rate, precision and update-only frames per second.",
+                       epilog=EXIT_CODES_EPILOG + " For demo: a tracker that fails (one not "
+                       "installed) is named in the table, and the status stays 0.")
     p.add_argument("--trackers", default="rcwmil",
-                   help="comma-separated trackers (default rcwmil), e.g. rcwmil,ct,opencv:MIL")
+                   help="comma-separated trackers, each " + trackers_help() + "; e.g. "
+                   "rcwmil,ct,opencv:MIL")
     p.add_argument("--frames", type=int, default=300, help="sequence length (default 300)")
     p.add_argument("--seed", type=int, default=0, help="seed of the sequence and trackers")
     p.set_defaults(func=_cmd_demo)

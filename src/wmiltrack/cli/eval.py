@@ -9,7 +9,16 @@ from pathlib import Path
 from typing import Any
 
 from ..data.layouts import LAYOUTS
-from .options import Subparsers, UsageError, add_executor_options
+from .options import (
+    EXIT_CODES_EPILOG,
+    Subparsers,
+    UsageError,
+    add_executor_options,
+    add_model_options,
+    check_tracker_spec,
+    set_model_paths,
+    trackers_help,
+)
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
@@ -21,34 +30,47 @@ def _cmd_eval(args: argparse.Namespace) -> int:
                          "TrackingNet or VOT layout); to track one video use `wmiltrack track`")
     trackers = split_specs(args.trackers)
     if args.results is None and not trackers:
-        raise ValueError("give --trackers (or --results DIR to score existing box files)")
-    from ..eval.pipeline import run_eval
+        raise UsageError("give --trackers (or --results DIR to score existing box files)")
+    if args.results is None:
+        for spec in trackers:
+            check_tracker_spec(spec)  # an unknown tracker or parameter: exit status 2
+    set_model_paths(args)
+    from ..eval.pipeline import EvalArgumentError, run_eval
 
-    doc = run_eval(
-        args.dataset,
-        args.out,
-        trackers=trackers,
-        results=args.results,
-        protocol=args.protocol,
-        sequences=split_specs(args.sequences) or None,
-        jobs=args.jobs,
-        repeats=args.repeats,
-        seed=args.seed,
-        skip=args.skip,
-        burnin=args.burnin,
-        missing=args.missing,
-        plots=not args.no_plots,
-        cv_threads=args.cv_threads,
-        show_progress=not args.no_progress,
-        executor=args.executor,
-        scheduler=args.scheduler,
-        resume=args.resume,
-        layout=args.layout,
-    )
+    try:
+        doc = run_eval(
+            args.dataset,
+            args.out,
+            trackers=trackers,
+            results=args.results,
+            protocol=args.protocol,
+            sequences=split_specs(args.sequences) or None,
+            jobs=args.jobs,
+            repeats=args.repeats,
+            seed=args.seed,
+            skip=args.skip,
+            burnin=args.burnin,
+            missing=args.missing,
+            plots=not args.no_plots,
+            cv_threads=args.cv_threads,
+            show_progress=not (args.no_progress or args.quiet),
+            executor=args.executor,
+            scheduler=args.scheduler,
+            resume=args.resume,
+            layout=args.layout,
+        )
+    except EvalArgumentError as exc:  # options that do not go together: exit status 2
+        raise UsageError(str(exc)) from None
     print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))
-    print(f"(wall time {doc['wall_time']:.1f} s)")
-    for key, path in doc["files"].items():
-        print(f"wrote {key}: {path}")
+    return _report(args, doc)
+
+
+def _report(args: argparse.Namespace, doc: dict[str, Any]) -> int:
+    """Print the table (and, unless --quiet, the files written); the exit status."""
+    if not args.quiet:
+        print(f"(wall time {doc['wall_time']:.1f} s)")
+        for key, path in doc["files"].items():
+            print(f"wrote {key}: {path}")
     errors = sum(s.get("errors", 0) for s in doc["summary"].values())
     errors += doc.get("unscored_errors", 0)
     return 1 if errors else 0
@@ -88,7 +110,11 @@ def add_eval(sub: Subparsers) -> None:
         epilog="Speed: update-only FPS on pre-decoded frames, OpenCV on one thread unless "
         "--cv-threads says otherwise. Parallel workers (-j) share the cores: for honest speed "
         "figures use -j 1. A frame where a tracker gives no box keeps its last box (--missing "
-        "hold); a frame left without a box is a miss in every figure.",
+        "hold); a frame left without a box is a miss in every figure. Besides the success and "
+        "precision plots, accuracy_speed.png puts each tracker at its mean AUC and FPS of the "
+        "same run. " + EXIT_CODES_EPILOG + " For eval: 1 also when a run of a tracker failed "
+        "(the table names it); a tracker that is not installed, or whose model files are not "
+        "given, is skipped with a note.",
     )
     p.add_argument(
         "dataset",
@@ -106,9 +132,9 @@ def add_eval(sub: Subparsers) -> None:
     p.add_argument(
         "--trackers",
         default="rcwmil",
-        help="comma-separated names: rcwmil, ct, fct, mil, wmil, osil, rcwmil-plus, opencv:NAME, "
-        "each optionally with :key=value parameter overrides (values as Python literals; "
-        "commas inside brackets or quotes stay in the value) (default rcwmil)",
+        help="comma-separated trackers, each " + trackers_help(None) + ", optionally with "
+        ":key=value parameter overrides (values as Python literals; commas inside brackets or "
+        "quotes stay in the value); default rcwmil",
     )
     p.add_argument(
         "--results",
@@ -164,4 +190,7 @@ def add_eval(sub: Subparsers) -> None:
     )
     p.add_argument("--no-plots", action="store_true", help="do not write the PNG plots")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar, notes or list of files written: the table only")
+    add_model_options(p)
     p.set_defaults(func=_cmd_eval)

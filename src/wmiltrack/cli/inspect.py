@@ -6,7 +6,15 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from .options import UsageError, add_tracker_options, open_frames, parse_box, tracker_from_args
+from .options import (
+    EXIT_CODES_EPILOG,
+    UsageError,
+    add_tracker_options,
+    open_frames,
+    parse_box,
+    tracker_from_args,
+)
+from .outputs import check_outputs
 
 
 def _cmd_inspect(args: argparse.Namespace) -> int:
@@ -16,6 +24,7 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
 
     if args.frame < 2:
         raise UsageError("--frame must be >= 2 (frames count from 1; the first one has no update)")
+    check_outputs([("-o", args.output)], [args.input])
     t = tracker_from_args(args, ours=True)
     seq = open_frames(args.input, has_box=args.box is not None)
     if args.box is not None:
@@ -57,12 +66,13 @@ def add_inspect(sub: Any) -> None:
         description="Track INPUT up to --frame and draw, on a crop around the target, the positive "
         "bag (green), the negative bag (red), the coarse search grid around the previous box (blue) "
         "and the fine grid around the coarse winner (yellow) of that frame's update, and the boxes of "
-        "the other scales searched (magenta; rcwmil-plus).")
+        "the other scales searched (magenta; the presets with a scale search).",
+        epilog=EXIT_CODES_EPILOG)
     p.add_argument("input", type=Path, help="video file, image folder or OTB sequence folder")
     p.add_argument("-o", "--output", type=Path, default=Path("samples.png"), help="PNG to write")
     p.add_argument("--frame", type=int, default=2,
                    help="frame to draw, counted from 1 (default 2: the first update)")
     p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (default: ground truth)")
     p.add_argument("--scale", type=int, default=3, help="enlargement of the crop (default 3)")
-    add_tracker_options(p)
+    add_tracker_options(p, opencv=False)
     p.set_defaults(func=_cmd_inspect)

@@ -10,21 +10,47 @@ import argparse
 import os
 import signal
 import sys
+import textwrap
 from collections.abc import Callable, Sequence
 from importlib import import_module
-from typing import NoReturn
+from typing import Any, NoReturn
 
-from .options import Subparsers, UsageError, join_negative_values
+from .options import (
+    EXIT_CODES_EPILOG,
+    EXIT_ERROR,
+    EXIT_SIGINT,
+    EXIT_SIGPIPE,
+    EXIT_USAGE,
+    Subparsers,
+    UsageError,
+    join_negative_values,
+)
 
 #: FFmpeg's and OpenCV's own log lines (``moov atom not found``, ``[ WARN:0@...]``) would reach
 #: the user ahead of the command's own message; both libraries read these when first used.
 QUIET_OPENCV = {"OPENCV_FFMPEG_LOGLEVEL": "-8", "OPENCV_LOG_LEVEL": "ERROR"}  # -8: AV_LOG_QUIET
-EXIT_USAGE = 2
-EXIT_SIGPIPE = 128 + int(getattr(signal, "SIGPIPE", 13))
+
+
+class _HelpFormatter(argparse.HelpFormatter):
+    """argparse's help, with lines broken at spaces only: a preset's name (``rcwmil-plus``)
+    or an option (``--cv-threads``) is never split over two lines."""
+
+    def _split_lines(self, text: str, width: int) -> list[str]:
+        return textwrap.wrap(" ".join(text.split()), width, break_on_hyphens=False)
+
+    def _fill_text(self, text: str, width: int, indent: str) -> str:
+        return textwrap.fill(" ".join(text.split()), width, initial_indent=indent,
+                             subsequent_indent=indent, break_on_hyphens=False)
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse with the command line's one error prefix, ``wmiltrack: error:``."""
+    """argparse with the command line's one error prefix, ``wmiltrack: error:``, and help
+    text that keeps names whole (:class:`_HelpFormatter`); subcommands' parsers are made by
+    this class too."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _HelpFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         self.print_usage(sys.stderr)
@@ -48,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="wmiltrack",
         description="Fast single-object visual tracking (RCWMIL and its family) and tracker benchmarks.",
+        epilog=EXIT_CODES_EPILOG,
     )
     parser.add_argument("--version", action="version", version=f"wmiltrack {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -60,10 +87,12 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line on ``argv`` (default: ``sys.argv[1:]``); returns the exit status.
 
-    Every error is one ``wmiltrack: error: ...`` line, not a traceback: exit status 2 for a
-    command line that cannot run as given (argparse's errors, :class:`UsageError`), 1 for
-    errors of the input or the run (bad files, unavailable trackers, OpenCV errors). Output cut
-    short by a closed pipe (``wmiltrack variants | head -5``) ends quietly with status 141.
+    Every error is one ``wmiltrack: error: ...`` line, not a traceback, and every subcommand
+    has the exit statuses of :data:`~wmiltrack.cli.options.EXIT_CODES`: 2 for a command line
+    that cannot run as given (argparse's errors, :class:`UsageError`), 1 for errors of the
+    input or the run (bad files, unavailable trackers, OpenCV errors), 130 for Ctrl-C (one
+    line, no traceback); output cut short by a closed pipe (``wmiltrack variants | head -5``)
+    ends quietly with status 141.
     """
     for key, value in QUIET_OPENCV.items():
         os.environ.setdefault(key, value)
@@ -80,14 +109,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:
         _silence_stdout()
         return EXIT_SIGPIPE
+    except KeyboardInterrupt:
+        # Ctrl-C: one line, not the traceback of wherever the run was (signals are now
+        # ignored, so that a second Ctrl-C cannot cut this line or the exit short)
+        _ignore_interrupts()
+        print("wmiltrack: interrupted by SIGINT (Ctrl-C); what was finished is written",
+              file=sys.stderr)
+        return EXIT_SIGINT
     except (ValueError, TypeError, FileNotFoundError, RuntimeError) as exc:
         print(f"wmiltrack: error: {exc}", file=sys.stderr)
-        return 1
+        return EXIT_ERROR
     except Exception as exc:
         if type(exc).__module__.split(".")[0] != "cv2":  # cv2.error: OpenCV refused the input
             raise
         print(f"wmiltrack: error: OpenCV: {str(exc).strip().splitlines()[-1]}", file=sys.stderr)
-        return 1
+        return EXIT_ERROR
+
+
+def _ignore_interrupts() -> None:
+    """Ignore further SIGINTs while the command line reports an interrupt and exits."""
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        pass
 
 
 def _silence_stdout() -> None:

@@ -3,12 +3,43 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
+import signal
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 Subparsers = Any  # argparse's _SubParsersAction is private
+
+# -- exit status: one table for every subcommand ----------------------------------------------
+EXIT_OK = 0
+"""The command did what was asked."""
+EXIT_ERROR = 1
+"""The run failed: an input that cannot be read, a tracker that is not installed or fails, an
+output that cannot be written."""
+EXIT_USAGE = 2
+"""The command line cannot run as given, found before anything ran or was written: a bad
+option, an unknown tracker or parameter, a bad box, an output that would overwrite an input."""
+EXIT_SIGINT = 128 + int(signal.SIGINT)
+"""Interrupted by Ctrl-C (SIGINT): 130."""
+EXIT_SIGPIPE = 128 + int(getattr(signal, "SIGPIPE", 13))
+"""Standard output was closed by its reader (``wmiltrack variants | head -1``): 141, quietly,
+as a shell command killed by SIGPIPE."""
+
+EXIT_CODES = {
+    EXIT_OK: "done",
+    EXIT_ERROR: "the run failed (an input that cannot be read, a tracker that is not installed "
+                "or fails, an output that cannot be written)",
+    EXIT_USAGE: "bad command line or input, refused before anything ran or was written (an "
+                "unknown tracker or parameter, a bad box, an output that is an input)",
+    EXIT_SIGINT: "interrupted by Ctrl-C (SIGINT)",
+    EXIT_SIGPIPE: "standard output closed by its reader (| head), quietly",
+}
+"""The exit statuses of every ``wmiltrack`` subcommand, as each ``--help`` lists them."""
+
+EXIT_CODES_EPILOG = "Exit status: " + "; ".join(f"{k} {v}" for k, v in EXIT_CODES.items()) + "."
 
 #: Options whose value may start with a minus sign (``--box -10,-10,40,40``).
 BOX_OPTIONS = ("--box",)
@@ -50,6 +81,10 @@ def parse_box(text: str) -> tuple[float, float, float, float]:
         raise argparse.ArgumentTypeError(f"--box needs four numbers x,y,w,h; got {text!r}") from None
     if len(values) != 4:
         raise argparse.ArgumentTypeError(f"--box needs four numbers x,y,w,h; got {text!r}")
+    if not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"--box needs finite numbers; got {text!r}")
+    if values[2] <= 0 or values[3] <= 0:
+        raise argparse.ArgumentTypeError(f"--box needs a positive width and height; got {text!r}")
     return values[0], values[1], values[2], values[3]
 
 
@@ -69,11 +104,91 @@ def parse_overrides(items: Sequence[str]) -> dict[str, Any]:
     return out
 
 
-def add_tracker_options(p: argparse.ArgumentParser) -> None:
-    """``-t/--tracker``, ``--seed`` and ``--set NAME=VALUE``, shared by the commands that run one tracker."""
-    p.add_argument("-t", "--tracker", default="rcwmil",
-                   help="variant: rcwmil (default), rcwmil-plus (most accurate), ct, fct, mil, wmil, "
-                   "osil, or opencv:NAME (not for inspect)")
+def preset_names() -> list[str]:
+    """wmiltrack's presets, from the registry (:data:`wmiltrack.engine.params.VARIANTS`): every
+    list of presets the command line shows is made from it."""
+    from ..engine.params import VARIANTS
+
+    return list(VARIANTS)
+
+
+def trackers_help(default: str | None = "rcwmil", *, opencv: bool = True) -> str:
+    """The help text of a tracker option: the presets, from the registry, and OpenCV's."""
+    from ..trackers import OPENCV_TRACKERS
+
+    text = f"a preset: {', '.join(preset_names())}"
+    if opencv:
+        text += f"; or opencv:NAME, NAME one of {', '.join(OPENCV_TRACKERS)}"
+    text += " (`wmiltrack variants` lists the presets and their parameters)"
+    if default is not None:
+        text += f"; default {default}"
+    return text
+
+
+def check_tracker_spec(spec: str) -> None:
+    """A :class:`UsageError` (exit status 2) for a tracker spec that names no tracker or sets
+    a parameter the tracker does not have; an OpenCV tracker that is valid but missing from the
+    installed ``cv2`` passes (running it is a runtime failure, exit status 1)."""
+    from ..engine.params import Params
+    from ..trackers import is_opencv_spec, parse_opencv_name, parse_spec
+
+    try:
+        name, overrides = parse_spec(spec)
+        if is_opencv_spec(name):
+            parse_opencv_name(name)
+            return
+        if name.lower() in preset_names():
+            Params.for_variant(name, **overrides)  # an unknown parameter or a bad value
+            return
+        from ..trackers import make_tracker
+
+        make_tracker(spec)  # not a preset: the registry's own answer ("did you mean ...")
+    except (ValueError, TypeError) as exc:
+        raise UsageError(str(exc)) from None
+
+
+def add_model_options(p: argparse.ArgumentParser) -> None:
+    """``--nano-backbone``, ``--nano-head`` and ``--vit-model``: the model files of OpenCV's
+    neural-network trackers (``opencv:Nano``, ``opencv:Vit``), which no wheel ships."""
+    from ..trackers import MODEL_ENV, MODEL_FILES
+
+    for kind, attrs in MODEL_ENV.items():
+        for attr, env in attrs.items():
+            option = _model_option(kind, attr)
+            p.add_argument(option, type=Path, default=None, metavar="FILE",
+                           help=f"for opencv:{kind}: {MODEL_FILES[(kind, attr)]} (default: "
+                           f"the environment variable {env})")
+
+
+def _model_option(kind: str, attr: str) -> str:
+    """``--nano-backbone``, ``--nano-head``, ``--vit-model``: the option of a model file."""
+    short = {"neckhead": "head", "net": "model"}.get(attr, attr)
+    return f"--{kind.lower()}-{short}"
+
+
+def set_model_paths(args: argparse.Namespace) -> None:
+    """Put the model files given by :func:`add_model_options` into their environment variables
+    (:data:`wmiltrack.trackers.MODEL_ENV`), where every tracker this run makes, in this process
+    or a worker started from it, finds them. A path that is not a file is a :class:`UsageError`."""
+    import os
+
+    from ..trackers import MODEL_ENV
+
+    for kind, attrs in MODEL_ENV.items():
+        for attr, env in attrs.items():
+            option = _model_option(kind, attr)
+            path = getattr(args, option.lstrip("-").replace("-", "_"), None)
+            if path is None:
+                continue
+            if not Path(path).is_file():
+                raise UsageError(f"{option} {path} is not a file")
+            os.environ[env] = str(Path(path).expanduser().resolve())
+
+
+def add_tracker_options(p: argparse.ArgumentParser, *, opencv: bool = True) -> None:
+    """``-t/--tracker``, ``--seed`` and ``--set NAME=VALUE``, shared by the commands that run one
+    tracker; ``opencv``: whether OpenCV's trackers may be asked for."""
+    p.add_argument("-t", "--tracker", default="rcwmil", help=trackers_help(opencv=opencv))
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="override a parameter, e.g. --set num_selected=30 (repeatable)")

@@ -20,21 +20,24 @@ from types import FrameType
 from typing import IO, Any
 
 from .options import (
+    EXIT_CODES_EPILOG,
+    EXIT_ERROR,
+    EXIT_OK,
+    EXIT_SIGINT,
     Subparsers,
     UsageError,
     add_executor_options,
+    add_model_options,
     add_tracker_options,
     open_frames,
     parse_box,
     parse_overrides,
+    set_model_paths,
     tracker_from_args,
 )
+from .outputs import check_outputs
 
-EXIT_OK = 0
-EXIT_ERROR = 1
-EXIT_USAGE = 2
-EXIT_SIGINT = 128 + int(signal.SIGINT)    # 130
-EXIT_SIGTERM = 128 + int(signal.SIGTERM)  # 143
+EXIT_SIGTERM = 128 + int(signal.SIGTERM)  # 143, besides the command line's own table
 
 _HELD_COLOR = (0, 0, 255)  # red: the box drawn on a skipped frame is the last one, held
 
@@ -74,42 +77,85 @@ class _BoxLines:
     """One ``x,y,w,h`` line per frame, written and flushed as soon as it is computed, to a file
     (same format as :func:`wmiltrack.data.boxes.write_boxes`) or to standard output.
 
-    The file is opened (and an existing one emptied) at the first line, once the first frame
-    and box are known to be good: a run that fails before it starts leaves the file as it was.
+    The file is opened in two steps, so that a run that fails before it starts leaves an
+    existing file as it was: :meth:`open` opens it without emptying it (a file that cannot be
+    written fails here), and the first line empties it, once the first frame, the box and the
+    other outputs (``--video``) are known to be good. :meth:`abandon` undoes an :meth:`open`
+    whose run did not start (a file it created is removed).
     """
 
-    def __init__(self, path: Path | None) -> None:
+    def __init__(self, path: Path | None, extra: Callable[[Sequence[float], float, bool], str]
+                 | None = None) -> None:
         from ..data.boxes import format_box
 
         self.path = path
         self.count = 0
         self._fh: IO[str] | None = None
+        self._created = False
+        self._regular = False
+        self._started = False
         self._format: Callable[[Sequence[float]], str]
+        self._extra = extra
         if path is None:
             self._fh = sys.stdout
+            self._started = True
             self._format = lambda box: ",".join(f"{float(v):g}" for v in box)
         else:
             self._format = format_box
 
-    def write(self, box: Sequence[float]) -> None:
-        self.write_line(self._format(box))
+    def open(self) -> None:
+        """Open the file for writing without changing what it holds (no-op for stdout)."""
+        if self._fh is not None or self.path is None:
+            return
+        self._created = not self.path.exists()
+        if self._created:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        # a regular file is emptied at the first line; a device or pipe (/dev/null, a FIFO)
+        # holds nothing to keep and cannot be emptied
+        self._regular = self.path.is_file()
+        self._fh = self.path.open("r+" if self._regular and not self._created else "w",
+                                  encoding="utf-8")
+
+    def abandon(self) -> None:
+        """Close a file opened by :meth:`open` before any line: an existing file keeps its
+        content, a file created by :meth:`open` is removed."""
+        if self.path is None or self._fh is None or self._started:
+            return
+        self._fh.close()
+        self._fh = None
+        if self._created:
+            self.path.unlink(missing_ok=True)
+
+    def write(self, box: Sequence[float], score: float = math.nan, ok: bool = True) -> None:
+        """The line of one frame: ``x,y,w,h``, or with ``--scores`` ``x,y,w,h,score,ok``."""
+        line = self._format(box)
+        if self._extra is not None:
+            line += self._extra(box, score, ok)
+        self.write_line(line)
 
     def write_line(self, line: str) -> None:
         """One line (of one frame), flushed at once."""
-        if self._fh is None:
-            assert self.path is not None
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fh = self.path.open("w", encoding="utf-8")
+        self.open()
+        assert self._fh is not None
+        if not self._started:  # the first line: now the old content goes
+            if self._regular:
+                self._fh.seek(0)
+                self._fh.truncate()
+            self._started = True
         self._fh.write(line + "\n")
         self._fh.flush()
         self.count += 1
 
     def close(self) -> None:
         if self.path is not None and self._fh is not None:
+            if not self._started:
+                self.abandon()
+                return
             self._fh.close()
 
 
 def _cmd_track(args: argparse.Namespace) -> int:
+    set_model_paths(args)
     if args.list is not None:
         return _track_list(args)
     if args.input is None:
@@ -140,6 +186,9 @@ def _track_list(args: argparse.Namespace) -> int:
         raise UsageError(f"-o {args.output} is a file; --list writes one box file per clip into a folder")
     tracker_from_args(args)  # an unknown tracker or parameter is a usage error before any clip runs
     clips = read_clip_list(args.list, args.output)
+    for clip in clips:  # no box file may be an input (a clip, a file of a clip's folder, the list)
+        check_outputs([("--list's box file", Path(clip.output))],
+                      [args.list, *(Path(c.path) for c in clips)])
     args.output.mkdir(parents=True, exist_ok=True)
     try:
         executor = make_executor(args.executor, args.jobs, 1, args.scheduler,
@@ -187,6 +236,10 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     if args.boxes is not None and args.box is not None:
         raise UsageError("give either --box (one target) or --boxes (several), not both")
     several = args.boxes is not None
+    if several and args.scores:
+        raise UsageError("--scores goes with one target; --boxes lines already hold a score")
+    check_outputs([("-o", args.output), ("--video", args.video)],
+                  [p for p in (args.input, args.boxes) if p is not None])
     tracker: Any = tracker_from_args(args, several=several)
     seq = open_frames(args.input, has_box=args.box is not None or several)
     starts = _start_boxes(args, seq)
@@ -194,8 +247,10 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     ids: list[int] = []
     reader = TolerantFrames(seq)
     frames = iter(reader)
-    out = _BoxLines(args.output)  # the file is opened at the first box, not before
-    bar = progress(frames, total=reader.expected, desc=f"{args.tracker} {seq.name}")
+    # the file is opened (not emptied) at the first frame, emptied at the first box
+    out = _BoxLines(args.output, _score_fields if args.scores else None)
+    bar = progress(frames, total=reader.expected, desc=f"{args.tracker} {seq.name}",
+                   enabled=False if args.quiet else None)
     writer = None
     skipped = 0
     times: list[float] = []
@@ -203,6 +258,7 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     last_boxes: list[tuple[float, ...]] = []
     last_frame: Any = None
     frames_done = 0
+    broken_pipe = False
     try:
         for i, frame, problem in bar:
             if stop.signum is not None:  # a signal came before the first frame
@@ -220,15 +276,30 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
                           file=sys.stderr)
                 shown, color = last_frame, _HELD_COLOR
                 boxes, scores = last_boxes, [math.nan] * len(last_boxes)
+                oks = [False] * len(last_boxes)
             elif i == 0:
-                if several:
-                    ids = [_add_target(tracker, frame, b, k, args.boxes) for k, b in enumerate(starts)]
-                else:
-                    tracker.init(frame, box)
+                try:
+                    if several:
+                        ids = [_add_target(tracker, frame, b, k, args.boxes)
+                               for k, b in enumerate(starts)]
+                    else:
+                        tracker.init(frame, box)
+                except (ValueError, TypeError) as exc:
+                    if args.box is None and not several:
+                        raise  # the sequence's own ground truth: a bad input file, status 1
+                    raise UsageError(str(exc) if several else f"--box: {exc}") from None
                 # the boxes the trackers start from: rounded to whole pixels, clipped to the frame
                 fw, fh = frame.shape[1], frame.shape[0]
                 boxes = [tuple(float(v) for v in clip_box(b, fw, fh)) for b in starts]
-                scores, shown = [math.nan] * len(boxes), frame
+                _warn_clipped(starts, boxes, fw, fh, bar)
+                scores, shown = [1.0] * len(boxes), frame
+                oks = [True] * len(boxes)
+                # every output is opened before the first line empties -o: a video that
+                # cannot be written leaves an existing box file as it was
+                out.open()
+                if args.video is not None:
+                    writer = _write_video_frame(writer, args.video, shown, boxes, i + 1,
+                                                math.nan, seq.fps, color)
             else:
                 t0 = time.perf_counter()
                 if several:
@@ -239,13 +310,14 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
                 times.append(time.perf_counter() - t0)
                 boxes = [tuple(r.box) for r in found]
                 scores, shown = [r.score for r in found], frame
+                oks = [bool(r.ok) for r in found]
             if several:
                 for k, (b, s) in enumerate(zip(boxes, scores)):
                     out.write_line(_mot_line(i, k, b, s, held=frame is None))
             else:
-                out.write(boxes[0])
+                out.write(boxes[0], scores[0], oks[0])
             frames_done += 1
-            if args.video is not None:
+            if args.video is not None and i > 0:
                 writer = _write_video_frame(writer, args.video, shown, boxes, i + 1,
                                             scores[0] if not several else math.nan, seq.fps, color)
             last_boxes, last_frame = boxes, shown
@@ -254,7 +326,9 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     except KeyboardInterrupt:  # a second SIGINT/SIGTERM while a frame was being processed
         if stop.signum is None:  # not from our handler (not installed outside the main thread)
             stop.signum = int(signal.SIGINT)
-    except OSError as exc:  # writing the boxes failed (disk full, closed pipe, ...)
+    except BrokenPipeError:  # the reader of standard output went away (| head): stop quietly
+        broken_pipe = True
+    except OSError as exc:  # writing the boxes failed (disk full, ...)
         error = f"cannot write the boxes: {exc}"
     finally:
         stop.hurry = False  # a signal now must not cut the closing of the output and video
@@ -268,6 +342,8 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
         except OSError as exc:
             error = error or f"cannot write the boxes: {exc}"
 
+    if broken_pipe:
+        raise BrokenPipeError  # the command line's one exit status for a closed pipe
     return _close_run(args, stop, reader, error, frames_done, len(starts) if several else 0,
                       out.count, times, skipped)
 
@@ -275,7 +351,10 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
 def _start_boxes(args: argparse.Namespace, seq: Any) -> list[tuple[float, ...]]:
     """The first box of each target: --boxes, --box, or the sequence's ground truth."""
     if args.boxes is not None:
-        return _read_start_boxes(args.boxes)
+        try:
+            return _read_start_boxes(args.boxes)
+        except ValueError as exc:  # a bad --boxes file is bad input, as a bad --box is
+            raise UsageError(str(exc)) from None
     if args.box is not None:
         return [tuple(args.box)]
     if seq.groundtruth is not None:
@@ -292,7 +371,8 @@ def _close_run(args: argparse.Namespace, stop: _StopRequest, reader: Any, error:
             error = f"{reader.ended_early} (--strict)"
         else:
             print(f"wmiltrack: warning: {reader.ended_early}", file=sys.stderr)
-    where = "" if args.output is None else f", boxes in {args.output}"
+    written = error is None or not error.startswith("cannot write")
+    where = "" if args.output is None or not written else f", boxes in {args.output}"
     summary = [f"{frames_done} frame{'' if frames_done == 1 else 's'}{where}"]
     if targets:
         summary.append(f"{targets} targets, {lines} lines")
@@ -308,8 +388,28 @@ def _close_run(args: argparse.Namespace, stop: _StopRequest, reader: Any, error:
     if stop.signum is not None:  # the interrupt decides the exit status
         status = 128 + stop.signum
         summary.append(f"interrupted by {signal.Signals(stop.signum).name} (exit status {status})")
-    print(f"wmiltrack: {'; '.join(summary)}", file=sys.stderr)
+    if not args.quiet or status != EXIT_OK:
+        print(f"wmiltrack: {'; '.join(summary)}", file=sys.stderr)
     return status
+
+
+def _score_fields(box: Sequence[float], score: float, ok: bool) -> str:
+    """The ``,score,ok`` that ``--scores`` adds to a line: the tracker's confidence (1 on the
+    first frame, ``nan`` where there is none: OpenCV's trackers, a skipped frame) and 1/0."""
+    return f",{score:.4g},{int(bool(ok))}"
+
+
+def _warn_clipped(given: Sequence[Sequence[float]], used: Sequence[Sequence[float]], fw: int,
+                  fh: int, bar: Any) -> None:
+    """Warn about each first box that reaches past the frame: the tracker starts from the part
+    inside it (rounding to whole pixels alone is not worth a word)."""
+    for b, u in zip(given, used):
+        x, y, w, h = (float(v) for v in b)
+        if x < -0.5 or y < -0.5 or x + w > fw + 0.5 or y + h > fh + 0.5:
+            box = ",".join(f"{v:g}" for v in (x, y, w, h))
+            kept = ",".join(f"{v:g}" for v in u)
+            bar.write(f"wmiltrack: warning: box {box} reaches past the {fw}x{fh} frame; "
+                      f"tracking the part inside it, {kept}", file=sys.stderr)
 
 
 def _read_start_boxes(path: Path) -> list[tuple[float, ...]]:
@@ -383,12 +483,12 @@ def add_track(sub: Subparsers) -> None:
         "is skipped: its line repeats the last box, a warning names it, and the summary counts "
         "it. A video that stops reading before the frame count its header announces is reported "
         "too.",
-        epilog="Exit status: 0 done (skipped frames included); 1 error, including a bad frame "
-        "with --strict or an output that cannot be written; 2 bad command line (also an unknown "
-        "tracker or parameter, or a bad --set value); 130 interrupted "
-        "by SIGINT (Ctrl-C), 143 by SIGTERM. An interrupt stops after the current frame; the "
+        epilog=EXIT_CODES_EPILOG + " For track: skipped frames still give 0; a bad frame "
+        "with --strict is 1; SIGTERM gives 143. An interrupt stops after the current frame; the "
         "output then holds one line per frame processed and --video is closed so that it plays. "
-        "A second interrupt stops at once (the lines and video already written are still kept).")
+        "A second interrupt stops at once (the lines and video already written are still kept). "
+        "-o, --video and --list's box files may not be the input or a file of it (its frames, "
+        "its ground truth), nor each other (exit status 2, nothing written).")
     p.add_argument("input", type=Path, nargs="?",
                    help="video file, image folder or OTB sequence folder (or give --list)")
     p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (pixels)")
@@ -401,15 +501,23 @@ def add_track(sub: Subparsers) -> None:
                    "clips' box files")
     p.add_argument("--list", type=Path, metavar="FILE",
                    help="track many clips: FILE holds one 'PATH x,y,w,h' line per clip (PATH "
-                   "relative to FILE's folder); each clip's boxes go to -o DIR/<clip name>.txt as "
+                   "relative to FILE's folder); each clip's boxes go to -o DIR/<clip name>.txt "
+                   "(clips of one name in different folders: DIR/<folder>_<clip name>.txt) as "
                    "soon as it is finished (written complete, then renamed), and a clip whose box "
                    "file exists is skipped, so running the command again resumes a stopped run")
     p.add_argument("--video", type=Path, help="write a video with the box, frame number and score "
                    "drawn (a skipped frame shows the last good frame with the held box in red)")
+    p.add_argument("--scores", action="store_true",
+                   help="one target: write x,y,w,h,score,ok lines (score: the tracker's confidence "
+                   "in [0, 1], 1 on the first frame, nan where there is none; ok: 1 tracked, 0 "
+                   "lost or skipped frame)")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar and no summary line (warnings and errors are still shown)")
     p.add_argument("--strict", action="store_true",
                    help="stop with exit status 1 at the first frame that cannot be decoded, or when "
                    "a video ends before the frame count its container announces (default: skip "
                    "the frame, hold the last box, warn)")
     add_tracker_options(p)
+    add_model_options(p)
     add_executor_options(p, "the clips")
     p.set_defaults(func=_cmd_track)

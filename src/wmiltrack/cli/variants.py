@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 from typing import Any
 
-from .options import Subparsers
+from .options import EXIT_CODES_EPILOG, Subparsers, UsageError
 
 #: Parameters shown in the variants table, with their column titles.
 VARIANT_COLUMNS = [
@@ -84,13 +85,23 @@ def variant_table() -> str:
     return "\n".join([head, rule, *rows])
 
 
+def _json_value(value: Any) -> Any:
+    """A parameter value JSON has no type for (a tuple is a list already): its text."""
+    return str(value)
+
+
 def _cmd_variants(args: argparse.Namespace) -> int:
     from ..engine.params import VARIANTS
 
+    if args.name and VARIANTS.get(args.name.lower()) is None:
+        raise UsageError(f"unknown variant {args.name!r}; choose one of {', '.join(VARIANTS)}")
+    if args.json:
+        chosen = [args.name.lower()] if args.name else list(VARIANTS)
+        doc = {name: VARIANTS[name].as_dict() for name in chosen}
+        print(json.dumps(doc, indent=1, default=_json_value))
+        return 0
     if args.name:
-        p = VARIANTS.get(args.name.lower())
-        if p is None:
-            raise ValueError(f"unknown variant {args.name!r}; choose one of {', '.join(VARIANTS)}")
+        p = VARIANTS[args.name.lower()]
         print(p.description)
         for key, value in p.as_dict().items():
             if key != "description":
@@ -104,6 +115,9 @@ def add_variants(sub: Subparsers) -> None:
     """Add the ``variants`` subcommand to ``sub``."""
     p = sub.add_parser("variants", help="list the tracker variants and their default parameters",
                        description="Print the variants' defaults as a markdown table, or every "
-                       "parameter of one variant.")
+                       "parameter of one variant.", epilog=EXIT_CODES_EPILOG)
     p.add_argument("name", nargs="?", help="show every parameter of this variant")
+    p.add_argument("--json", action="store_true",
+                   help="print every parameter (of every variant, or of NAME) as JSON: "
+                   "{variant: {parameter: value}}")
     p.set_defaults(func=_cmd_variants)

@@ -69,6 +69,20 @@ class HaarAppearance:
         self.bags: tuple[Any, ...] = ()
         self.chan_names: tuple[str, ...] | None = None
 
+    # -- copies ----------------------------------------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        """What a copy or a pickle keeps: everything but what is rebuilt from it (the core's
+        bag draws, which hold this model's generator, and the core's feature banks)."""
+        state = self.__dict__.copy()
+        state.pop("_bags_for", None)
+        state.pop("_banks", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state, _bags_for={})
+        if "bank_arrays" in state:  # started: the base bank again (the others on demand)
+            self.__dict__["_banks"] = {self.base_wh: self._core_bank(self.bank_arrays)}
+
     # -- state -----------------------------------------------------------------------------
     def start(self, img: np.ndarray, box: IntBox) -> None:
         """Draw the feature bank for ``box`` and start untrained classifiers (the first frame's

@@ -14,7 +14,11 @@ def as_frame(frame: Any) -> np.ndarray:
     """Validate a frame and return it as a uint8 array the core can read without copying.
 
     Accepted: ``H x W`` gray, ``H x W x 1``, ``H x W x 3`` (BGR, as OpenCV reads) and
-    ``H x W x 4`` (BGRA; alpha ignored), any strides, read-only or not.
+    ``H x W x 4`` (BGRA; alpha ignored), any memory layout, read-only or not. A frame whose
+    rows are contiguous (C order, or a crop of such a frame) is used without copying; another
+    layout (Fortran order, a transposed or reversed view, every other column) is copied into C
+    order once, because OpenCV, which some cues use, refuses such arrays. An ndarray subclass
+    (``np.matrix``, a masked array: its data, the mask ignored) is read as a plain array.
 
     * uint8: used as is.
     * other integer dtypes: accepted when every value is in 0..255 (the 8-bit scale),
@@ -27,6 +31,8 @@ def as_frame(frame: Any) -> np.ndarray:
     """
     if not isinstance(frame, np.ndarray):
         raise TypeError(f"frame must be a numpy array, got {type(frame).__name__}")
+    if type(frame) is not np.ndarray:  # a subclass (np.matrix, a masked array): its plain data,
+        frame = np.asarray(frame)      # which numpy's and OpenCV's functions read as expected
     if frame.ndim not in (2, 3):
         raise ValueError(f"frame must be H x W or H x W x C, got shape {frame.shape}")
     if frame.ndim == 3 and frame.shape[2] not in (1, 3, 4):
@@ -39,7 +45,7 @@ def as_frame(frame: Any) -> np.ndarray:
     lo: float  # value range, for the messages below (int for integer frames)
     hi: float
     if frame.dtype == np.uint8:
-        return frame
+        return _rows_contiguous(frame)
     if kind in "ui":
         lo, hi = int(frame.min()), int(frame.max())
         if lo < 0 or hi > 255:
@@ -47,7 +53,8 @@ def as_frame(frame: Any) -> np.ndarray:
                 f"{frame.dtype} frame has values in [{lo}, {hi}]; wmiltrack reads integer frames on "
                 "the 8-bit scale 0..255 (convert it first, e.g. (frame >> 8).astype(np.uint8) for 16-bit)"
             )
-        return frame.astype(np.uint8)
+        converted: np.ndarray = frame.astype(np.uint8, order="C")
+        return converted
     if kind == "f":
         lo, hi = float(np.min(frame)), float(np.max(frame))
         if not (math.isfinite(lo) and math.isfinite(hi)):
@@ -62,8 +69,20 @@ def as_frame(frame: Any) -> np.ndarray:
                 f"float frame has values in [{lo:g}, {hi:g}]: ambiguous, a [0, 1] image would read "
                 "as black on wmiltrack's 0..255 float scale; pass (frame * 255) or a uint8 frame"
             )
-        return np.rint(frame).astype(np.uint8)
+        rounded: np.ndarray = np.rint(frame).astype(np.uint8, order="C")
+        return rounded
     raise TypeError(f"frame dtype {frame.dtype} is not supported: pass uint8 (or 0..255 ints/floats)")
+
+
+def _rows_contiguous(frame: np.ndarray) -> np.ndarray:
+    """``frame`` itself when each row's pixels are contiguous and rows go forward in memory (as
+    OpenCV's functions need), else a C-ordered copy."""
+    item = frame.itemsize
+    pixel = item * (frame.shape[2] if frame.ndim == 3 else 1)
+    rows_ok = frame.strides[1] == pixel and (frame.ndim == 2 or frame.strides[2] == item)
+    if rows_ok and frame.strides[0] >= pixel * frame.shape[1]:
+        return frame
+    return np.ascontiguousarray(frame)
 
 
 def frame_size(frame: np.ndarray) -> tuple[int, int]:

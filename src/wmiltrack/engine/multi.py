@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .frames import as_frame
+from .frames import as_frame, frame_size
 from .params import Params
 from .result import TrackResult
 from .tracker import Tracker, update_many
@@ -82,6 +82,7 @@ class MultiTracker:
         self._threads = threads if threads is not None else (os.cpu_count() or 1)
         self._targets: dict[int, Tracker] = {}
         self._next_id = 0
+        self._frame_wh: tuple[int, int] | None = None  # the live targets' frame size
 
     # -- public API ------------------------------------------------------------------------
     @property
@@ -103,14 +104,24 @@ class MultiTracker:
     def add(self, frame: np.ndarray, box: Any) -> int:
         """Start tracking the object in ``box = (x, y, w, h)`` of ``frame``; returns its id.
 
-        Ids are 0, 1, 2, ... in the order of successful calls. A bad box raises the same
-        ``ValueError``/``TypeError`` as :meth:`Tracker.init` and uses up no id; the other
-        targets are not affected.
+        Ids are 0, 1, 2, ... in the order of successful calls. A bad box or frame raises the
+        same ``ValueError``/``TypeError`` as :meth:`Tracker.init` and uses up no id; the other
+        targets are not affected. All targets follow one video, so a frame of another size than
+        the live targets' is a ``ValueError`` (every later :meth:`update` would fail for one
+        side or the other).
         """
+        img = as_frame(frame)
+        wh = frame_size(img)
+        if self._targets and self._frame_wh is not None and wh != self._frame_wh:
+            raise ValueError(
+                f"frame is {wh[0]}x{wh[1]} but the live targets were started on "
+                f"{self._frame_wh[0]}x{self._frame_wh[1]} frames: all targets of a MultiTracker "
+                "follow one video (use a MultiTracker per video)")
         tracker = Tracker(params=self._params, seed=self._seed + self._next_id)
-        tracker.init(frame, box)
+        tracker.init(img, box)
         target_id = self._next_id
         self._targets[target_id] = tracker
+        self._frame_wh = wh
         self._next_id += 1
         return target_id
 
@@ -123,15 +134,22 @@ class MultiTracker:
     def update(self, frame: np.ndarray) -> dict[int, TrackResult]:
         """Locate every live target in the next frame; ``{id: TrackResult}``.
 
-        The frame is checked once (bad frames raise as :meth:`Tracker.update` does, before any
-        target moves). A target whose update fails (for instance a frame of another size than
-        the one it started on) does not stop the others: its error is raised after all targets
-        have been updated, as a ``ValueError`` naming the target.
+        The frame is checked once, before any target moves: a bad frame, or one of another size
+        than the targets started on, raises as :meth:`Tracker.update` does and changes no
+        target. A target whose update still fails does not stop the others: its error is
+        raised after all targets have been updated, as a ``ValueError`` naming the target.
         """
         img = as_frame(frame)
         items = list(self._targets.items())
         if not items:
             return {}
+        wh = frame_size(img)
+        if wh != self._frame_wh:
+            assert self._frame_wh is not None
+            raise ValueError(
+                f"frame size changed from {self._frame_wh[0]}x{self._frame_wh[1]} to "
+                f"{wh[0]}x{wh[1]}; no target was moved (remove the targets and add them again "
+                "on frames of the new size)")
         trackers = [t for _, t in items]
         shared = self._prepare(img, trackers)
         # Each target runs its own frame step; their calls into the core go together, on up

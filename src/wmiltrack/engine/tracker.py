@@ -21,6 +21,7 @@ from typing import Any, Callable, TypeVar
 import numpy as np
 
 from .. import _core
+from . import copying as _copying  # noqa: F401 (installs deepcopy for the core's objects)
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
 from .cues import ColourCue, Cue
@@ -145,8 +146,8 @@ class Tracker:
     Parameters
     ----------
     variant : str
-        ``"rcwmil"`` (default, the paper's tracker), ``"ct"``, ``"fct"``, ``"mil"``,
-        ``"wmil"``, ``"osil"`` or ``"rcwmil-plus"``; see :func:`wmiltrack.variants`.
+        A preset: a key of :func:`wmiltrack.variants`, the preset registry (default
+        ``"rcwmil"``, the paper's tracker; ``wmiltrack variants`` lists them all).
     seed : int
         Seed of the random feature bank and negative sampling. The same seed and the same
         frames give identical boxes.
@@ -200,6 +201,17 @@ class Tracker:
         self._box: IntBox = (0, 0, 0, 0)
         self._score = math.nan
         self._search_log: list[tuple[IntBox, int, int]] = []
+
+    # -- copies: copy.deepcopy(tracker) forks it ------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        """Everything but the lock that keeps two threads out (a copy gets its own)."""
+        state = self.__dict__.copy()
+        del state["_busy"]
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self._busy = threading.Lock()
 
     # -- public API ------------------------------------------------------------------------
     @property

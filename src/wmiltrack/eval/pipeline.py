@@ -104,7 +104,7 @@ from .report import (
 from .runner import RunOutcome, SerialExecutor, Task, run_task
 from .scoring import Missing, run_boxes, score_ope, score_vot
 
-__all__ = ["make_tasks", "run_eval", "run_tasks"]
+__all__ = ["EvalArgumentError", "make_tasks", "run_eval", "run_tasks"]
 
 FloatArray = npt.NDArray[np.float64]
 Protocol = Literal["ope", "vot"]
@@ -489,25 +489,31 @@ def _score_and_write(
     }
 
 
+class EvalArgumentError(ValueError):
+    """Arguments :func:`run_eval` cannot honour together (checked before any work); the command
+    line reports it as a bad command line, exit status 2."""
+
+
 def _check_eval_arguments(repeats: int, jobs: int, protocol: str, missing: str, resume: bool,
                           results: str | os.PathLike[str] | None) -> None:
-    """``ValueError`` for arguments :func:`run_eval` cannot honour, before any work."""
+    """:class:`EvalArgumentError` for arguments :func:`run_eval` cannot honour, before any
+    work."""
     if repeats < 1:
-        raise ValueError(f"--repeats must be at least 1, got {repeats}")
+        raise EvalArgumentError(f"--repeats must be at least 1, got {repeats}")
     if jobs < 1:
-        raise ValueError(f"-j must be at least 1, got {jobs}")
+        raise EvalArgumentError(f"-j must be at least 1, got {jobs}")
     if protocol not in ("ope", "vot"):
-        raise ValueError(f"protocol must be 'ope' or 'vot', not {protocol!r}")
+        raise EvalArgumentError(f"protocol must be 'ope' or 'vot', not {protocol!r}")
     if missing not in ("hold", "miss"):
-        raise ValueError(f"missing must be 'hold' or 'miss', not {missing!r}")
+        raise EvalArgumentError(f"missing must be 'hold' or 'miss', not {missing!r}")
     if resume and (protocol != "ope" or results is not None):
-        raise ValueError(
+        raise EvalArgumentError(
             "--resume reads OPE box files back; the VOT protocol's figures need the run itself"
             if results is None
             else "--resume is for running trackers, not with --results"
         )
     if results is not None and protocol == "vot":
-        raise ValueError(
+        raise EvalArgumentError(
             "--results scores box files with the OPE protocol; the VOT protocol "
             "re-initialises the tracker, so it has to run it"
         )

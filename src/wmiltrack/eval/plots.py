@@ -1,8 +1,11 @@
-"""Success and precision plots in the style of the OTB toolkit (matplotlib, Agg backend).
+"""Success and precision plots in the style of the OTB toolkit (matplotlib, Agg backend), and
+an accuracy-speed plot.
 
 Each tracker is one curve; the legend reads ``name [score]`` and is sorted by that score,
 best first, as OTB's ``perfPlot.m`` does: the success plot is ranked by AUC (the mean of the
-21 success-curve points), the precision plot by the precision at 20 px.
+21 success-curve points), the precision plot by the precision at 20 px. The accuracy-speed
+plot puts each tracker at its mean AUC against its update frames per second, both from the same
+run, so that the trade-off between trackers is read at a glance.
 
 matplotlib is an optional dependency (the ``eval`` extra).  :func:`require_matplotlib`
 raises a :class:`RuntimeError` that tells the user to ``pip install "wmiltrack[eval]"``.
@@ -21,6 +24,7 @@ from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 
 __all__ = [
     "INSTALL_HINT",
+    "plot_accuracy_speed",
     "plot_precision",
     "plot_success",
     "ranked",
@@ -206,3 +210,69 @@ def plot_precision(
         legend_loc="lower right",
         dpi=dpi,
     )
+
+
+def plot_accuracy_speed(
+    aucs: Mapping[str, float],
+    fps: Mapping[str, float],
+    path: str | os.PathLike[str],
+    *,
+    title: str = "Accuracy and speed",
+    dpi: int = 80,
+) -> list[str]:
+    """Write the accuracy-speed plot: one labelled point per tracker at (update frames per
+    second, mean AUC), the speed axis logarithmic (trackers differ by orders of magnitude).
+
+    Parameters
+    ----------
+    aucs:
+        ``{tracker: mean success AUC}``.
+    fps:
+        ``{tracker: update frames per second}`` of the same run as ``aucs``.
+    path:
+        Output file (``.png``).
+    title:
+        Plot title.
+    dpi:
+        Resolution.
+
+    Returns
+    -------
+    list of str
+        The trackers plotted: those with a finite AUC and a positive, finite speed (a run
+        scored from box files, ``--results``, has no speed).
+
+    Raises
+    ------
+    RuntimeError
+        If matplotlib is missing.
+    ValueError
+        If no tracker has both figures.
+    """
+    shown = [t for t in ranked(aucs)
+             if t in fps and np.isfinite(float(aucs[t])) and np.isfinite(float(fps[t]))
+             and float(fps[t]) > 0]
+    if not shown:
+        raise ValueError("no tracker has both an AUC and a speed to plot")
+    plt = require_matplotlib()
+    fig, ax = plt.subplots(figsize=(5.6, 3.9))
+    try:
+        xs = np.array([float(fps[t]) for t in shown])
+        ys = np.array([float(aucs[t]) for t in shown])
+        markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
+        for i, (name, x, y) in enumerate(zip(shown, xs, ys)):
+            ax.scatter([x], [y], marker=markers[i % len(markers)], s=36, zorder=3)
+            ax.annotate(name, (x, y), xytext=(4, 3), textcoords="offset points", fontsize=7)
+        ax.set_xscale("log")
+        lo, hi = float(xs.min()), float(xs.max())
+        ax.set_xlim(lo / 2.0, hi * 3.0)  # room for the labels right of the fastest point
+        ax.set_ylim(max(0.0, float(ys.min()) - 0.05), min(1.0, float(ys.max()) + 0.05))
+        ax.set_xlabel("Update frames per second (log scale, same run)")
+        ax.set_ylabel("Mean success AUC")
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, which="both", linewidth=0.4, alpha=0.6)
+        fig.tight_layout()
+        fig.savefig(os.fspath(path), dpi=dpi)
+    finally:
+        plt.close(fig)
+    return shown

@@ -187,7 +187,9 @@ def read_results(
 
 
 def write_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, str]:
-    """Write ``success_ope.png`` and ``precision_ope.png`` of :func:`score_ope`'s summary.
+    """Write ``success_ope.png`` and ``precision_ope.png`` of :func:`score_ope`'s summary, and
+    beside them ``accuracy_speed.png`` (mean AUC against update FPS of the same run) when the
+    runs were timed.
 
     Parameters
     ----------
@@ -201,9 +203,10 @@ def write_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, s
     Returns
     -------
     dict
-        ``{"success_plot": path, "precision_plot": path}``.
+        ``{"success_plot": path, "precision_plot": path}``, and ``"accuracy_speed_plot"``
+        when some tracker has a speed.
     """
-    from .plots import plot_precision, plot_success
+    from .plots import plot_accuracy_speed, plot_precision, plot_success
 
     summ = scored["summary"]
     succ = out / "success_ope.png"
@@ -220,7 +223,14 @@ def write_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, s
         prec,
         title=f"Precision plots of OPE ({n_seq} sequences)",
     )
-    return {"success_plot": str(succ), "precision_plot": str(prec)}
+    files = {"success_plot": str(succ), "precision_plot": str(prec)}
+    speeds = {t: float(s.get("fps", float("nan"))) for t, s in summ.items()}
+    if any(np.isfinite(v) and v > 0 for v in speeds.values()):
+        both = out / "accuracy_speed.png"
+        plot_accuracy_speed({t: s["auc"] for t, s in summ.items()}, speeds, both,
+                            title=f"Accuracy and speed ({n_seq} sequences, same run)")
+        files["accuracy_speed_plot"] = str(both)
+    return files
 
 
 def _f(v: Any, spec: str) -> str:

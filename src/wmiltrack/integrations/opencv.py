@@ -25,12 +25,14 @@ from ..engine.result import TrackResult
 from ..engine.tracker import Tracker
 
 __all__ = [
+    "COMPAT_CLASSES",
     "TrackerCT",
     "TrackerCompat",
     "TrackerFCT",
     "TrackerMILBoost",
     "TrackerOSIL",
     "TrackerRCWMIL",
+    "TrackerRCWMILCF",
     "TrackerRCWMILPlus",
     "TrackerWMIL",
 ]
@@ -44,8 +46,8 @@ class TrackerCompat:
     Parameters
     ----------
     variant : str
-        Variant name (``"rcwmil"``, ``"ct"``, ``"fct"``, ``"mil"``, ``"wmil"``, ``"osil"``,
-        ``"rcwmil-plus"``).
+        A preset: a key of :func:`wmiltrack.variants`, the preset registry (each preset also
+        has its own subclass, listed in :data:`COMPAT_CLASSES`).
     params : Params or mapping, optional
         Full parameters, or a mapping of overrides of the variant's defaults.
     seed : int
@@ -185,3 +187,17 @@ class TrackerRCWMILPlus(TrackerCompat):
     occlusion-aware update): ``TrackerRCWMILPlus.create()``."""
 
     VARIANT = "rcwmil-plus"
+
+
+class TrackerRCWMILCF(TrackerCompat):
+    """OpenCV-shaped ``rcwmil-cf`` (rcwmil-plus with correlation filters on fHOG features for
+    the target's position and size): ``TrackerRCWMILCF.create()``."""
+
+    VARIANT = "rcwmil-cf"
+
+
+COMPAT_CLASSES: dict[str, type[TrackerCompat]] = {
+    cls.VARIANT: cls for cls in TrackerCompat.__subclasses__()
+}
+"""The OpenCV-shaped class of each preset, by preset name (one per key of
+:func:`wmiltrack.variants`; a test checks that none is missing)."""
