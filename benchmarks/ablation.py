@@ -67,12 +67,15 @@ COMPONENTS: dict[str, tuple[dict[str, object], dict[str, object]]] = {
 
 #: rcwmil-cf's parts: the values that take each one out of rcwmil-cf (or change it).
 CF_PARTS: dict[str, dict[str, object]] = {
-    "- template": {"template_weight": 0.0},
+    "- template": {"template_weight": 0.0, "judge_memory": 0.0, "judge_gates": False,
+                   "judge_holds": False},
+    "- the judge": {"judge_memory": 0.0, "judge_gates": False, "judge_holds": False},
+    "- the judge's hold": {"judge_holds": False},
     "- DSST's vote": {"scale_dsst": 0.0},
     "DSST as the scale model": {"scale_model": "dsst", "scale_dsst": 0.0},
     "- compression": {"template_channels": 0},
     "- learning from the search sample": {"template_reuse": False},
-    "- lost state": {"redetect": False},
+    "- lost state": {"redetect": False, "judge_holds": False},
     "33 scale samples": {"scale_samples": 33},
 }
 

@@ -437,7 +437,7 @@ class Tracker:
                 and parts.recovery is not None):
             parts.recovery.lost, parts.recovery.frames_lost = True, 1  # look for it again
             self._hold(self._box)
-            return score
+            return 0.0  # (the score of a frame in the lost state)
         yield from self._learn_all(img, score)
         if parts.motion is not None:
             parts.motion.follow(previous, self._box, parts.policy.tracked(conf))
