@@ -206,3 +206,29 @@ def test_cpp_bench_binary_if_built() -> None:
     assert r.returncode == 0, r.stderr
     for word in ("integral", "project", "score", "exhaustive 25/1", "Mval/s"):
         assert word in r.stdout
+
+
+def test_devset_halves_and_lost_flag_shares(tmp_path: Path) -> None:
+    """benchmarks/devset.py: the halves are the sorted names alternated, and the figures it
+    prints are those of its JSON (AUC per half; the lost flag's shares over the scored
+    frames); two roots are one development set."""
+    for i, name in enumerate(["Cc", "Aa", "Dd"]):
+        write_generated_otb(tmp_path / "one", name, seed=i, n=12)
+    write_generated_otb(tmp_path / "two", "Bb", seed=5, n=12)
+    out = tmp_path / "dev.json"
+    r = _run([str(BENCH / "devset.py"), "--roots", f"{tmp_path / 'one'},{tmp_path / 'two'}",
+              "--trackers", "rcwmil,rcwmil-cf", "--seeds", "0,1", "--json", str(out)])
+    assert r.returncode == 0, r.stderr
+    got = json.loads(out.read_text())
+    assert got["halves"] == [["Aa", "Cc"], ["Bb", "Dd"]]
+    runs = [x for x in got["runs"] if x["spec"] == "rcwmil"]
+    assert sorted((x["name"], x["seed"]) for x in runs) == sorted(
+        (n, s) for n in ["Aa", "Bb", "Cc", "Dd"] for s in (0, 1))
+    s = got["summary"]["rcwmil"]
+    per = s["per_sequence"]
+    assert s["half1"] == pytest.approx((per["Aa"] + per["Cc"]) / 2)
+    assert s["half2"] == pytest.approx((per["Bb"] + per["Dd"]) / 2)
+    assert 0.0 <= s["well_tracked_flagged_lost"] <= 1.0
+    assert f"rcwmil: half 1 {s['half1']:.3f}, half 2 {s['half2']:.3f}" in r.stdout
+    same = _run([str(BENCH / "devset.py"), "--roots", f"{tmp_path / 'one'},{tmp_path / 'one'}"])
+    assert same.returncode != 0 and "is in both" in same.stderr

@@ -47,8 +47,9 @@ class _Named:
 
 
 @dataclass(frozen=True)
-class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings, MotionSettings, ScaleSettings,
-             SearchSettings, ClassifierSettings, BagSettings, FeatureSettings, _Named):
+class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings,
+             MotionSettings, ScaleSettings, SearchSettings, ClassifierSettings, BagSettings,
+             FeatureSettings, _Named):
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
 
     Every field belongs to one part, which documents and checks it:
