@@ -21,7 +21,8 @@ from typing import Any, Literal
 
 __all__ = ["BagSettings", "ClassifierSettings", "ColourSettings", "FeatureSettings",
            "JudgeSettings", "MotionSettings", "ScaleSettings", "ScoreSettings", "SearchSettings",
-           "TemplateSettings", "CONFIDENCE_OFFSET", "CHANNELS", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_RADIUS"]
+           "TemplateSettings", "CONFIDENCE_OFFSET", "CHANNELS", "MAX_NEG_RADIUS", "MAX_POS_RADIUS",
+           "MAX_SEARCH_RADIUS"]
 
 MAX_POS_RADIUS = 100
 """Largest positive-bag radius (``pos_radius``, ``init_pos_radius``): ~31 000 positives."""
