@@ -24,7 +24,7 @@ from .. import _core
 from . import copying as _copying  # noqa: F401 (installs deepcopy for the core's objects)
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
-from .cues import ColourCue, Cue
+from .cues import ColourCue, Cue, check_cue_weights
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .judge import LostJudge
 from .motion import VelocityMotion
@@ -155,7 +155,8 @@ class Tracker:
         Start from these parameters instead of the variant's defaults.
     cues : sequence of Cue, optional
         More cues merged into the search (:class:`~wmiltrack.engine.cues.Cue`), after the
-        preset's own; their weights and the preset's colour weight add up to at most 1.
+        preset's own; their weights, ``colour_weight`` and ``template_weight`` add up to at
+        most 1 (:func:`~wmiltrack.engine.cues.check_cue_weights`).
     **overrides
         Any :class:`~wmiltrack.Params` field, e.g. ``num_selected=30``.
 
@@ -181,13 +182,7 @@ class Tracker:
             params = Params.for_variant(variant, **overrides)
         elif overrides:
             params = params.replace(**overrides)
-        for cue in cues:
-            if not isinstance(cue, Cue):
-                raise TypeError(f"a cue needs weight, start, table and learn; got {cue!r}")
-            if not 0.0 <= cue.weight <= 1.0:
-                raise ValueError(f"a cue's weight must be in [0, 1], got {cue.weight!r}")
-        if params.colour_weight + sum(c.weight for c in cues) > 1.0 + 1e-12:
-            raise ValueError("the cues' weights (with colour_weight) add up to more than 1")
+        check_cue_weights(params.colour_weight, params.template_weight, cues)
         self._params = params
         # the search's (radius, step) stages: the coarse grid, then the fine one if any
         self._stages = [(params.coarse_radius, params.coarse_step)]
