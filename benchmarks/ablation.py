@@ -127,14 +127,14 @@ def _aucs(root: Path, rows: dict[str, str], seeds: list[int], names: list[str] |
           args: argparse.Namespace) -> dict[str, list[float]]:
     """Mean AUC over the sequences, per row and seed: one run_eval per seed over every row (the
     pipeline's own conventions)."""
-    from wmiltrack.eval.pipeline import run_eval
+    from wmiltrack.eval.pipeline import EvalConfig, run_eval
 
     auc: dict[str, list[float]] = {title: [] for title in rows}
     with tempfile.TemporaryDirectory() as tmp:
         for seed in seeds:
-            doc = run_eval(root, Path(tmp) / f"seed{seed}", trackers=list(rows.values()),
-                           sequences=names, jobs=args.jobs, repeats=1, seed=seed, plots=False,
-                           show_progress=not args.no_progress)
+            doc = run_eval(EvalConfig(root, Path(tmp) / f"seed{seed}", trackers=list(rows.values()),
+                                      sequences=names, jobs=args.jobs, repeats=1, seed=seed,
+                                      plots=False, show_progress=not args.no_progress))
             for title, s in rows.items():
                 per_seq = doc["results"][s]
                 auc[title].append(float(np.mean([v["runs"][0]["auc"] for v in per_seq.values()])))

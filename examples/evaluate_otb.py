@@ -19,7 +19,7 @@ import cv2
 
 from wmiltrack.data.boxes import write_boxes
 from wmiltrack.data.synthetic import make_preset
-from wmiltrack.eval.pipeline import run_eval
+from wmiltrack.eval.pipeline import EvalConfig, run_eval
 
 
 def write_otb_folder(root: Path) -> Path:
@@ -45,7 +45,8 @@ def main() -> None:
     args = parser.parse_args()
 
     dataset = args.dataset or write_otb_folder(args.out / "dataset")
-    report = run_eval(dataset, args.out, trackers=args.trackers.split(","), show_progress=False)
+    report = run_eval(EvalConfig(dataset, args.out, trackers=args.trackers.split(","),
+                                 show_progress=False))
 
     print((args.out / "eval_ope.md").read_text())
     for kind, path in sorted(report["files"].items()):

@@ -239,12 +239,12 @@ def test_boxes_file_errors_name_the_line(video: tuple[Path, tuple[float, ...]], 
 
 @pytest.mark.parametrize("threads", [1, 2])
 def test_eval_json_records_the_opencv_threads_used(tmp_path: Path, threads: int) -> None:
-    from wmiltrack.eval.pipeline import run_eval
+    from wmiltrack.eval.pipeline import EvalConfig, run_eval
 
     _image_folder(tmp_path / "data" / "A", n=5)
     (tmp_path / "data" / "A" / "groundtruth_rect.txt").write_text("30,20,24,20\n" * 5)
     before = cv2.getNumThreads()
-    doc = run_eval(tmp_path / "data", tmp_path / "out", trackers=["rcwmil"], cv_threads=threads,
-                   plots=False, show_progress=False)
+    doc = run_eval(EvalConfig(tmp_path / "data", tmp_path / "out", trackers=["rcwmil"],
+                              cv_threads=threads, plots=False, show_progress=False))
     assert doc["environment"]["opencv_threads"] == threads
     assert cv2.getNumThreads() == before

@@ -248,35 +248,33 @@ def _rows(out: Path) -> list[list[str]]:
             if line.startswith("| Syn") or line.startswith("| **mean")]
 
 
-def test_resume_after_an_interruption_runs_only_what_is_missing(
-    otb: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    from wmiltrack.eval import runner
+class _Maker:
+    """``runner.make_tracker`` that records the specs it makes, and can interrupt the third
+    task (SynB with rcwmil) or fail to make ct."""
 
-    full, out = tmp_path / "full", tmp_path / "out"
-    common = ["--trackers", "rcwmil,ct", "--no-progress", "--no-plots"]
-    assert main(["eval", str(otb), "--out", str(full), *common]) == 0
+    def __init__(self, real: Any) -> None:
+        self.real = real
+        self.made: list[str] = []
+        self.interrupt = self.fail = False
 
-    real = runner.make_tracker
-    made: list[str] = []
-
-    def make(spec: str, seed: int = 0, **params: Any) -> Any:
-        made.append(spec)
-        if len(made) == 3 and interrupt:  # the third task: SynB with rcwmil
+    def __call__(self, spec: str, seed: int = 0, **params: Any) -> Any:
+        self.made.append(spec)
+        if len(self.made) == 3 and self.interrupt:
             raise KeyboardInterrupt
-        if fail and spec == "ct":
+        if self.fail and spec == "ct":
             raise RuntimeError("cannot make it")
-        return real(spec, seed=seed, **params)
+        return self.real(spec, seed=seed, **params)
 
-    monkeypatch.setattr(runner, "make_tracker", make)
-    interrupt, fail = True, False
-    assert main(["eval", str(otb), "--out", str(out), *common]) == 130  # Ctrl-C: one line, 130
-    assert sorted(p.name for p in (out / "boxes").rglob("*.txt")) == ["SynA.txt", "SynA.txt"]
+    def run(self, *args: str) -> tuple[int, list[str]]:
+        """``wmiltrack eval`` with ``args``: its exit status and the specs it made."""
+        self.made.clear()
+        status = main(["eval", *args, "--trackers", "rcwmil,ct", "--no-progress", "--no-plots"])
+        return status, list(self.made)
 
-    made.clear()
-    interrupt = False
-    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 0
-    assert made == ["rcwmil", "ct"]  # only SynB's two runs
+
+def _check_resumed(full: Path, out: Path) -> dict[str, np.ndarray]:
+    """A resumed run's box files and rows are those of the run that was not interrupted; the
+    runs read back are untimed, the others timed."""
     a, b = _files(full / "boxes"), _files(out / "boxes")
     assert sorted(a) == sorted(b) and len(a) == 4
     for k in a:
@@ -286,42 +284,51 @@ def test_resume_after_an_interruption_runs_only_what_is_missing(
     assert "resumed: 2 of 4 runs read back from their box files" in table
     doc = json.loads((out / "eval_ope.json").read_text())
     assert doc["settings"]["resumed_runs"] == 2
-    # resumed runs are untimed; the runs made now are timed
     assert doc["results"]["rcwmil"]["SynA"]["runs"][0]["fps"] is None
     assert doc["results"]["rcwmil"]["SynB"]["runs"][0]["fps"] > 0
+    return a
 
-    # a deleted box file and a failed run are run again; nothing else is
-    (out / "boxes" / "ct" / "SynA.txt").unlink()
-    made.clear()
-    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 0
-    assert made == ["ct"]
-    np.testing.assert_array_equal(read_boxes(out / "boxes" / "ct" / "SynA.txt"), a["ct/SynA.txt"])
 
-    # a run that failed is run again
+def _check_failed_runs_run_again(make: _Maker, otb: Path, out: Path, full: Path) -> None:
+    """A run that failed is recorded, and is run again by the next --resume."""
     for seq in ("SynA", "SynB"):
         (out / "boxes" / "ct" / f"{seq}.txt").unlink()
-    made.clear()
-    fail = True
-    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 1
-    assert made == ["ct", "ct"]
+    make.fail = True
+    assert make.run(str(otb), "--out", str(out), "--resume") == (1, ["ct", "ct"])
     record = json.loads((out / "boxes" / "ct" / "SynA.run.json").read_text())
     assert record["seed"] == 0 and record["error"] == "RuntimeError: cannot make it"
     assert np.isnan(read_boxes(out / "boxes" / "ct" / "SynA.txt")).all()
-    made.clear()
-    fail = False
-    assert main(["eval", str(otb), "--out", str(out), "--resume", *common]) == 0
-    assert made == ["ct", "ct"]  # failed runs are not taken as done
+    make.fail = False
+    assert make.run(str(otb), "--out", str(out), "--resume") == (0, ["ct", "ct"])  # not done
     assert _rows(full) == _rows(out)
 
-    # another --missing rule is another run (the box files hold the boxes after it)
-    made.clear()
-    assert main(["eval", str(otb), "--out", str(out), "--resume", "--missing", "miss", *common]) == 0
-    assert made == ["rcwmil", "ct", "rcwmil", "ct"]
 
-    # another seed is another run
-    made.clear()
-    assert main(["eval", str(otb), "--out", str(out), "--resume", "--seed", "1", *common]) == 0
-    assert made == ["rcwmil", "ct", "rcwmil", "ct"]
+def test_resume_after_an_interruption_runs_only_what_is_missing(
+    otb: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from wmiltrack.eval import runner
+
+    full, out = tmp_path / "full", tmp_path / "out"
+    make = _Maker(runner.make_tracker)
+    assert make.run(str(otb), "--out", str(full))[0] == 0
+    monkeypatch.setattr(runner, "make_tracker", make)
+    make.interrupt = True
+    assert make.run(str(otb), "--out", str(out))[0] == 130  # Ctrl-C: one line, 130
+    assert sorted(p.name for p in (out / "boxes").rglob("*.txt")) == ["SynA.txt", "SynA.txt"]
+    make.interrupt = False
+    assert make.run(str(otb), "--out", str(out), "--resume") == (0, ["rcwmil", "ct"])  # SynB's
+    a = _check_resumed(full, out)
+
+    # a deleted box file is run again; nothing else is
+    (out / "boxes" / "ct" / "SynA.txt").unlink()
+    assert make.run(str(otb), "--out", str(out), "--resume") == (0, ["ct"])
+    np.testing.assert_array_equal(read_boxes(out / "boxes" / "ct" / "SynA.txt"), a["ct/SynA.txt"])
+    _check_failed_runs_run_again(make, otb, out, full)
+
+    # another --missing rule, or another seed, is another run
+    every = ["rcwmil", "ct", "rcwmil", "ct"]
+    assert make.run(str(otb), "--out", str(out), "--resume", "--missing", "miss") == (0, every)
+    assert make.run(str(otb), "--out", str(out), "--resume", "--seed", "1") == (0, every)
 
 
 def test_resume_is_ope_only(otb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -95,3 +95,40 @@ def test_cues_are_checked_when_the_tracker_is_made() -> None:
         wmiltrack.Tracker("rcwmil", cues=[NearPoint((0, 0), 10, 1.5)])
     with pytest.raises(TypeError, match="weight, start, table and learn"):
         wmiltrack.Tracker("rcwmil", cues=[object()])  # type: ignore[list-item]
+
+
+# Every way of adding cues, each with cue weights that add up to more than 1 (rcwmil-cf's own
+# cues: colour 0.65 + correlation filter 0.2; one more of 0.3 makes 1.15).
+_TOO_MUCH = [
+    ("Params", lambda cue: wmiltrack.Params(colour_weight=0.7, template_weight=0.4)),
+    ("Params.replace", lambda cue: wmiltrack.variants()["rcwmil-cf"].replace(template_weight=0.4)),
+    ("Tracker override", lambda cue: wmiltrack.Tracker("rcwmil-cf", template_weight=0.4)),
+    ("Tracker cues", lambda cue: wmiltrack.Tracker("rcwmil-cf", cues=[cue])),
+    ("Tracker params + cues", lambda cue: wmiltrack.Tracker(
+        params=wmiltrack.variants()["rcwmil-plus"], cues=[cue, NearPoint((0, 0), 10, 0.1)])),
+    ("spec", lambda cue: wmiltrack.trackers.make_tracker("rcwmil-cf:template_weight=0.4")),
+    ("make_tracker cues", lambda cue: wmiltrack.trackers.make_tracker("rcwmil-cf", cues=[cue])),
+    ("MultiTracker", lambda cue: wmiltrack.MultiTracker("rcwmil-plus", colour_weight=0.9,
+                                                        template_weight=0.2)),
+    ("compat mapping", lambda cue: wmiltrack.compat.TrackerCompat("rcwmil-cf", {"cues": [cue]})),
+    ("compat create", lambda cue: wmiltrack.compat.TrackerCompat.create({"colour_weight": 0.9,
+                                                                         "template_weight": 0.2})),
+]
+
+
+@pytest.mark.parametrize("how,make", _TOO_MUCH, ids=[h for h, _ in _TOO_MUCH])
+def test_cue_weights_above_1_are_refused_every_way(how: str, make) -> None:
+    """One rule (``check_cue_weights``): colour_weight + template_weight + every added cue's
+    weight <= 1, whichever way the cues come in (the classifier's share would be negative)."""
+    import wmiltrack.compat  # noqa: F401
+    import wmiltrack.trackers  # noqa: F401
+
+    with pytest.raises(ValueError, match="add up to more than 1"):
+        make(NearPoint((0, 0), 10, 0.3))
+
+
+def test_cue_weights_up_to_1_are_accepted() -> None:
+    t = wmiltrack.Tracker("rcwmil-cf", cues=[NearPoint((0, 0), 10, 0.15)])  # 0.65 + 0.2 + 0.15
+    assert t.params.template_weight == 0.2
+    with pytest.raises(TypeError, match="a cue needs"):
+        wmiltrack.Tracker("rcwmil", cues=[object()])

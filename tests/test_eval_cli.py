@@ -302,7 +302,6 @@ def test_bad_arguments(
 
 def test_public_entry_points_are_unchanged(capsys: pytest.CaptureFixture[str]) -> None:
     import importlib
-    import inspect
 
     import wmiltrack
 
@@ -316,9 +315,11 @@ def test_public_entry_points_are_unchanged(capsys: pytest.CaptureFixture[str]) -
     usage = capsys.readouterr().out
     for cmd in ("track", "demo", "variants", "eval", "inspect"):
         assert cmd in usage, cmd
-    from wmiltrack.eval.pipeline import run_eval
+    import dataclasses
 
-    params = inspect.signature(run_eval).parameters
+    from wmiltrack.eval.pipeline import EvalConfig
+
+    params = {f.name: f for f in dataclasses.fields(EvalConfig)}
     for p in ("trackers", "results", "protocol", "sequences", "jobs", "repeats", "seed",
               "missing", "cv_threads"):
         assert p in params, p

@@ -4,6 +4,7 @@ wmiltrack.eval.pipeline (box files written per task, failures reported, interrup
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -19,7 +20,7 @@ from wmiltrack.cli import main
 from wmiltrack.data.boxes import read_boxes
 from wmiltrack.engine.result import TrackResult
 from wmiltrack.eval.metrics import iou
-from wmiltrack.eval.pipeline import make_tasks, run_eval, run_tasks
+from wmiltrack.eval.pipeline import EvalConfig, make_tasks, run_eval, run_tasks
 from wmiltrack.eval.runner import SerialExecutor, run_sequence
 from wmiltrack.eval.scoring import scored_boxes
 
@@ -179,8 +180,9 @@ def test_hold_last_box_is_the_default_for_every_tracker(tmp_path: Path, fakes: d
     # an OpenCV-like tracker: no box on frames 3-5; a wmiltrack-like one: a wrong box, ok False
     fakes["fake:nobox"] = lambda: Scripted(lost=(3, 4, 5), lost_box="nan")
     fakes["fake:okfalse"] = lambda: Scripted(lost=(3, 4, 5), lost_box="far")
-    doc = run_eval(tmp_path / "data", tmp_path / "hold", trackers=["fake:nobox", "fake:okfalse"],
-                   plots=False, show_progress=False)
+    config = EvalConfig(tmp_path / "data", tmp_path / "hold",
+                        trackers=["fake:nobox", "fake:okfalse"], plots=False, show_progress=False)
+    doc = run_eval(config)
     held = read_boxes(tmp_path / "hold" / "boxes" / "fake_nobox" / "A.txt")
     np.testing.assert_array_equal(held[3:6], np.tile(gt[2], (3, 1)))  # the last box, held
     nobox = doc["results"]["fake:nobox"]["A"]["runs"][0]
@@ -191,8 +193,7 @@ def test_hold_last_box_is_the_default_for_every_tracker(tmp_path: Path, fakes: d
     assert "hold the last box" in doc["caption"] and "OpenCV threads: 1" in doc["caption"]
 
     # the other convention: every frame a tracker reports lost is a miss, for both trackers
-    doc = run_eval(tmp_path / "data", tmp_path / "miss", trackers=["fake:nobox", "fake:okfalse"],
-                   plots=False, show_progress=False, missing="miss")
+    doc = run_eval(dataclasses.replace(config, out=tmp_path / "miss", missing="miss"))
     for name, folder in (("fake:nobox", "fake_nobox"), ("fake:okfalse", "fake_okfalse")):
         run = doc["results"][name]["A"]["runs"][0]
         assert run["n_no_prediction"] == 3 and run["precision_20"] == pytest.approx(5 / 8)
@@ -237,7 +238,7 @@ def test_an_interrupted_run_keeps_the_finished_box_files(tmp_path: Path, fakes: 
     _write_otb(data, "B")
     _write_otb(data, "C", width=W - 8)
     fakes["fake:stop"] = lambda: Scripted(interrupt_width=W - 8)
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt):  # (the keyword call: run_eval(dataset, out, ...))
         run_eval(data, tmp_path / "out", trackers=["fake:stop"], plots=False,
                  show_progress=False, repeats=2)
     written = sorted(p.name for p in (tmp_path / "out" / "boxes" / "fake_stop").iterdir())
@@ -282,3 +283,15 @@ def test_serial_executor_sets_and_restores_opencv_threads(tmp_path: Path, fakes:
         assert seen == [1, 1] and cv2.getNumThreads() == 2
     finally:
         cv2.setNumThreads(before)
+
+
+def test_run_eval_takes_one_config_or_the_keywords(tmp_path: Path) -> None:
+    config = EvalConfig(tmp_path / "data", tmp_path / "out")
+    assert config.trackers == ("rcwmil",) and config.seeds == (0,)
+    assert dataclasses.replace(config, seed=3, repeats=2).seeds == (3, 4)
+    with pytest.raises(TypeError, match="takes no other argument"):
+        run_eval(config, tmp_path / "elsewhere")
+    with pytest.raises(TypeError, match="needs out"):
+        run_eval(tmp_path / "data")
+    with pytest.raises(TypeError):
+        run_eval(tmp_path / "data", tmp_path / "out", no_such_option=1)

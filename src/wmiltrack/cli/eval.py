@@ -35,10 +35,10 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         for spec in trackers:
             check_tracker_spec(spec)  # an unknown tracker or parameter: exit status 2
     set_model_paths(args)
-    from ..eval.pipeline import EvalArgumentError, run_eval
+    from ..eval.pipeline import EvalArgumentError, EvalConfig, run_eval
 
     try:
-        doc = run_eval(
+        doc = run_eval(EvalConfig(
             args.dataset,
             args.out,
             trackers=trackers,
@@ -58,7 +58,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             resume=args.resume,
             layout=args.layout,
-        )
+        ))
     except EvalArgumentError as exc:  # options that do not go together: exit status 2
         raise UsageError(str(exc)) from None
     print(Path(doc["files"]["table"]).read_text(encoding="utf-8"))

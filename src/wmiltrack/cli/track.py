@@ -12,13 +12,14 @@ import math
 import signal
 import sys
 import threading
-import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 from typing import IO, Any
 
+from ..timing import timed
 from .options import (
     EXIT_CODES_EPILOG,
     EXIT_ERROR,
@@ -166,13 +167,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
         return _track(args, stop)
 
 
-def _track_list(args: argparse.Namespace) -> int:
-    """``track --list FILE -o DIR``: every clip of the list on the chosen executor; each box
-    file written as its clip finishes; clips whose box file exists are skipped (resume)."""
-    from ..batch import ClipResult, describe_clip, failed_clip, read_clip_list, track_clips
-    from ..executors import make_executor
-    from ..progress import progress
-
+def _check_list_args(args: argparse.Namespace) -> None:
+    """The usage errors of ``track --list``: options that go with one INPUT, and -o DIR."""
     if args.input is not None:
         raise UsageError("give either INPUT (one clip) or --list FILE (many), not both")
     mixed = [o for o, v in (("--box", args.box), ("--boxes", args.boxes), ("--video", args.video))
@@ -184,6 +180,16 @@ def _track_list(args: argparse.Namespace) -> int:
         raise UsageError("--list needs -o DIR, the folder of the clips' box files")
     if args.output.is_file():
         raise UsageError(f"-o {args.output} is a file; --list writes one box file per clip into a folder")
+
+
+def _track_list(args: argparse.Namespace) -> int:
+    """``track --list FILE -o DIR``: every clip of the list on the chosen executor; each box
+    file written as its clip finishes; clips whose box file exists are skipped (resume)."""
+    from ..batch import ClipResult, describe_clip, failed_clip, read_clip_list, track_clips
+    from ..executors import make_executor
+    from ..progress import progress
+
+    _check_list_args(args)
     tracker_from_args(args)  # an unknown tracker or parameter is a usage error before any clip runs
     clips = read_clip_list(args.list, args.output)
     for clip in clips:  # no box file may be an input (a clip, a file of a clip's folder, the list)
@@ -214,23 +220,181 @@ def _track_list(args: argparse.Namespace) -> int:
                 print(f"wmiltrack: error: {result.clip.label}: {result.error}", file=sys.stderr)
     except KeyboardInterrupt:
         interrupted = True
-    summary = [f"{len(clips)} clips: {tracked} tracked"]
-    if done:
-        summary.append(f"{done} already done (their box files exist)")
-    if failed:
-        summary.append(f"{len(failed)} failed")
-    left = len(clips) - done - tracked - len(failed)
-    if interrupted:
-        summary.append(f"interrupted with {left} not done: run the same command again to resume")
-    print(f"wmiltrack: {'; '.join(summary)}; boxes in {args.output}", file=sys.stderr)
+    _list_summary(args, len(clips), done, tracked, len(failed), interrupted)
     if interrupted:
         return EXIT_SIGINT
     return EXIT_ERROR if failed else EXIT_OK
 
 
+def _list_summary(args: argparse.Namespace, clips: int, done: int, tracked: int, failed: int,
+                  interrupted: bool) -> None:
+    """Print the one-line summary of a ``track --list`` run."""
+    summary = [f"{clips} clips: {tracked} tracked"]
+    if done:
+        summary.append(f"{done} already done (their box files exist)")
+    if failed:
+        summary.append(f"{failed} failed")
+    left = clips - done - tracked - failed
+    if interrupted:
+        summary.append(f"interrupted with {left} not done: run the same command again to resume")
+    print(f"wmiltrack: {'; '.join(summary)}; boxes in {args.output}", file=sys.stderr)
+
+
+@dataclass
+class _Step:
+    """What one frame gave: a box, a score and an ok flag per target, the frame to draw them on
+    (the last good one for a skipped frame) and their colour."""
+
+    boxes: list[tuple[float, ...]]
+    scores: list[float]
+    oks: list[bool]
+    shown: Any
+    color: tuple[int, int, int] = (0, 255, 0)
+
+
+class _OneTarget:
+    """One target (``--box`` or the sequence's ground truth): a :class:`~wmiltrack.Tracker`
+    (or an OpenCV tracker) started on the first box, one ``x,y,w,h`` line per frame (with
+    ``--scores``: ``,score,ok``), the score drawn on ``--video``."""
+
+    def __init__(self, tracker: Any, out: _BoxLines, box_given: bool) -> None:
+        self.tracker = tracker
+        self.out = out
+        self.box_given = box_given
+
+    def start(self, frame: Any, starts: Sequence[Sequence[float]]) -> None:
+        try:
+            self.tracker.init(frame, starts[0])
+        except (ValueError, TypeError) as exc:
+            if not self.box_given:
+                raise  # the sequence's own ground truth: a bad input file, status 1
+            raise UsageError(f"--box: {exc}") from None
+
+    def found(self, result: Any) -> list[Any]:
+        """The frame's results from what ``tracker.update`` returned."""
+        return [result]
+
+    def write(self, index: int, step: _Step, held: bool) -> None:
+        self.out.write(step.boxes[0], step.scores[0], step.oks[0])
+
+    def drawn_score(self, step: _Step) -> float:
+        return step.scores[0]
+
+
+class _SeveralTargets:
+    """Several targets (``--boxes FILE``): a :class:`~wmiltrack.MultiTracker` with one target
+    per line of FILE, one MOTChallenge-style line per target and frame, no score drawn."""
+
+    def __init__(self, tracker: Any, out: _BoxLines, path: Path) -> None:
+        self.tracker = tracker
+        self.out = out
+        self.path = path
+        self.ids: list[int] = []
+
+    def start(self, frame: Any, starts: Sequence[Sequence[float]]) -> None:
+        try:
+            self.ids = [_add_target(self.tracker, frame, b, k, self.path)
+                        for k, b in enumerate(starts)]
+        except (ValueError, TypeError) as exc:
+            raise UsageError(str(exc)) from None
+
+    def found(self, results: Any) -> list[Any]:
+        return [results[k] for k in self.ids]
+
+    def write(self, index: int, step: _Step, held: bool) -> None:
+        for k, (b, s) in enumerate(zip(step.boxes, step.scores)):
+            self.out.write_line(_mot_line(index, k, b, s, held=held))
+
+    def drawn_score(self, step: _Step) -> float:
+        return math.nan
+
+
+class _Run:
+    """The frames of one ``track`` run, one at a time: the trackers' boxes, the output lines,
+    ``--video``, and what the summary counts."""
+
+    def __init__(self, args: argparse.Namespace, targets: _OneTarget | _SeveralTargets,
+                 starts: list[tuple[float, ...]], bar: Any, fps: float | None) -> None:
+        self.args = args
+        self.targets = targets
+        self.starts = starts
+        self.bar = bar
+        self.fps = fps
+        self.video: Any = None  # the cv2.VideoWriter, once the first frame is drawn
+        self.last: _Step | None = None
+        self.skipped = 0
+        self.frames_done = 0
+        self.times: list[float] = []
+        self.error: str | None = None
+
+    def frame(self, i: int, frame: Any, problem: str | None) -> bool:
+        """Track, write and draw one frame; False when the run must stop (``--strict``)."""
+        if frame is None:
+            step = self._skipped(i, problem)
+            if step is None:
+                return False
+        elif i == 0:
+            step = self._first(frame)
+        else:
+            step = self._next(frame)
+        self.targets.write(i, step, held=frame is None)
+        self.frames_done += 1
+        if self.args.video is not None and i > 0:
+            self._draw(step, i + 1, self.targets.drawn_score(step))
+        self.last = step
+        return True
+
+    def _skipped(self, i: int, problem: str | None) -> _Step | None:
+        """A frame that cannot be used: the last boxes held (None with ``--strict``)."""
+        if i == 0:
+            raise ValueError(f"frame 1 cannot be used ({problem}), and the first box belongs to it")
+        if self.args.strict:
+            self.error = f"frame {i + 1}: {problem} (--strict)"
+            return None
+        self.skipped += 1
+        self.bar.write(f"wmiltrack: warning: frame {i + 1} skipped, last box held: {problem}",
+                       file=sys.stderr)
+        last = self.last
+        assert last is not None
+        n = len(last.boxes)
+        return _Step(last.boxes, [math.nan] * n, [False] * n, last.shown, _HELD_COLOR)
+
+    def _first(self, frame: Any) -> _Step:
+        """The first frame: the trackers start; their boxes as they use them (rounded to
+        whole pixels, clipped to the frame)."""
+        from ..engine.frames import clip_box
+
+        self.targets.start(frame, self.starts)
+        fw, fh = frame.shape[1], frame.shape[0]
+        boxes = [tuple(float(v) for v in clip_box(b, fw, fh)) for b in self.starts]
+        _warn_clipped(self.starts, boxes, fw, fh, self.bar)
+        step = _Step(boxes, [1.0] * len(boxes), [True] * len(boxes), frame)
+        # every output is opened before the first line empties -o: a video that cannot be
+        # written leaves an existing box file as it was
+        self.targets.out.open()
+        if self.args.video is not None:
+            self._draw(step, 1, math.nan)
+        return step
+
+    def _next(self, frame: Any) -> _Step:
+        """A later frame: the trackers' update, timed alone."""
+        result, seconds = timed(self.targets.tracker.update, frame)
+        self.times.append(seconds)
+        found = self.targets.found(result)
+        return _Step([tuple(r.box) for r in found], [r.score for r in found],
+                     [bool(r.ok) for r in found], frame)
+
+    def _draw(self, step: _Step, number: int, score: float) -> None:
+        self.video = _write_video_frame(self.video, self.args.video, step.shown, step.boxes,
+                                        number, score, self.fps, step.color)
+
+    def close_video(self) -> None:
+        if self.video is not None:
+            self.video.release()
+
+
 def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     from ..data.sequences import TolerantFrames
-    from ..engine.frames import clip_box
     from ..progress import progress
 
     if args.boxes is not None and args.box is not None:
@@ -243,85 +407,21 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     tracker: Any = tracker_from_args(args, several=several)
     seq = open_frames(args.input, has_box=args.box is not None or several)
     starts = _start_boxes(args, seq)
-    box = starts[0]
-    ids: list[int] = []
     reader = TolerantFrames(seq)
     frames = iter(reader)
     # the file is opened (not emptied) at the first frame, emptied at the first box
     out = _BoxLines(args.output, _score_fields if args.scores else None)
+    targets = (_SeveralTargets(tracker, out, args.boxes) if several
+               else _OneTarget(tracker, out, args.box is not None))
     bar = progress(frames, total=reader.expected, desc=f"{args.tracker} {seq.name}",
                    enabled=False if args.quiet else None)
-    writer = None
-    skipped = 0
-    times: list[float] = []
-    error: str | None = None
-    last_boxes: list[tuple[float, ...]] = []
-    last_frame: Any = None
-    frames_done = 0
+    run = _Run(args, targets, starts, bar, seq.fps)
     broken_pipe = False
     try:
         for i, frame, problem in bar:
             if stop.signum is not None:  # a signal came before the first frame
                 break
-            color = (0, 255, 0)
-            if frame is None:
-                if i == 0:
-                    raise ValueError(f"frame 1 cannot be used ({problem}), and the first box "
-                                     "belongs to it")
-                if args.strict:
-                    error = f"frame {i + 1}: {problem} (--strict)"
-                    break
-                skipped += 1
-                bar.write(f"wmiltrack: warning: frame {i + 1} skipped, last box held: {problem}",
-                          file=sys.stderr)
-                shown, color = last_frame, _HELD_COLOR
-                boxes, scores = last_boxes, [math.nan] * len(last_boxes)
-                oks = [False] * len(last_boxes)
-            elif i == 0:
-                try:
-                    if several:
-                        ids = [_add_target(tracker, frame, b, k, args.boxes)
-                               for k, b in enumerate(starts)]
-                    else:
-                        tracker.init(frame, box)
-                except (ValueError, TypeError) as exc:
-                    if args.box is None and not several:
-                        raise  # the sequence's own ground truth: a bad input file, status 1
-                    raise UsageError(str(exc) if several else f"--box: {exc}") from None
-                # the boxes the trackers start from: rounded to whole pixels, clipped to the frame
-                fw, fh = frame.shape[1], frame.shape[0]
-                boxes = [tuple(float(v) for v in clip_box(b, fw, fh)) for b in starts]
-                _warn_clipped(starts, boxes, fw, fh, bar)
-                scores, shown = [1.0] * len(boxes), frame
-                oks = [True] * len(boxes)
-                # every output is opened before the first line empties -o: a video that
-                # cannot be written leaves an existing box file as it was
-                out.open()
-                if args.video is not None:
-                    writer = _write_video_frame(writer, args.video, shown, boxes, i + 1,
-                                                math.nan, seq.fps, color)
-            else:
-                t0 = time.perf_counter()
-                if several:
-                    results = tracker.update(frame)
-                    found = [results[k] for k in ids]
-                else:
-                    found = [tracker.update(frame)]
-                times.append(time.perf_counter() - t0)
-                boxes = [tuple(r.box) for r in found]
-                scores, shown = [r.score for r in found], frame
-                oks = [bool(r.ok) for r in found]
-            if several:
-                for k, (b, s) in enumerate(zip(boxes, scores)):
-                    out.write_line(_mot_line(i, k, b, s, held=frame is None))
-            else:
-                out.write(boxes[0], scores[0], oks[0])
-            frames_done += 1
-            if args.video is not None and i > 0:
-                writer = _write_video_frame(writer, args.video, shown, boxes, i + 1,
-                                            scores[0] if not several else math.nan, seq.fps, color)
-            last_boxes, last_frame = boxes, shown
-            if stop.signum is not None:
+            if not run.frame(i, frame, problem) or stop.signum is not None:
                 break
     except KeyboardInterrupt:  # a second SIGINT/SIGTERM while a frame was being processed
         if stop.signum is None:  # not from our handler (not installed outside the main thread)
@@ -329,23 +429,23 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
     except BrokenPipeError:  # the reader of standard output went away (| head): stop quietly
         broken_pipe = True
     except OSError as exc:  # writing the boxes failed (disk full, ...)
-        error = f"cannot write the boxes: {exc}"
+        run.error = f"cannot write the boxes: {exc}"
     finally:
         stop.hurry = False  # a signal now must not cut the closing of the output and video
         bar.close()
         frames.close()
         seq.close()
-        if writer is not None:
-            writer.release()
+        run.close_video()
         try:
             out.close()
         except OSError as exc:
-            error = error or f"cannot write the boxes: {exc}"
+            run.error = run.error or f"cannot write the boxes: {exc}"
 
     if broken_pipe:
         raise BrokenPipeError  # the command line's one exit status for a closed pipe
-    return _close_run(args, stop, reader, error, frames_done, len(starts) if several else 0,
-                      out.count, times, skipped)
+    return _close_run(args, stop, reader, run.error, run.frames_done,
+                      len(starts) if several else 0,
+                      out.count, run.times, run.skipped)
 
 
 def _start_boxes(args: argparse.Namespace, seq: Any) -> list[tuple[float, ...]]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from collections.abc import Callable
 from typing import Any
 
 from .options import EXIT_CODES_EPILOG, Subparsers, UsageError
@@ -18,69 +19,96 @@ VARIANT_COLUMNS = [
 ]
 
 
+def _weights(p: Any) -> str:
+    if p.feature_kind == "subregion":
+        w = f"+1/-1 at {p.positive_prob:.2f}/{1 - p.positive_prob:.2f}"
+    else:
+        w = {"sign": "+-1", "sign_sqrt": "+-1/sqrt(n)", "uniform": "U[-1,1]"}[p.weight_mode]
+    return w + (" / area" if p.area_normalize else ", raw sums")
+
+
+def _negatives(p: Any) -> str:
+    how = "exactly" if p.neg_sampling == "exact" else "Bernoulli, max"
+    return f"{p.neg_inner:g} <= d < {p.neg_outer:g}, {how} {p.neg_count}"
+
+
+def _instance_weights(p: Any) -> str:
+    if p.selection != "wmil":
+        return "-"
+    return {"exp": "exp(-d)/sum", "exp_sq": "exp(-d^2)", "uniform": "equal"}[p.instance_weights]
+
+
+def _search(p: Any) -> str:
+    s = f"{p.coarse_radius}/{p.coarse_step}"
+    return s + (f" then {p.fine_radius}/{p.fine_step}" if p.fine_radius > 0 else "")
+
+
+def _scale_parts(p: Any) -> list[str]:
+    """The scale estimator and the correlation filter, as the additions column names them."""
+    parts = []
+    if p.scale_model == "dsst":
+        parts.append(f"scale by DSST ({p.scale_samples} samples)")
+    elif p.scale_steps:
+        contrast = f", colour contrast {p.scale_contrast:g}" if p.scale_contrast > 0 else ""
+        vote = (f", DSST vote {p.scale_dsst:g} ({p.scale_samples} samples)"
+                if p.scale_dsst > 0 else "")
+        parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} ({p.scale_model}{contrast}{vote})")
+    if p.template_weight > 0:
+        cells = round(math.sqrt(p.template_area) / p.template_cell)
+        kept = f", {p.template_channels} channels" if p.template_channels else ""
+        parts.append(f"fHOG correlation filter {p.template_weight:g} (~{cells}x{cells} cells{kept})")
+    return parts
+
+
+def _plus(p: Any) -> str:
+    """What a preset adds to the paper's tracker (rcwmil-plus and rcwmil-cf), or ``-``."""
+    parts = _scale_parts(p)
+    if p.channels:
+        parts.append("channels " + "+".join(p.channels))
+    if p.colour_weight > 0:
+        parts.append(f"colour {p.colour_weight:g}" + (" (luma on gray)" if p.gray_colour else ""))
+    if p.motion != "none":
+        parts.append(f"motion {p.motion}")
+    if p.score_colour > 0:
+        first = " (first frame)" if p.score_colour_model == "first" else ""
+        parts.append(f"score colour {p.score_colour:g}{first}")
+    if p.score_luma > 0:
+        parts.append(f"score luma {p.score_luma:g} (first frame)")
+    if p.redetect:
+        parts.append("lost state and re-detection")
+    return ", ".join(parts) or "-"
+
+
+#: The cells of the table's columns that are not one parameter's value.
+_CELLS: dict[str, Callable[[Any], str]] = {
+    "features": lambda p: "sub-region (2x2)" if p.feature_kind == "subregion" else "random rects",
+    "rects": lambda p: f"{p.rects_min}-{p.rects_max}",
+    "weights": _weights,
+    "pos_radius": lambda p: f"d < {p.pos_radius:g}",
+    "negatives": _negatives,
+    "selection": lambda p: {"wmil": "WMIL gradient", "milboost": "MILBoost (Noisy-OR)",
+                            "none": "all features"}[p.selection],
+    "instance_weights": _instance_weights,
+    "plus": _plus,
+    "search": _search,
+}
+
+
+def _cell(p: Any, key: str) -> str:
+    """One cell of the variants table: preset ``p``'s column ``key``."""
+    if key in _CELLS:
+        return _CELLS[key](p)
+    value = getattr(p, key)
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
 def variant_table() -> str:
     """The defaults of every variant as a markdown table (the README's table)."""
     from ..engine.params import VARIANTS
 
-    def cell(p: Any, key: str) -> str:
-        if key == "features":
-            return "sub-region (2x2)" if p.feature_kind == "subregion" else "random rects"
-        if key == "rects":
-            return f"{p.rects_min}-{p.rects_max}"
-        if key == "weights":
-            if p.feature_kind == "subregion":
-                w = f"+1/-1 at {p.positive_prob:.2f}/{1 - p.positive_prob:.2f}"
-            else:
-                w = {"sign": "+-1", "sign_sqrt": "+-1/sqrt(n)", "uniform": "U[-1,1]"}[p.weight_mode]
-            return w + (" / area" if p.area_normalize else ", raw sums")
-        if key == "pos_radius":
-            return f"d < {p.pos_radius:g}"
-        if key == "negatives":
-            how = "exactly" if p.neg_sampling == "exact" else "Bernoulli, max"
-            return f"{p.neg_inner:g} <= d < {p.neg_outer:g}, {how} {p.neg_count}"
-        if key == "selection":
-            return {"wmil": "WMIL gradient", "milboost": "MILBoost (Noisy-OR)",
-                    "none": "all features"}[p.selection]
-        if key == "instance_weights":
-            return "-" if p.selection != "wmil" else {"exp": "exp(-d)/sum", "exp_sq": "exp(-d^2)",
-                                                      "uniform": "equal"}[p.instance_weights]
-        if key == "plus":
-            parts = []
-            if p.scale_model == "dsst":
-                parts.append(f"scale by DSST ({p.scale_samples} samples)")
-            elif p.scale_steps:
-                contrast = f", colour contrast {p.scale_contrast:g}" if p.scale_contrast > 0 else ""
-                vote = (f", DSST vote {p.scale_dsst:g} ({p.scale_samples} samples)"
-                        if p.scale_dsst > 0 else "")
-                parts.append(f"scale {p.scale_factor:g}^+-{p.scale_steps} "
-                             f"({p.scale_model}{contrast}{vote})")
-            if p.template_weight > 0:
-                cells = round(math.sqrt(p.template_area) / p.template_cell)
-                kept = f", {p.template_channels} channels" if p.template_channels else ""
-                parts.append(f"fHOG correlation filter {p.template_weight:g} "
-                             f"(~{cells}x{cells} cells{kept})")
-            if p.channels:
-                parts.append("channels " + "+".join(p.channels))
-            if p.colour_weight > 0:
-                parts.append(f"colour {p.colour_weight:g}" + (" (luma on gray)" if p.gray_colour else ""))
-            if p.motion != "none":
-                parts.append(f"motion {p.motion}")
-            if p.score_colour > 0:
-                first = " (first frame)" if p.score_colour_model == "first" else ""
-                parts.append(f"score colour {p.score_colour:g}{first}")
-            if p.score_luma > 0:
-                parts.append(f"score luma {p.score_luma:g} (first frame)")
-            if p.redetect:
-                parts.append("lost state and re-detection")
-            return ", ".join(parts) or "-"
-        if key == "search":
-            s = f"{p.coarse_radius}/{p.coarse_step}"
-            return s + (f" then {p.fine_radius}/{p.fine_step}" if p.fine_radius > 0 else "")
-        return f"{getattr(p, key):g}" if isinstance(getattr(p, key), float) else str(getattr(p, key))
-
     head = "| variant | " + " | ".join(title for title, _ in VARIANT_COLUMNS) + " |"
     rule = "|" + "---|" * (len(VARIANT_COLUMNS) + 1)
-    rows = [f"| **{name}** | " + " | ".join(cell(p, key) for _, key in VARIANT_COLUMNS) + " |"
+    rows = [f"| **{name}** | " + " | ".join(_cell(p, key) for _, key in VARIANT_COLUMNS) + " |"
             for name, p in VARIANTS.items()]
     return "\n".join([head, rule, *rows])
 

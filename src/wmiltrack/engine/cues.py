@@ -10,6 +10,7 @@ learn. A new cue is one class with the three members of :class:`Cue`; pass it to
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -19,7 +20,7 @@ from .colour import ColourModel, box_contrast
 from .frames import IntBox
 from .settings import ColourSettings
 
-__all__ = ["ColourCue", "Cue", "CueTable"]
+__all__ = ["ColourCue", "Cue", "CueTable", "check_cue_weights"]
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -56,6 +57,27 @@ class Cue(Protocol):
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
         """Learn from a frame after the tracker placed the target at ``box``."""
+
+
+def check_cue_weights(colour_weight: float, template_weight: float, cues: Sequence[object] = ()
+                      ) -> None:
+    """The one rule on the cues' weights, for every way of adding cues (:class:`Params`
+    construction and ``replace``, ``Tracker(..., cues=...)``): each added cue is a :class:`Cue`
+    with a weight in [0, 1], and ``colour_weight``, ``template_weight`` and the added cues'
+    weights add up to at most 1 (the classifier's share of the merged score is 1 minus their
+    sum). A ``TypeError`` or ``ValueError`` otherwise."""
+    added: list[float] = []
+    for cue in cues:
+        if not isinstance(cue, Cue):
+            raise TypeError(f"a cue needs weight, start, table and learn; got {cue!r}")
+        if not 0.0 <= cue.weight <= 1.0:
+            raise ValueError(f"a cue's weight must be in [0, 1], got {cue.weight!r}")
+        added.append(float(cue.weight))
+    total = colour_weight + template_weight + sum(added)
+    if total > 1.0 + 1e-12:
+        terms = " + ".join(f"{w:g}" for w in (colour_weight, template_weight, *added))
+        raise ValueError("the cues' weights (colour_weight + template_weight + each added cue's "
+                         f"weight) add up to more than 1: {terms} = {total:g}")
 
 
 class ColourCue:

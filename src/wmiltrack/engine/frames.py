@@ -10,6 +10,18 @@ import numpy as np
 IntBox = tuple[int, int, int, int]
 
 
+def _check_shape(frame: np.ndarray) -> None:
+    """A ``ValueError`` unless ``frame`` is ``H x W`` or ``H x W x C`` (C 1, 3 or 4), not empty."""
+    if frame.ndim not in (2, 3):
+        raise ValueError(f"frame must be H x W or H x W x C, got shape {frame.shape}")
+    if frame.ndim == 3 and frame.shape[2] not in (1, 3, 4):
+        raise ValueError(
+            f"frame must have 1, 3 (BGR) or 4 (BGRA) channels, got {frame.shape[2]} (shape {frame.shape})"
+        )
+    if frame.shape[0] == 0 or frame.shape[1] == 0:
+        raise ValueError(f"frame is empty (shape {frame.shape})")
+
+
 def as_frame(frame: Any) -> np.ndarray:
     """Validate a frame and return it as a uint8 array the core can read without copying.
 
@@ -33,14 +45,7 @@ def as_frame(frame: Any) -> np.ndarray:
         raise TypeError(f"frame must be a numpy array, got {type(frame).__name__}")
     if type(frame) is not np.ndarray:  # a subclass (np.matrix, a masked array): its plain data,
         frame = np.asarray(frame)      # which numpy's and OpenCV's functions read as expected
-    if frame.ndim not in (2, 3):
-        raise ValueError(f"frame must be H x W or H x W x C, got shape {frame.shape}")
-    if frame.ndim == 3 and frame.shape[2] not in (1, 3, 4):
-        raise ValueError(
-            f"frame must have 1, 3 (BGR) or 4 (BGRA) channels, got {frame.shape[2]} (shape {frame.shape})"
-        )
-    if frame.shape[0] == 0 or frame.shape[1] == 0:
-        raise ValueError(f"frame is empty (shape {frame.shape})")
+    _check_shape(frame)
     kind = frame.dtype.kind
     lo: float  # value range, for the messages below (int for integer frames)
     hi: float

@@ -14,6 +14,7 @@ import difflib
 from dataclasses import dataclass, field
 from typing import Any
 
+from .cues import check_cue_weights
 from .settings import (
     CONFIDENCE_OFFSET,
     MAX_NEG_RADIUS,
@@ -84,9 +85,7 @@ class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, C
         if self.selection == "none" and self.num_selected != self.num_features:
             raise ValueError("selection='none' scores every feature: num_selected must equal "
                              "num_features")
-        if self.colour_weight + self.template_weight > 1.0 + 1e-12:
-            raise ValueError("colour_weight + template_weight must be <= 1 (the cues' share of the "
-                             f"merged score), got {self.colour_weight} + {self.template_weight}")
+        check_cue_weights(self.colour_weight, self.template_weight)
         if self.judge_memory > 0 and not (self.template_weight > 0 or self.template_motion):
             raise ValueError("judge_memory > 0 needs the correlation-filter template "
                              "(template_weight > 0 or template_motion)")

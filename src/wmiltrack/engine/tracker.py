@@ -14,7 +14,7 @@ from __future__ import annotations
 import functools
 import math
 import threading
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Callable, TypeVar
 
@@ -24,11 +24,12 @@ from .. import _core
 from . import copying as _copying  # noqa: F401 (installs deepcopy for the core's objects)
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
-from .cues import ColourCue, Cue
+from .cues import ColourCue, Cue, check_cue_weights
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .judge import LostJudge
 from .motion import VelocityMotion
 from .params import Params
+from .parts import PART_KINDS, Judge, MotionModel, PartFactory, Recovery, ScaleEstimator
 from .policy import ContrastScore, UpdatePolicy, confidence
 from .recovery import Redetector
 from .requests import Steps, drive, run_batches
@@ -36,7 +37,8 @@ from .result import TrackResult
 from .scale import HaarScale
 from .template import CorrelationTemplate, DSSTScale
 
-__all__ = ["NotInitializedError", "Parts", "Tracker", "compose", "confidence", "update_many"]
+__all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "compose", "confidence",
+           "update_many"]
 
 
 class NotInitializedError(ValueError):
@@ -67,11 +69,11 @@ class Parts:
 
     appearance: HaarAppearance
     cues: list[Cue]
-    scale: HaarScale | DSSTScale | None
-    motion: VelocityMotion | CorrelationTemplate | None
+    scale: ScaleEstimator | None
+    motion: MotionModel | None
     policy: UpdatePolicy
-    recovery: Redetector | None = None
-    judge: LostJudge | None = None
+    recovery: Recovery | None = None
+    judge: Judge | None = None
     template: CorrelationTemplate | None = None  # (the judge reads its first-frame filter)
 
     @property
@@ -97,9 +99,12 @@ class Parts:
 
 
 def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
-            cues: Sequence[Cue] = ()) -> Parts:
+            cues: Sequence[Cue] = (), parts: Mapping[str, PartFactory] | None = None) -> Parts:
     """The parts that ``params`` asks for, for a tracker started on ``frame`` at ``box``, with
-    ``cues`` added after the preset's own. The appearance model is created but not started."""
+    ``cues`` added after the preset's own and each kind of part in ``parts`` (``"scale"``,
+    ``"motion"``, ``"recovery"``: a factory, see :data:`~wmiltrack.engine.parts.PartFactory`)
+    made by its factory instead of from ``params``. The appearance model is created but not
+    started."""
     appearance = HaarAppearance(params, seed)
     all_cues: list[Cue] = []
     colour: ColourCue | None = None
@@ -113,11 +118,11 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
             all_cues.append(template)
     all_cues.extend(cues)
     fw, fh = frame_size(frame)
-    scale: HaarScale | DSSTScale | None = None
+    scale: ScaleEstimator | None = None
     if params.scale_steps > 0:
         kind = DSSTScale if params.scale_model == "dsst" else HaarScale
         scale = kind(params, (box[2], box[3]), (fw, fh))
-    motion: VelocityMotion | CorrelationTemplate | None = None
+    motion: MotionModel | None = None
     if params.template_motion:
         motion = template
     elif params.motion == "velocity":
@@ -125,10 +130,53 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
     report = None
     if (params.score_colour > 0 and colour is not None) or params.score_luma > 0:
         report = ContrastScore(params, colour.model if colour is not None else None, None)
-    recovery = Redetector(params) if params.redetect else None
+    recovery: Recovery | None = Redetector(params) if params.redetect else None
     judge = LostJudge(params, params) if params.judge_memory > 0 else None
+    if parts:
+        scale = _made(parts, "scale", params, frame, box, scale)
+        motion = _made(parts, "motion", params, frame, box, motion)
+        recovery = _made(parts, "recovery", params, frame, box, recovery)
     return Parts(appearance, all_cues, scale, motion, UpdatePolicy(params, report), recovery,
                  judge, template)
+
+
+def _made(parts: Mapping[str, PartFactory], kind: str, params: Params, frame: np.ndarray,
+          box: IntBox, default: Any) -> Any:
+    """The part of ``kind`` made by the user's factory in ``parts`` (checked against the kind's
+    interface), else ``default``, the one ``params`` asks for."""
+    if kind not in parts:
+        return default
+    part = parts[kind](params, frame, box)
+    if part is not None and not isinstance(part, PART_KINDS[kind]):
+        missing = [m for m in _members(PART_KINDS[kind]) if not hasattr(part, m)]
+        raise TypeError(f"the {kind} part {part!r} lacks {', '.join(missing)} (see "
+                        f"wmiltrack.engine.parts.{PART_KINDS[kind].__name__})")
+    return part
+
+
+def _members(protocol: type[Any]) -> list[str]:
+    """The attributes and methods an object needs to be a ``protocol``."""
+    names = set(getattr(protocol, "__annotations__", {}))
+    names |= {n for n, v in vars(protocol).items() if not n.startswith("_")
+              and (callable(v) or isinstance(v, property))}
+    return sorted(names)
+
+
+def check_part_factories(parts: Mapping[str, Any] | None) -> dict[str, PartFactory]:
+    """``Tracker(parts=...)`` checked: known kinds, each a callable factory."""
+    if parts is None:
+        return {}
+    if not isinstance(parts, Mapping):
+        raise TypeError(f"parts must be a mapping of kind to factory, got {type(parts).__name__}")
+    unknown = sorted(set(parts) - set(PART_KINDS))
+    if unknown:
+        raise ValueError(f"unknown part kind(s) {', '.join(map(repr, unknown))}; the kinds are "
+                         f"{', '.join(map(repr, PART_KINDS))}")
+    for kind, factory in parts.items():
+        if not callable(factory):
+            raise TypeError(f"parts[{kind!r}] must be a factory (params, frame, box) -> part, "
+                            f"got {factory!r}")
+    return dict(parts)
 
 
 def _start_report(report: ContrastScore, params: Params, frame: np.ndarray, box: IntBox) -> None:
@@ -155,7 +203,15 @@ class Tracker:
         Start from these parameters instead of the variant's defaults.
     cues : sequence of Cue, optional
         More cues merged into the search (:class:`~wmiltrack.engine.cues.Cue`), after the
-        preset's own; their weights and the preset's colour weight add up to at most 1.
+        preset's own; their weights, ``colour_weight`` and ``template_weight`` add up to at
+        most 1 (:func:`~wmiltrack.engine.cues.check_cue_weights`).
+    parts : mapping, optional
+        Parts of your own instead of the preset's: ``{"scale": factory, "motion": factory,
+        "recovery": factory}`` (any of the three), each factory called at :meth:`init` as
+        ``factory(params, frame, box)`` and returning an object with the kind's interface
+        (:mod:`wmiltrack.engine.parts`: ``ScaleEstimator``, ``MotionModel``, ``Recovery``), or
+        None for no part of that kind. A class whose ``__init__`` takes ``(params, frame,
+        box)`` is such a factory.
     **overrides
         Any :class:`~wmiltrack.Params` field, e.g. ``num_selected=30``.
 
@@ -174,20 +230,15 @@ class Tracker:
     """
 
     def __init__(self, variant: str = "rcwmil", *, seed: int = 0, params: Params | None = None,
-                 cues: Sequence[Cue] = (), **overrides: Any) -> None:
+                 cues: Sequence[Cue] = (), parts: Mapping[str, PartFactory] | None = None,
+                 **overrides: Any) -> None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise ValueError(f"seed must be a non-negative int, got {seed!r}")
         if params is None:
             params = Params.for_variant(variant, **overrides)
         elif overrides:
             params = params.replace(**overrides)
-        for cue in cues:
-            if not isinstance(cue, Cue):
-                raise TypeError(f"a cue needs weight, start, table and learn; got {cue!r}")
-            if not 0.0 <= cue.weight <= 1.0:
-                raise ValueError(f"a cue's weight must be in [0, 1], got {cue.weight!r}")
-        if params.colour_weight + sum(c.weight for c in cues) > 1.0 + 1e-12:
-            raise ValueError("the cues' weights (with colour_weight) add up to more than 1")
+        check_cue_weights(params.colour_weight, params.template_weight, cues)
         self._params = params
         # the search's (radius, step) stages: the coarse grid, then the fine one if any
         self._stages = [(params.coarse_radius, params.coarse_step)]
@@ -195,6 +246,7 @@ class Tracker:
             self._stages.append((params.fine_radius, params.fine_step))
         self._seed = int(seed)
         self._extra_cues = tuple(cues)
+        self._part_factories = check_part_factories(parts)
         self._busy = threading.Lock()
         self._initialized = False
         self._frame_wh = (0, 0)
@@ -254,7 +306,8 @@ class Tracker:
         img = as_frame(frame)
         fw, fh = frame_size(img)
         b = clip_box(box, fw, fh)
-        parts = compose(self._params, self._seed, img, b, self._extra_cues)
+        parts = compose(self._params, self._seed, img, b, self._extra_cues,
+                        self._part_factories)
         model = parts.appearance
         model.start(img, b)
         for part in parts.others():

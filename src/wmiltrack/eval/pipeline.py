@@ -104,7 +104,7 @@ from .report import (
 from .runner import RunOutcome, SerialExecutor, Task, run_task
 from .scoring import Missing, run_boxes, score_ope, score_vot
 
-__all__ = ["EvalArgumentError", "make_tasks", "run_eval", "run_tasks"]
+__all__ = ["EvalArgumentError", "EvalConfig", "make_tasks", "run_eval", "run_tasks"]
 
 FloatArray = npt.NDArray[np.float64]
 Protocol = Literal["ope", "vot"]
@@ -519,13 +519,14 @@ def _check_eval_arguments(repeats: int, jobs: int, protocol: str, missing: str, 
         )
 
 
-def _run_trackers(ds: Any, tracker_names: list[str], seeds: tuple[int, ...], protocol: Protocol,
-                  skip: int, burnin: int, missing: Missing, ex: Executor, box_root: Path,
-                  resume: bool, show_progress: bool, notes: list[str],
+def _run_trackers(ds: Any, tracker_names: list[str], cfg: EvalConfig, ex: Executor,
+                  box_root: Path, notes: list[str],
                   say: Callable[[str], None]) -> tuple[list[RunOutcome], int, int]:
     """Run every (tracker, sequence, seed) task on ``ex``, writing each box file as its task
     ends (or, with ``resume``, reading back those already written); the runs in task order,
     how many were read back, and how many failed on sequences that are not scored."""
+    seeds, protocol, skip, burnin = cfg.seeds, cfg.protocol, cfg.skip, cfg.burnin
+    missing = cfg.missing
     # absolute paths: the workers of a cluster may run in other folders
     if ds.layout == "otb":
         tasks = make_tasks(
@@ -539,7 +540,7 @@ def _run_trackers(ds: Any, tracker_names: list[str], seeds: tuple[int, ...], pro
     all_tasks = list(tasks)
     lengths = {name: gt.shape[0] for name, gt in ds.gts.items()}
     resumed: list[RunOutcome] = []
-    if resume:
+    if cfg.resume:
         tasks, resumed = _split_resumable(tasks, box_root, lengths, missing)
         if resumed:
             notes.append(
@@ -552,7 +553,7 @@ def _run_trackers(ds: Any, tracker_names: list[str], seeds: tuple[int, ...], pro
         tasks,
         ex,
         _box_writer(box_root, protocol, missing, say, lengths),
-        show_progress,
+        cfg.show_progress,
     ) if tasks else []
     order = {(t, s, r): i for i, (t, s, r) in enumerate(
         (t.tracker, Path(t.sequence).name, t.repeat) for t in all_tasks
@@ -569,32 +570,11 @@ def _run_trackers(ds: Any, tracker_names: list[str], seeds: tuple[int, ...], pro
     return runs, len(resumed), unscored_errors
 
 
-def run_eval(
-    dataset: str | os.PathLike[str],
-    out: str | os.PathLike[str],
-    *,
-    trackers: Sequence[str] = ("rcwmil",),
-    results: str | os.PathLike[str] | None = None,
-    protocol: Protocol = "ope",
-    sequences: Sequence[str] | None = None,
-    jobs: int = 1,
-    repeats: int = 1,
-    seed: int = 0,
-    skip: int = 5,
-    burnin: int = 10,
-    missing: Missing = "hold",
-    plots: bool = True,
-    cv_threads: int | None = 1,
-    show_progress: bool = True,
-    log: Callable[[str], None] | None = None,
-    executor: Executor | ExecutorName | None = None,
-    scheduler: str | None = None,
-    resume: bool = False,
-    layout: str | None = None,
-) -> dict[str, Any]:
-    """Run (or read) and score trackers on a dataset; write the table, JSON, plots and boxes.
+@dataclass(frozen=True)
+class EvalConfig:
+    """What :func:`run_eval` runs (or reads) and scores, and how.
 
-    Parameters
+    Attributes
     ----------
     dataset:
         Folder of OTB sequence folders, or one sequence folder.
@@ -645,6 +625,58 @@ def run_eval(
         Do not run a task whose box file is already in ``out`` with its ``.run.json`` record
         (same seed and ``missing`` rule, no error): read its boxes back instead (untimed; a
         note in the table says how many).  OPE only.
+    """
+
+    dataset: str | os.PathLike[str]
+    out: str | os.PathLike[str]
+    trackers: Sequence[str] = ("rcwmil",)
+    results: str | os.PathLike[str] | None = None
+    protocol: Protocol = "ope"
+    sequences: Sequence[str] | None = None
+    jobs: int = 1
+    repeats: int = 1
+    seed: int = 0
+    skip: int = 5
+    burnin: int = 10
+    missing: Missing = "hold"
+    plots: bool = True
+    cv_threads: int | None = 1
+    show_progress: bool = True
+    log: Callable[[str], None] | None = None
+    executor: Executor | ExecutorName | None = None
+    scheduler: str | None = None
+    resume: bool = False
+    layout: str | None = None
+
+    @property
+    def seeds(self) -> tuple[int, ...]:
+        """The seeds of the repeats: ``seed .. seed + repeats - 1``."""
+        return tuple(self.seed + r for r in range(self.repeats))
+
+
+def _as_config(config: EvalConfig | str | os.PathLike[str], out: str | os.PathLike[str] | None,
+               options: dict[str, Any]) -> EvalConfig:
+    """``config`` itself, or the :class:`EvalConfig` of the older keyword call."""
+    if isinstance(config, EvalConfig):
+        if out is not None or options:
+            raise TypeError("run_eval(config) takes no other argument: set them in the EvalConfig")
+        return config
+    if out is None:
+        raise TypeError("run_eval(dataset, out, ...) needs out, the output folder")
+    return EvalConfig(config, out, **options)
+
+
+def run_eval(config: EvalConfig | str | os.PathLike[str],
+             out: str | os.PathLike[str] | None = None, **options: Any) -> dict[str, Any]:
+    """Run (or read) and score trackers on a dataset; write the table, JSON, plots and boxes.
+
+    Parameters
+    ----------
+    config:
+        What to run and how (:class:`EvalConfig`). For convenience the dataset folder may be
+        given instead, with ``out`` and any other :class:`EvalConfig` field as keywords:
+        ``run_eval(dataset, out, trackers=[...])`` is ``run_eval(EvalConfig(dataset, out,
+        trackers=[...]))``.
 
     Returns
     -------
@@ -665,16 +697,18 @@ def run_eval(
     KeyboardInterrupt
         Passed on after the box files of every finished task are written.
     """
-    say = log if log is not None else (lambda s: print(s, file=sys.stderr))
-    _check_eval_arguments(repeats, jobs, protocol, missing, resume, results)
-    want_plots = plots and protocol == "ope"
+    cfg = _as_config(config, out, options)
+    say = cfg.log if cfg.log is not None else (lambda s: print(s, file=sys.stderr))
+    protocol, results = cfg.protocol, cfg.results
+    _check_eval_arguments(cfg.repeats, cfg.jobs, protocol, cfg.missing, cfg.resume, results)
+    want_plots = cfg.plots and protocol == "ope"
     if want_plots:
         from .plots import require_matplotlib
 
         require_matplotlib()  # fail before a long run, not after it
-    dataset_p = Path(dataset)
-    out_p = Path(out)
-    ds = _open_dataset(dataset_p, layout, sequences)
+    dataset_p = Path(cfg.dataset)
+    out_p = Path(cfg.out)
+    ds = _open_dataset(dataset_p, cfg.layout, cfg.sequences)
     notes: list[str] = []
     first_only = [n for n in ds.gts if ds.metas[n].get("first_frame_only")]
     gts = {n: g for n, g in ds.gts.items() if n not in first_only}
@@ -683,7 +717,7 @@ def run_eval(
             f"not scored: {len(first_only)} sequence(s) annotated on the first frame only "
             "(the benchmark's server scores them); their boxes are written"
         )
-    seeds = tuple(seed + r for r in range(repeats))
+    seeds = cfg.seeds
     t_start = time.perf_counter()
     files: dict[str, str] = {}
     out_p.mkdir(parents=True, exist_ok=True)
@@ -696,7 +730,7 @@ def run_eval(
         tracker_names = list(dict.fromkeys(r.tracker for r in runs))
         n_repeats = 1 + max(r.repeat for r in runs)
     else:
-        specs = [t.strip() for t in trackers if t.strip()]
+        specs = [t.strip() for t in cfg.trackers if t.strip()]
         tracker_names = _check_trackers(specs, notes)
         for n in notes:
             say(n)
@@ -704,23 +738,22 @@ def run_eval(
             raise ValueError("no tracker left to run")
         box_root = out_p / ("boxes" if protocol == "ope" else "boxes_vot")
         files["boxes"] = str(box_root)
-        ex = _executor(executor, jobs, cv_threads, scheduler, say)
-        runs, n_resumed, unscored_errors = _run_trackers(
-            ds, tracker_names, seeds, protocol, skip, burnin, missing, ex, box_root, resume,
-            show_progress, notes, say)
+        ex = _executor(cfg.executor, cfg.jobs, cfg.cv_threads, cfg.scheduler, say)
+        runs, n_resumed, unscored_errors = _run_trackers(ds, tracker_names, cfg, ex, box_root,
+                                                         notes, say)
         runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
         timed = True
-        n_repeats = repeats
+        n_repeats = cfg.repeats
     wall = time.perf_counter() - t_start
 
     settings = {
-        "jobs": jobs,
-        "executor": None if results is not None else _executor_name(executor, jobs),
+        "jobs": cfg.jobs,
+        "executor": None if results is not None else _executor_name(cfg.executor, cfg.jobs),
         "resumed_runs": n_resumed,
-        "missing": missing,
-        "skip": skip,
-        "burnin": burnin,
-        "cv_threads": cv_threads,
+        "missing": cfg.missing,
+        "skip": cfg.skip,
+        "burnin": cfg.burnin,
+        "cv_threads": cfg.cv_threads,
         "seeds": list(seeds) if results is None else None,
         "success_thresholds": [float(t) for t in SUCCESS_THRESHOLDS],
         "precision_thresholds": [float(t) for t in PRECISION_THRESHOLDS],

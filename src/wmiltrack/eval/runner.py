@@ -10,12 +10,12 @@ interruption loses only the tasks not yet finished.
 Timing rules
 ------------
 * Frames are decoded before any clock starts; the trackers get the same in-memory arrays.
-* ``time.perf_counter()`` is read right before and after each ``update`` call, and nothing
-  else is inside the interval.  ``init`` is timed separately (``init_time``), and creating the
-  tracker object is not timed.
+* The clock is read right before and after each ``update`` call, and nothing else is inside
+  the interval (:func:`wmiltrack.timing.timed`, the one timing helper of every timed loop).
+  ``init`` is timed separately (``init_time``), and creating the tracker object is not timed.
 * Python's garbage collector is run before every run and disabled during it, for every
-  tracker alike (as :mod:`timeit` does), so a collection does not land on one tracker's
-  update.
+  tracker alike (as :mod:`timeit` does, :func:`wmiltrack.timing.gc_paused`), so a
+  collection does not land on one tracker's update.
 * ``fps`` is *update-only* throughput: ``updates / sum(update times)``.  The median
   per-update time is kept too (``median_update_time``), being robust to a slow outlier.
 * OpenCV's own thread pool is set to ``cv_threads`` (1 by default: one thread per tracker, as
@@ -26,9 +26,7 @@ Timing rules
 
 from __future__ import annotations
 
-import gc
 import math
-import time
 import traceback
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -41,6 +39,7 @@ import numpy.typing as npt
 
 from .. import executors
 from ..engine.result import TrackerLike, TrackResult
+from ..timing import gc_paused, timed
 from ..trackers import make_tracker
 from .metrics import valid_mask
 
@@ -211,70 +210,70 @@ def run_sequence(
         raise ValueError(f"init_box must be 4 numbers x, y, w, h; got {init_box!r}")
     name = _spec_name(spec)
     tracker = _factory(spec, seed, params)()
-
-    boxes = np.full((n, 4), np.nan)
-    scores = np.full(n, np.nan)
-    oks = np.zeros(n, dtype=bool)
-    times = np.full(n, np.nan)
-    init_time = float("nan")
-    n_updates = 0
-    error: str | None = None
-    error_frame: int | None = None
-    tb: str | None = None
-
+    run = _Recording(name, n)
     frame_list = list(frames)
-    clock = time.perf_counter
-    gc.collect()
-    was_enabled = gc.isenabled()
-    gc.disable()
     i = 0
-    try:
-        box_tuple = (float(box0[0]), float(box0[1]), float(box0[2]), float(box0[3]))
-        t0 = clock()
-        tracker.init(frame_list[0], box_tuple)
-        init_time = clock() - t0
-        boxes[0] = box0
-        oks[0] = True
-        for i in range(1, n):
-            frame = frame_list[i]
-            t0 = clock()
-            r = tracker.update(frame)
-            t1 = clock()
-            times[i] = t1 - t0
-            boxes[i] = r.box
-            scores[i] = r.score
-            oks[i] = r.ok
-            n_updates += 1
-    except Exception as exc:
-        if raise_errors:
-            raise
-        error = f"{type(exc).__name__}: {exc}"
-        error_frame = i
-        tb = traceback.format_exc()
-        if i < n:
-            boxes[i:] = np.nan
-            scores[i:] = np.nan
-            oks[i:] = False
-            times[i:] = np.nan
-        warnings.warn(
-            f"tracker {name!r} raised at frame {i + 1}: {error}", RuntimeWarning, stacklevel=2
-        )
-    finally:
-        if was_enabled:
-            gc.enable()
-    return RunResult(
-        tracker=name,
-        boxes=boxes,
-        scores=scores,
-        oks=oks,
-        init_time=init_time,
-        update_times=times,
-        n_updates=n_updates,
-        error=error,
-        error_frame=error_frame,
-        traceback=tb,
-    )
+    with gc_paused():
+        try:
+            box_tuple = (float(box0[0]), float(box0[1]), float(box0[2]), float(box0[3]))
+            _, run.init_time = timed(tracker.init, frame_list[0], box_tuple)
+            run.boxes[0] = box0
+            run.oks[0] = True
+            for i in range(1, n):
+                r, run.times[i] = timed(tracker.update, frame_list[i])
+                run.boxes[i] = r.box
+                run.scores[i] = r.score
+                run.oks[i] = r.ok
+                run.n_updates += 1
+        except Exception as exc:
+            if raise_errors:
+                raise
+            run.failed(exc, i)
+            warnings.warn(
+                f"tracker {name!r} raised at frame {i + 1}: {run.error}", RuntimeWarning,
+                stacklevel=2
+            )
+    return run.result()
 
+
+class _Recording:
+    """What :func:`run_sequence` records while it runs, frame by frame."""
+
+    def __init__(self, name: str, n: int) -> None:
+        self.name = name
+        self.boxes = np.full((n, 4), np.nan)
+        self.scores = np.full(n, np.nan)
+        self.oks = np.zeros(n, dtype=bool)
+        self.times = np.full(n, np.nan)
+        self.init_time = math.nan
+        self.n_updates = 0
+        self.error: str | None = None
+        self.error_frame: int | None = None
+        self.traceback: str | None = None
+
+    def failed(self, exc: Exception, i: int) -> None:
+        """The tracker raised ``exc`` at frame ``i``: recorded, and no box from there on."""
+        self.error = f"{type(exc).__name__}: {exc}"
+        self.error_frame = i
+        self.traceback = traceback.format_exc()
+        self.boxes[i:] = np.nan
+        self.scores[i:] = np.nan
+        self.oks[i:] = False
+        self.times[i:] = np.nan
+
+    def result(self) -> RunResult:
+        return RunResult(
+            tracker=self.name,
+            boxes=self.boxes,
+            scores=self.scores,
+            oks=self.oks,
+            init_time=self.init_time,
+            update_times=self.times,
+            n_updates=self.n_updates,
+            error=self.error,
+            error_frame=self.error_frame,
+            traceback=self.traceback,
+        )
 
 
 # ----------------------------------------------------------------------------- tasks
@@ -407,15 +406,13 @@ class _TimedTracker:
         self.update_times = update_times
 
     def init(self, frame: Frame, box: tuple[float, float, float, float]) -> object:
-        t0 = time.perf_counter()
-        out = self.inner.init(frame, box)
-        self.init_times.append(time.perf_counter() - t0)
+        out, seconds = timed(self.inner.init, frame, box)
+        self.init_times.append(seconds)
         return out
 
     def update(self, frame: Frame) -> TrackResult:
-        t0 = time.perf_counter()
-        r = self.inner.update(frame)
-        self.update_times.append(time.perf_counter() - t0)
+        r, seconds = timed(self.inner.update, frame)
+        self.update_times.append(seconds)
         return r
 
 
@@ -461,14 +458,8 @@ def _run_vot(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> 
     def factory() -> TrackerLike:
         return _TimedTracker(make_tracker(task.tracker, seed=task.seed), init_times, update_times)
 
-    gc.collect()
-    was_enabled = gc.isenabled()
-    gc.disable()
-    try:
+    with gc_paused():
         res = run_supervised(factory, frames, gt, skip=task.skip, burnin=task.burnin)
-    finally:
-        if was_enabled:
-            gc.enable()
     total = float(sum(update_times))
     n = len(update_times)
     boxes = np.asarray(res.boxes, dtype=np.float64)
