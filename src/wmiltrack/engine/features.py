@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import _core
 from .params import Params
+from .settings import FeatureSettings
 
 #: Channel names (``Params.channels``) and their ids in ``_core.IntegralImage.compute_channels``.
 CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "opp_rg": _core.CH_OPP_RG,
@@ -59,7 +60,7 @@ class BankArrays:
         return int(self.starts.size - 1)
 
 
-def min_box_size(params: Params) -> tuple[int, int]:
+def min_box_size(params: FeatureSettings) -> tuple[int, int]:
     """Smallest ``(w, h)`` a box may have for this variant's features."""
     if params.feature_kind == "subregion":
         side = int(math.isqrt(params.num_subregions)) if params.subregion_mode == "grid" else 1

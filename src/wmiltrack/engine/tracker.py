@@ -25,6 +25,7 @@ from . import copying as _copying  # noqa: F401 (installs deepcopy for the core'
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
 from .cues import ColourCue, Cue, check_cue_weights
+from .features import min_box_size
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .judge import LostJudge
 from .motion import VelocityMotion
@@ -35,7 +36,19 @@ from .recovery import Redetector
 from .requests import Steps, drive, run_batches
 from .result import TrackResult
 from .scale import HaarScale
-from .template import CorrelationTemplate, DSSTScale
+from .settings import (
+    ColourSettings,
+    FeatureSettings,
+    FilterLearning,
+    JudgeSettings,
+    MotionSettings,
+    RecoverySettings,
+    ScaleSettings,
+    ScoreSettings,
+    TemplateSettings,
+    own,
+)
+from .template import CorrelationTemplate, DSSTScale, dsst_min_side
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "compose", "confidence",
            "update_many"]
@@ -106,38 +119,48 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
     made by its factory instead of from ``params``. The appearance model is created but not
     started."""
     appearance = HaarAppearance(params, seed)
+    learning = FilterLearning.of(own(TemplateSettings, params))  # the filters' one rule
     all_cues: list[Cue] = []
     colour: ColourCue | None = None
-    if ColourCue.wanted(params, frame):
-        colour = ColourCue(params, intensity=not ColourModel.usable(frame))
+    if ColourCue.wanted(own(ColourSettings, params), frame):
+        colour = ColourCue(own(ColourSettings, params), intensity=not ColourModel.usable(frame))
         all_cues.append(colour)
     template = None
     if params.template_weight > 0 or params.template_motion:
-        template = CorrelationTemplate(params)
+        template = CorrelationTemplate(own(TemplateSettings, params),
+                                       remembers=params.judge_memory > 0)
         if params.template_weight > 0:
             all_cues.append(template)
     all_cues.extend(cues)
     fw, fh = frame_size(frame)
     scale: ScaleEstimator | None = None
     if params.scale_steps > 0:
-        kind = DSSTScale if params.scale_model == "dsst" else HaarScale
-        scale = kind(params, (box[2], box[3]), (fw, fh))
+        if params.scale_model == "dsst":
+            scale = DSSTScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
+                              min_side=dsst_min_side(params.min_box_size), learning=learning)
+        else:
+            scale = HaarScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
+                              min_box=min_box_size(own(FeatureSettings, params)),
+                              num_features=params.num_features, learning=learning)
     motion: MotionModel | None = None
     if params.template_motion:
         motion = template
     elif params.motion == "velocity":
-        motion = VelocityMotion(params)
+        motion = VelocityMotion(own(MotionSettings, params))
     report = None
     if (params.score_colour > 0 and colour is not None) or params.score_luma > 0:
-        report = ContrastScore(params, colour.model if colour is not None else None, None)
-    recovery: Recovery | None = Redetector(params) if params.redetect else None
-    judge = LostJudge(params, params) if params.judge_memory > 0 else None
+        report = ContrastScore(own(ScoreSettings, params),
+                               colour.model if colour is not None else None, None)
+    recovery: Recovery | None = (Redetector(own(RecoverySettings, params)) if params.redetect
+                                 else None)
+    judge = (LostJudge(own(JudgeSettings, params), threshold=params.lost_threshold)
+             if params.judge_memory > 0 else None)
     if parts:
         scale = _made(parts, "scale", params, frame, box, scale)
         motion = _made(parts, "motion", params, frame, box, motion)
         recovery = _made(parts, "recovery", params, frame, box, recovery)
-    return Parts(appearance, all_cues, scale, motion, UpdatePolicy(params, report), recovery,
-                 judge, template)
+    return Parts(appearance, all_cues, scale, motion,
+                 UpdatePolicy(own(ScoreSettings, params), report), recovery, judge, template)
 
 
 def _made(parts: Mapping[str, PartFactory], kind: str, params: Params, frame: np.ndarray,
