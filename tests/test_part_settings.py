@@ -76,6 +76,13 @@ def test_each_part_reads_only_its_own_settings(
             continue
         held = [k for k, v in vars(part).items() if isinstance(v, Params)]
         assert not held, f"{type(part).__name__} holds the whole Params in {held}"
+    # no part can call back into the tracker: none holds it or one of its bound methods
+    for part in (*parts.others(), parts.policy, parts.judge, parts.appearance):
+        if part is None:
+            continue
+        back = [k for k, v in vars(part).items()
+                if v is t or getattr(v, "__self__", None) is t]
+        assert not back, f"{type(part).__name__} holds the tracker in {back}"
 
 
 def test_recovery_constants_are_settings() -> None:

@@ -176,9 +176,10 @@ class HaarAppearance:
         """The core's coarse-to-fine search from ``box``; with ``img`` and ``roi`` the core
         computes the luma integral image of ``roi`` first; ``cue`` is merged into each stage."""
         pool = self.pool
-        return Search(self.ii, self.bank(box[2], box[3]), self.selected, pool.mu1, pool.sigma1,
-                      pool.mu0, pool.sigma0, self.params.guard, box, stages, frame_wh, img, roi,
-                      cue)
+        return Search(ii=self.ii, bank=self.bank(box[2], box[3]), selected=self.selected,
+                      mu1=pool.mu1, sigma1=pool.sigma1, mu0=pool.mu0, sigma0=pool.sigma0,
+                      guard=self.params.guard, box=box, stages=stages, frame_size=frame_wh,
+                      frame=img, roi=roi, cues=cue)
 
     def prepare(self, img: np.ndarray | None, box: IntBox, margin: int
                 ) -> tuple[np.ndarray | None, IntBox | None]:
@@ -227,7 +228,8 @@ class HaarAppearance:
             # The core draws the bags (as the sampler would, from this model's generator) and
             # learns in the same call.
             request, bags = self._learning_on_core_bags(box, extra, second)
-            answer, bags_drawn = yield LearnAt(request, bags, box, frame_wh)
+            answer, bags_drawn = yield LearnAt(learn=request, bags=bags, box=box,
+                                               frame_size=frame_wh)
             learnt = Learnt._make(answer)
             self._take_core_bags(learnt, Drawn._make(bags_drawn), n_extra)
             return learnt.second_mu, learnt.second_sigma
@@ -254,7 +256,7 @@ class HaarAppearance:
         draws and state changes as a search then :meth:`learn_steps`; returns the search's
         per-stage results."""
         request, bags = self._learning_on_core_bags(frame_box)
-        results, learnt, drawn = yield Step(search, request, bags)
+        results, learnt, drawn = yield Step(search=search, learn=request, bags=bags)
         self._take_core_bags(Learnt._make(learnt), Drawn._make(drawn))
         return results
 
