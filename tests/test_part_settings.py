@@ -41,6 +41,7 @@ CASES = [(name, {}) for name in wmiltrack.variants()] + [
     ("rcwmil-cf", {"scale_model": "dsst", "scale_dsst": 0.0}),
     ("rcwmil-cf", {"template_motion": True}),
     ("rcwmil", {"motion": "velocity", "redetect": True}),
+    ("rcwmil", {"channels": ("luma", "grad")}),
 ]
 
 
@@ -68,10 +69,11 @@ def test_each_part_reads_only_its_own_settings(
     strays = sorted({(cls.__name__, name) for cls, name in reads
                      if name not in {f.name for f in dataclasses.fields(cls)}})
     assert not strays, f"parts read settings they do not own: {strays}"
-    # and no part keeps the whole Params (only the appearance model is built from it)
+    # and no part keeps the whole Params
     parts = t._parts
     assert parts is not None
-    for part in (*parts.others(), parts.policy, parts.judge):
+    for part in (*parts.others(), parts.policy, parts.judge, parts.appearance,
+                 parts.appearance.pool):
         if part is None:
             continue
         held = [k for k, v in vars(part).items() if isinstance(v, Params)]

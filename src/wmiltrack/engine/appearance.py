@@ -32,7 +32,7 @@ from .sampling import BagSampler
 from .selection import milboost_select
 
 if TYPE_CHECKING:
-    from .params import Params
+    from .settings import AppearanceSettings
 
 __all__ = ["HaarAppearance", "roi_around"]
 
@@ -56,9 +56,10 @@ class HaarAppearance:
     same boxes.
     """
 
-    def __init__(self, params: Params, seed: int) -> None:
+    def __init__(self, params: AppearanceSettings, seed: int, *, variant: str = "rcwmil") -> None:
         self.params = params
         self.seed = seed
+        self.variant = variant  # the preset's name, for messages
         self.ii = _core.IntegralImage()
         # the learning step's fixed settings, in LearnRequest's order
         self._rule = (params.learning_rate, params.first_update == "direct",
@@ -89,7 +90,7 @@ class HaarAppearance:
         learning is the tracker's next step)."""
         p = self.params
         w, h = box[2], box[3]
-        check_box_size(p, w, h)
+        check_box_size(p, w, h, self.variant)
         self.rng = np.random.default_rng(self.seed)
         self.bank_arrays: BankArrays = make_bank(p, w, h, self.rng)
         # Channels: each feature on one channel, drawn from its own stream; the integral image

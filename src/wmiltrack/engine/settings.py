@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal, TypeVar
 
-__all__ = ["BagSettings", "ClassifierSettings", "ColourSettings", "FeatureSettings",
+__all__ = ["AppearanceSettings", "BagSettings", "ClassifierSettings", "ColourSettings", "FeatureSettings",
            "FilterLearning", "JudgeSettings", "NO_GATE", "RecoverySettings", "own",
            "MotionSettings", "ScaleSettings", "ScoreSettings", "SearchSettings",
            "TemplateSettings", "CONFIDENCE_OFFSET", "CHANNELS", "MAX_NEG_RADIUS", "MAX_POS_RADIUS",
@@ -831,6 +831,21 @@ class JudgeSettings:
               f"judge_gates must be True or False, got {self.judge_gates!r}")
         _need(isinstance(self.judge_holds, bool),
               f"judge_holds must be True or False, got {self.judge_holds!r}")
+
+
+@dataclass(frozen=True)
+class AppearanceSettings(SearchSettings, ClassifierSettings, BagSettings, FeatureSettings):
+    """The appearance model's settings (:class:`~wmiltrack.engine.appearance.HaarAppearance`):
+    the feature bank, the bags, the weak classifiers and their selection, and the search; the
+    four classes above at once (no field of its own)."""
+
+    def __post_init__(self) -> None:
+        AppearanceSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        for part in (FeatureSettings, BagSettings, ClassifierSettings, SearchSettings):
+            part.check(self)
 
 
 @dataclass(frozen=True)

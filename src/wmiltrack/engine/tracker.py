@@ -37,6 +37,7 @@ from .requests import Search, Steps, drive, run_batches
 from .result import TrackResult
 from .scale import HaarScale
 from .settings import (
+    AppearanceSettings,
     ColourSettings,
     FeatureSettings,
     FilterLearning,
@@ -118,7 +119,7 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
     ``"motion"``, ``"recovery"``: a factory, see :data:`~wmiltrack.engine.parts.PartFactory`)
     made by its factory instead of from ``params``. The appearance model is created but not
     started."""
-    appearance = HaarAppearance(params, seed)
+    appearance = HaarAppearance(own(AppearanceSettings, params), seed, variant=params.variant)
     learning = FilterLearning.of(own(TemplateSettings, params))  # the filters' one rule
     all_cues: list[Cue] = []
     colour: ColourCue | None = None
