@@ -15,7 +15,7 @@ from wmiltrack.engine.settings import JudgeSettings, ScoreSettings
 
 
 def _judge(**kw: float) -> LostJudge:
-    return LostJudge(JudgeSettings(judge_memory=3.0, **kw), ScoreSettings())  # type: ignore[arg-type]
+    return LostJudge(JudgeSettings(judge_memory=3.0, **kw), threshold=ScoreSettings().lost_threshold)  # type: ignore[arg-type]
 
 
 def test_judged_confidence_is_the_documented_logistic() -> None:

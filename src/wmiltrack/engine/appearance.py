@@ -10,7 +10,7 @@ made of nothing but this model runs all of that in one call to the core
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,12 +27,12 @@ from .features import (
     scale_bank,
 )
 from .frames import IntBox
-from .requests import Learn, LearnAt, Search, Step, Steps
+from .requests import Drawn, Learn, LearnAt, Learnt, Search, Step, Steps
 from .sampling import BagSampler
 from .selection import milboost_select
 
 if TYPE_CHECKING:
-    from .params import Params
+    from .settings import AppearanceSettings
 
 __all__ = ["HaarAppearance", "roi_around"]
 
@@ -56,9 +56,10 @@ class HaarAppearance:
     same boxes.
     """
 
-    def __init__(self, params: Params, seed: int) -> None:
+    def __init__(self, params: AppearanceSettings, seed: int, *, variant: str = "rcwmil") -> None:
         self.params = params
         self.seed = seed
+        self.variant = variant  # the preset's name, for messages
         self.ii = _core.IntegralImage()
         # the learning step's fixed settings, in LearnRequest's order
         self._rule = (params.learning_rate, params.first_update == "direct",
@@ -89,7 +90,7 @@ class HaarAppearance:
         learning is the tracker's next step)."""
         p = self.params
         w, h = box[2], box[3]
-        check_box_size(p, w, h)
+        check_box_size(p, w, h, self.variant)
         self.rng = np.random.default_rng(self.seed)
         self.bank_arrays: BankArrays = make_bank(p, w, h, self.rng)
         # Channels: each feature on one channel, drawn from its own stream; the integral image
@@ -176,33 +177,32 @@ class HaarAppearance:
         """The core's coarse-to-fine search from ``box``; with ``img`` and ``roi`` the core
         computes the luma integral image of ``roi`` first; ``cue`` is merged into each stage."""
         pool = self.pool
-        return Search(self.ii, self.bank(box[2], box[3]), self.selected, pool.mu1, pool.sigma1,
-                      pool.mu0, pool.sigma0, self.params.guard, box, stages, frame_wh, img, roi,
-                      cue)
+        return Search(ii=self.ii, bank=self.bank(box[2], box[3]), selected=self.selected,
+                      mu1=pool.mu1, sigma1=pool.sigma1, mu0=pool.mu0, sigma0=pool.sigma0,
+                      guard=self.params.guard, box=box, stages=stages, frame_size=frame_wh,
+                      frame=img, roi=roi, cues=cue)
 
-    def search_on(self, img: np.ndarray | None, box: IntBox, margin: int,
-                  stages: list[tuple[int, int]], frame_wh: tuple[int, int],
-                  cues: Callable[[], tuple[Any, ...] | None]) -> Search:
-        """The search from ``box`` on a frame whose integral image covers ``margin`` pixels
-        around it: a luma model's is computed by the core in the search's own call, a
-        several-channel model's here first (before ``cues`` makes the cues' merged table,
-        so that a frame the model cannot read is refused first); ``img=None`` searches the
-        integral image this model holds (one shared by several trackers)."""
+    def prepare(self, img: np.ndarray | None, box: IntBox, margin: int
+                ) -> tuple[np.ndarray | None, IntBox | None]:
+        """Make ready the integral image that a search from ``box`` reads, ``margin`` pixels
+        around it, before anything else of the frame (a frame the model cannot read is refused
+        here): a several-channel model's is computed here; a luma model's is computed by the
+        core in the search's own call, from the ``(frame, region)`` returned (pass them to
+        :meth:`search_request`). ``img=None``: the integral image this model holds (one shared
+        by several trackers); ``(None, None)`` is returned then and for a several-channel
+        model."""
         if img is None:
-            return self.search_request(box, stages, frame_wh, None, None, cues())
+            return None, None
         if self.chan_names is not None:
             self.compute_integral(img, box, margin)
-            return self.search_request(box, stages, frame_wh, None, None, cues())
-        return self.search_request(box, stages, frame_wh, img, roi_around(box, margin), cues())
+            return None, None
+        return img, roi_around(box, margin)
 
     def grid(self, box: IntBox, radius: int, frame_wh: tuple[int, int]) -> tuple[int, int, float, int]:
         """Best offset, its raw score and the candidate count of the step-1 grid of
         ``radius`` around ``box`` (one search stage, at ``box``'s size)."""
-        pool = self.pool
-        ((dx, dy, score, n),) = _core.search(Search(self.ii, self.bank(box[2], box[3]),
-                                                    self.selected, pool.mu1, pool.sigma1, pool.mu0,
-                                                    pool.sigma0, self.params.guard, box,
-                                                    [(radius, 1)], frame_wh))
+        request = self.search_request(box, [(radius, 1)], frame_wh, None, None, None)
+        ((dx, dy, score, n),) = _core.search(request)
         return dx, dy, score, n
 
     def project(self, w: int, h: int, corners: np.ndarray) -> np.ndarray:
@@ -229,9 +229,11 @@ class HaarAppearance:
             # The core draws the bags (as the sampler would, from this model's generator) and
             # learns in the same call.
             request, bags = self._learning_on_core_bags(box, extra, second)
-            learnt, drawn = yield LearnAt(request, bags, box, frame_wh)
-            self._take_core_bags(learnt, drawn, n_extra)
-            return learnt[6], learnt[7]
+            answer, bags_drawn = yield LearnAt(learn=request, bags=bags, box=box,
+                                               frame_size=frame_wh)
+            learnt = Learnt._make(answer)
+            self._take_core_bags(learnt, Drawn._make(bags_drawn), n_extra)
+            return learnt.second_mu, learnt.second_sigma
         fw, fh = frame_wh
         pos, dist = sampler.positives(box, fw, fh)
         neg = sampler.negatives(box, fw, fh, self.rng)
@@ -240,9 +242,9 @@ class HaarAppearance:
         w = sampler.weights(dist, self.params.instance_weights) if select == "wmil" else None
         request = self._learn_request(box, np.concatenate((pos, neg)), pos.shape[0], select, w,
                                       extra, second)
-        learnt = yield request
+        learnt = Learnt._make((yield request))
         self._take_learnt(learnt, pos.shape[0], neg.shape[0] + n_extra)
-        return learnt[6], learnt[7]
+        return learnt.second_mu, learnt.second_sigma
 
     def skip_learning(self) -> None:
         """Record that this frame was not learnt from (no bags)."""
@@ -255,8 +257,8 @@ class HaarAppearance:
         draws and state changes as a search then :meth:`learn_steps`; returns the search's
         per-stage results."""
         request, bags = self._learning_on_core_bags(frame_box)
-        results, learnt, drawn = yield Step(search, request, bags)
-        self._take_core_bags(learnt, drawn)
+        results, learnt, drawn = yield Step(search=search, learn=request, bags=bags)
+        self._take_core_bags(Learnt._make(learnt), Drawn._make(drawn))
         return results
 
     def _learning_on_core_bags(self, box: IntBox, extra: np.ndarray | None = None,
@@ -267,13 +269,11 @@ class HaarAppearance:
         return (self._learn_request(box, _NO_CORNERS, 0, select, None, extra, second),
                 self._bag_request(select))
 
-    def _take_core_bags(self, learnt: tuple[Any, ...], drawn: tuple[Any, ...],
-                        n_extra: int = 0) -> None:
+    def _take_core_bags(self, learnt: Learnt, drawn: Drawn, n_extra: int = 0) -> None:
         """Keep what a learning step on bags the core drew returned: the bags ``(xs, ys,
         n_pos)`` (split by :meth:`corners` when asked) and the model."""
-        xs, _, n_pos = drawn
-        self.bags = drawn
-        self._take_learnt(learnt, n_pos, xs.shape[0] - n_pos + n_extra)
+        self.bags = tuple(drawn)
+        self._take_learnt(learnt, drawn.n_pos, drawn.xs.shape[0] - drawn.n_pos + n_extra)
 
     def _bag_request(self, select: str) -> _core.BagRequest:
         """The tracking bags' draw from this model's generator, for the core (made once)."""
@@ -308,17 +308,20 @@ class HaarAppearance:
         ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives) of ``box``'s size."""
         pool = self.pool
         lam, direct, mil, floor, guard, k, code = self._rule
-        # (in LearnRequest's order, positionally: keywords cost a microsecond a frame here)
-        return Learn(self.ii, self.bank(box[2], box[3]), corners[:, 0], corners[:, 1], n_pos,
-                     pool.mu1, pool.sigma1, pool.mu0, pool.sigma0, lam, pool.first(1),
-                     pool.first(0), direct, mil, floor, guard, select, w, k, code, extra, second)
+        return Learn(ii=self.ii, bank=self.bank(box[2], box[3]), xs=corners[:, 0],
+                     ys=corners[:, 1], n_pos=n_pos, mu1=pool.mu1, sigma1=pool.sigma1,
+                     mu0=pool.mu0, sigma0=pool.sigma0, lam=lam, first_pos=pool.first(1),
+                     first_neg=pool.first(0), direct_first=direct, mil=mil, sigma_floor=floor,
+                     guard=guard, select=select, w_pos=w, k=k, code_gradient=code,
+                     extra_neg=extra, second=second)
 
-    def _take_learnt(self, learnt: tuple[Any, ...], n_pos: int, n_neg: int) -> None:
+    def _take_learnt(self, learnt: Learnt, n_pos: int, n_neg: int) -> None:
         """Keep the model and the selection that a learning request returned."""
-        mu1, sigma1, mu0, sigma0, selected, h, _, _ = learnt
-        self.pool.assign(mu1, sigma1, mu0, sigma0, n_pos > 0, n_neg > 0)
-        if selected is not None:
-            self.selected = selected
+        self.pool.assign(learnt.mu1, learnt.sigma1, learnt.mu0, learnt.sigma0, n_pos > 0,
+                         n_neg > 0)
+        h = learnt.h
+        if learnt.selected is not None:
+            self.selected = learnt.selected
         elif h is not None:
             self.selected = milboost_select(h[:, :n_pos], h[:, n_pos:], self.params.num_selected,
                                             guard=self.params.guard)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .params import Params
+from .settings import AppearanceSettings
 
 
 class GaussianPool:
@@ -16,9 +16,11 @@ class GaussianPool:
     :meth:`assign`.
     """
 
-    def __init__(self, params: Params) -> None:
-        m = params.num_features
-        self.params = params
+    def __init__(self, params: AppearanceSettings | int) -> None:
+        """``params``: the appearance model's parameters (kept as :attr:`params`), or just a
+        number of features (a model outside the appearance model's learning rules)."""
+        m = params if isinstance(params, int) else params.num_features
+        self.params = None if isinstance(params, int) else params
         self.mu1 = np.zeros(m)
         self.sigma1 = np.ones(m)
         self.mu0 = np.zeros(m)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import _core
-from .params import Params
+from .settings import FeatureSettings
 
 #: Channel names (``Params.channels``) and their ids in ``_core.IntegralImage.compute_channels``.
 CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "opp_rg": _core.CH_OPP_RG,
@@ -59,7 +59,7 @@ class BankArrays:
         return int(self.starts.size - 1)
 
 
-def min_box_size(params: Params) -> tuple[int, int]:
+def min_box_size(params: FeatureSettings) -> tuple[int, int]:
     """Smallest ``(w, h)`` a box may have for this variant's features."""
     if params.feature_kind == "subregion":
         side = int(math.isqrt(params.num_subregions)) if params.subregion_mode == "grid" else 1
@@ -77,13 +77,14 @@ def box_area_ok(w: int, h: int) -> bool:
     return w * h <= _core.MAX_RECT_AREA
 
 
-def check_box_size(params: Params, w: int, h: int) -> None:
+def check_box_size(params: FeatureSettings, w: int, h: int, variant: str | None = None) -> None:
     """Raise ``ValueError`` when a ``w x h`` box is too small for the variant's features, or
-    too large for the core's 32-bit sums."""
+    too large for the core's 32-bit sums. ``variant``: the variant's name for the message."""
+    who = f"variant {variant!r}" if variant is not None else "the box"
     mw, mh = min_box_size(params)
     if w < mw or h < mh:
         raise ValueError(
-            f"box is {w}x{h} pixels (after clipping to the frame); variant {params.variant!r} "
+            f"box is {w}x{h} pixels (after clipping to the frame); {who} "
             f"needs at least {mw}x{mh}"
         )
     if not box_area_ok(w, h):
@@ -93,7 +94,8 @@ def check_box_size(params: Params, w: int, h: int) -> None:
         )
 
 
-def _subregions(params: Params, w: int, h: int, rng: np.random.Generator) -> list[tuple[int, int, int, int]]:
+def _subregions(params: FeatureSettings, w: int, h: int, rng: np.random.Generator
+                ) -> list[tuple[int, int, int, int]]:
     """Origin and size of the sub-region of each feature."""
     m = params.num_features
     if params.subregion_mode == "grid":
@@ -107,14 +109,14 @@ def _subregions(params: Params, w: int, h: int, rng: np.random.Generator) -> lis
     return [(int(rng.integers(0, w - sw + 1)), int(rng.integers(0, h - sh + 1)), sw, sh) for _ in range(m)]
 
 
-def _side_range(params: Params, size: int) -> tuple[int, int]:
+def _side_range(params: FeatureSettings, size: int) -> tuple[int, int]:
     """Allowed rectangle side within a sub-region side of ``size`` (spec section 7)."""
     lo = min(size, max(params.rect_min_size, math.ceil(params.beta_min * size)))
     hi = max(lo, min(size, math.floor(params.beta_max * size)))
     return lo, hi
 
 
-def make_bank(params: Params, w: int, h: int, rng: np.random.Generator) -> BankArrays:
+def make_bank(params: FeatureSettings, w: int, h: int, rng: np.random.Generator) -> BankArrays:
     """Draw the variant's feature bank for a ``w x h`` box."""
     check_box_size(params, w, h)
     m = params.num_features

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from .settings import JudgeSettings, ScoreSettings
+from .settings import JudgeSettings
 
 __all__ = ["LostJudge"]
 
@@ -23,12 +23,14 @@ class LostJudge:
 
     :meth:`verdict` takes each frame's reported score and the first-frame filter's response
     peak on that frame (NaN when the filter did not search: that frame leaves the counts at
-    zero and the verdict as it was).
+    zero and the verdict as it was). ``threshold``: the reported score at which the judge's
+    score term is zero (the policy's ``lost_threshold``, given by
+    :func:`~wmiltrack.engine.tracker.compose`).
     """
 
-    def __init__(self, settings: JudgeSettings, score: ScoreSettings) -> None:
+    def __init__(self, settings: JudgeSettings, *, threshold: float = 0.5) -> None:
         self.settings = settings
-        self.threshold = score.lost_threshold
+        self.threshold = threshold
         self.lost = False
         self.turned = False  # whether the last frame changed the verdict
         self._run = 0  # frames in a row that argue for changing the verdict

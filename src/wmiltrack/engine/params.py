@@ -20,6 +20,7 @@ from .settings import (
     MAX_NEG_RADIUS,
     MAX_POS_RADIUS,
     MAX_SEARCH_RADIUS,
+    AppearanceSettings,
     BagSettings,
     ClassifierSettings,
     ColourSettings,
@@ -49,8 +50,7 @@ class _Named:
 
 @dataclass(frozen=True)
 class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings,
-             MotionSettings, ScaleSettings, SearchSettings, ClassifierSettings, BagSettings,
-             FeatureSettings, _Named):
+             MotionSettings, ScaleSettings, AppearanceSettings, _Named):
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
 
     Every field belongs to one part, which documents and checks it:

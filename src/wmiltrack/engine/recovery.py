@@ -34,22 +34,6 @@ from .settings import RecoverySettings
 
 __all__ = ["Redetector"]
 
-#: Weight of the old value in the running means (confidence, template match).
-_MEMORY = 0.9
-#: Tracked frames before the first judgement: the first frames' confidence is inflated (the
-#: classifier has just been trained on the first box) and their running mean not yet formed.
-_WARMUP = 10
-#: Weight of each tracked frame's patch in the grey template.
-_TEMPLATE_RATE = 0.05
-#: The template holds at most this many pixels (the box's aspect): a larger target is matched
-#: on frames shrunk by the same factor, and the fine search after a re-detection places the
-#: box to the pixel. Keeps a large target's per-frame cost and whole-frame search small.
-_TEMPLATE_AREA = 1600.0
-#: The whole-frame pass of the re-detection matches a template of at most this many pixels
-#: (the frame shrunk alike); the place it finds is checked at the template's resolution.
-_SEARCH_AREA = 256.0
-
-
 def _grey(frame: np.ndarray) -> np.ndarray:
     if frame.ndim == 2:
         return frame
@@ -108,7 +92,7 @@ class Redetector:
         self.learn(frame, box)
 
     def _patch(self, frame: np.ndarray, box: IntBox) -> np.ndarray | None:
-        """The box's grey pixels at the template's size (at most ``_TEMPLATE_AREA`` pixels;
+        """The box's grey pixels at the template's size (at most ``recover_template_area`` pixels;
         None if the box leaves the frame)."""
         x, y, w, h = box
         fh, fw = frame.shape[:2]
@@ -118,7 +102,7 @@ class Redetector:
         if self.template is not None:
             size = self.template.shape[::-1]
         else:
-            shrink = min(1.0, math.sqrt(_TEMPLATE_AREA / (w * h)))
+            shrink = min(1.0, math.sqrt(self.settings.recover_template_area / (w * h)))
             size = (max(1, round(w * shrink)), max(1, round(h * shrink)))
         if patch.shape[::-1] != size:
             patch = np.asarray(cv2.resize(patch, size, interpolation=cv2.INTER_AREA),
@@ -136,9 +120,9 @@ class Redetector:
         m = _match(patch, self.template)
         if self.match is None or m >= self.match:
             self.size = (box[2], box[3])
-        self.match = m if self.match is None else _MEMORY * self.match + (1.0 - _MEMORY) * m
-        cv2.addWeighted(self.template, 1.0 - _TEMPLATE_RATE, patch, _TEMPLATE_RATE, 0.0,
-                        dst=self.template)
+        a, rate = self.settings.recover_memory, self.settings.recover_template_rate
+        self.match = m if self.match is None else a * self.match + (1.0 - a) * m
+        cv2.addWeighted(self.template, 1.0 - rate, patch, rate, 0.0, dst=self.template)
 
     def _dropped(self, conf: float, frame: np.ndarray, box: IntBox,
                  witnesses: Sequence[float]) -> bool:
@@ -147,7 +131,8 @@ class Redetector:
         all fell below ``lost_drop`` times their running means (a target that changes its look
         keeps one of them; one that is hidden or gone loses all)."""
         drop, ref = self.settings.lost_drop, self.reference
-        if ref is None or self.seen < _WARMUP or conf >= drop * ref:  # NaN: dropped
+        warmup = self.settings.recover_warmup
+        if ref is None or self.seen < warmup or conf >= drop * ref:  # NaN: dropped
             return False
         for value, mean in zip(witnesses, self.witnesses):
             if value >= drop * mean:
@@ -166,12 +151,12 @@ class Redetector:
             self.lost = True
             self.frames_lost = 1
             return True
-        ref = self.reference
-        self.reference = conf if ref is None else _MEMORY * ref + (1.0 - _MEMORY) * conf
+        ref, a = self.reference, self.settings.recover_memory
+        self.reference = conf if ref is None else a * ref + (1.0 - a) * conf
         if len(self.witnesses) != len(witnesses):
             self.witnesses = list(witnesses)
         else:
-            self.witnesses = [_MEMORY * m + (1.0 - _MEMORY) * v
+            self.witnesses = [a * m + (1.0 - a) * v
                               for m, v in zip(self.witnesses, witnesses)]
         self.seen += 1
         return False
@@ -204,7 +189,7 @@ class Redetector:
         may have had its box shrunk or grown before it counted as lost.
 
         Two passes: the whole frame at a resolution where the template has at most
-        ``_SEARCH_AREA`` pixels (a 32-px target on a 640 x 480 frame: 0.6 instead of 4 ms),
+        ``recover_search_area`` pixels (a 32-px target on a 640 x 480 frame: 0.6 instead of 4 ms),
         then the neighbourhood of its best place at the template's own resolution, whose
         correlation decides."""
         if self.template is None or self.size is None:
@@ -240,8 +225,8 @@ class Redetector:
         templ = self.template
         if templ.shape != (round(h * sy), round(w * sx)):
             templ = cv2.resize(templ, (round(w * sx), round(h * sy)), interpolation=cv2.INTER_AREA)
-        # Pass 1: the whole frame with the template shrunk to at most _SEARCH_AREA pixels.
-        c = min(1.0, math.sqrt(_SEARCH_AREA / templ.size))
+        # Pass 1: the whole frame with the template shrunk to at most recover_search_area pixels.
+        c = min(1.0, math.sqrt(self.settings.recover_search_area / templ.size))
         small = cv2.resize(templ, (max(4, round(templ.shape[1] * c)), max(4, round(templ.shape[0] * c))),
                            interpolation=cv2.INTER_AREA) if c < 1.0 else templ
         cx, cy = sx * small.shape[1] / templ.shape[1], sy * small.shape[0] / templ.shape[0]

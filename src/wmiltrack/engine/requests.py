@@ -14,7 +14,8 @@ from typing import Any, NamedTuple
 
 from .. import _core
 
-__all__ = ["Learn", "LearnAt", "Search", "Step", "Steps", "drive", "run", "run_batches"]
+__all__ = ["Drawn", "Learn", "LearnAt", "Learnt", "Search", "Step", "Steps", "drive", "run",
+           "run_batches"]
 
 
 Search = _core.SearchRequest
@@ -22,6 +23,32 @@ Search = _core.SearchRequest
 
 Learn = _core.LearnRequest
 """A request for the core's learning step (:class:`_core.LearnRequest`)."""
+
+
+class Learnt(NamedTuple):
+    """The core's answer to a learning request (``_core.learn``, ``learn_at``, ``frame_step``),
+    by name: the updated model, the selection, and the second target model."""
+
+    mu1: Any
+    sigma1: Any
+    mu0: Any
+    sigma0: Any
+    #: The features WMIL selected (int32), or None.
+    selected: Any
+    #: The log ratios ``(M, n)`` for a MILBoost selection here (``select="ratios"``), or None.
+    h: Any
+    #: The second target model (the request's ``second``) updated, or None without one.
+    second_mu: Any
+    second_sigma: Any
+
+
+class Drawn(NamedTuple):
+    """The bags the core drew (``learn_at``, ``frame_step``): the boxes' top-left corners,
+    the ``n_pos`` positives first."""
+
+    xs: Any
+    ys: Any
+    n_pos: int
 
 
 class Step(NamedTuple):

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from .params import Params
+from .settings import BagSettings
 
 
 @functools.cache
@@ -55,7 +55,7 @@ def annulus_offsets(inner: float, outer: float) -> np.ndarray:
 class BagSampler:
     """Positive and negative bags around a box, for the first frame or for tracking."""
 
-    def __init__(self, params: Params, *, first_frame: bool = False) -> None:
+    def __init__(self, params: BagSettings, *, first_frame: bool = False) -> None:
         p = params
         pos_r = p.init_pos_radius if first_frame and p.init_pos_radius is not None else p.pos_radius
         inner = p.init_neg_inner if first_frame and p.init_neg_inner is not None else p.neg_inner

@@ -12,12 +12,12 @@ import numpy as np
 
 from .classifier import GaussianPool
 from .correlation import ScaleEstimator, ScaleFilterSettings, SparseUpdates
-from .features import box_area_ok, min_box_size
+from .features import box_area_ok
 from .frames import IntBox
+from .settings import NO_GATE, FilterLearning, ScaleSettings
 
 if TYPE_CHECKING:
     from .appearance import HaarAppearance
-    from .params import Params
 
 __all__ = ["HaarScale", "centred", "dsst_filter"]
 
@@ -29,13 +29,12 @@ def centred(box: IntBox, w: int, h: int, dx: float = 0.0, dy: float = 0.0) -> In
     return int(math.floor(cx - w / 2.0 + 0.5)), int(math.floor(cy - h / 2.0 + 0.5)), w, h
 
 
-def dsst_filter(params: Params) -> tuple[SparseUpdates, ScaleEstimator]:
-    """DSST's scale filter for a tracker (``scale_samples`` over DSST's range) and its
-    learning schedule (every ``template_every``-th frame, at the rate that keeps DSST's
-    memory), as the scale model and as the Haar scale search's vote both use them."""
-    updates = SparseUpdates(ScaleFilterSettings().learning_rate, params.template_every)
-    return updates, ScaleEstimator(ScaleFilterSettings.spanning(params.scale_samples,
-                                                                updates.rate))
+def dsst_filter(samples: int, learning: FilterLearning) -> tuple[SparseUpdates, ScaleEstimator]:
+    """DSST's scale filter (``samples`` sizes over DSST's range) and its learning schedule
+    (every ``learning.every``-th frame, at the rate that keeps DSST's memory), as the scale
+    model and as the Haar scale search's vote both use them."""
+    updates = SparseUpdates(ScaleFilterSettings().learning_rate, learning.every)
+    return updates, ScaleEstimator(ScaleFilterSettings.spanning(samples, updates.rate))
 
 
 class HaarScale:
@@ -46,21 +45,28 @@ class HaarScale:
     (its own target Gaussians, learnt with the appearance model's positives), or both; with a
     colour cue, also by the box's colour contrast. Boxes at wrong scales can be learnt as
     negatives.
+
+    Besides its own settings it is given, by :func:`~wmiltrack.engine.tracker.compose`: the
+    smallest box the appearance model's features allow (``min_box``,
+    :func:`~wmiltrack.engine.features.min_box_size`), their number (``num_features``, the size
+    of its target model) and the correlation filters' learning rule (``learning``, for DSST's
+    vote).
     """
 
-    def __init__(self, params: Params, base_wh: tuple[int, int], frame_wh: tuple[int, int]) -> None:
-        self.settings = params
+    def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
+                 frame_wh: tuple[int, int], *, min_box: tuple[int, int], num_features: int,
+                 learning: FilterLearning = NO_GATE) -> None:
+        self.settings = settings
         self.base_wh = base_wh
         self.frame_wh = frame_wh
+        self.min_box = min_box
         self.index = 0
         self.tried: list[IntBox] = []  # the boxes tried at other scales in the last frame
-        self.pool = (GaussianPool(params.replace(learning_rate=params.scale_learning_rate))
-                     if params.scale_model != "ratio" else None)
-        # DSST's vote on the size (scale_dsst), learnt at every template_every-th frame's box
-        # among those scored at least template_gate, as the translation filter
-        self.dsst_updates, dsst = dsst_filter(params)
-        self.learn_above = params.template_gate
-        self.dsst = dsst if params.scale_dsst > 0 else None
+        self.pool = GaussianPool(num_features) if settings.scale_model != "ratio" else None
+        # DSST's vote on the size (scale_dsst), learnt as the translation filter (``learning``)
+        self.dsst_updates, dsst = dsst_filter(settings.scale_samples, learning)
+        self.learn_above = learning.above
+        self.dsst = dsst if settings.scale_dsst > 0 else None
         self._voted: IntBox | None = None  # the box DSST's last vote was taken around
 
     @property
@@ -84,7 +90,7 @@ class HaarScale:
         if not (p.scale_min - 1e-9 <= s <= p.scale_max + 1e-9):
             return False
         w, h = self.box_size(index)
-        mw, mh = min_box_size(p)
+        mw, mh = self.min_box
         return mw <= w <= self.frame_wh[0] and mh <= h <= self.frame_wh[1] and box_area_ok(w, h)
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:

@@ -15,12 +15,14 @@ the paper's code path.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
-__all__ = ["BagSettings", "ClassifierSettings", "ColourSettings", "FeatureSettings",
-           "JudgeSettings", "MotionSettings", "ScaleSettings", "ScoreSettings", "SearchSettings",
+__all__ = ["AppearanceSettings", "BagSettings", "ClassifierSettings", "ColourSettings", "FeatureSettings",
+           "FilterLearning", "JudgeSettings", "NO_GATE", "RecoverySettings", "own",
+           "MotionSettings", "ScaleSettings", "ScoreSettings", "SearchSettings",
            "TemplateSettings", "CONFIDENCE_OFFSET", "CHANNELS", "MAX_NEG_RADIUS", "MAX_POS_RADIUS",
            "MAX_SEARCH_RADIUS"]
 
@@ -39,6 +41,16 @@ CONFIDENCE_OFFSET = 1.4
 
 #: The image channels a feature may read (``FeatureSettings.channels``).
 CHANNELS = ("luma", "grad", "opp_rg", "opp_yb")
+
+
+_S = TypeVar("_S")
+
+
+def own(cls: type[_S], params: Any) -> _S:
+    """The settings of one part: a ``cls`` (a settings class below) holding ``params``'s values
+    of ``cls``'s fields and nothing else. :func:`~wmiltrack.engine.tracker.compose` builds each
+    part with its own, so a part cannot read another part's settings."""
+    return cls(**{f.name: getattr(params, f.name) for f in dataclasses.fields(cls)})  # type: ignore[arg-type]
 
 
 def _need(ok: bool, message: str) -> None:
@@ -691,6 +703,24 @@ class RecoverySettings:
     recover_floor : float
         The least correlation a re-detected place needs in any case: people, cars and textures
         of one kind reach 0.7-0.77 at the wrong place on the shared sequences.
+    recover_memory : float
+        Weight of the old value in the running means (confidence, template match, the cues'
+        own confidences), in [0, 1).
+    recover_warmup : int
+        Tracked frames before the first judgement: the first frames' confidence is inflated
+        (the classifier has just been trained on the first box) and their running mean not yet
+        formed.
+    recover_template_rate : float
+        Weight of each tracked frame's patch in the grey template, in (0, 1].
+    recover_template_area : float
+        The template holds at most this many pixels (the box's aspect): a larger target is
+        matched on frames shrunk by the same factor, and the fine search after a re-detection
+        places the box to the pixel. Keeps a large target's per-frame cost and whole-frame
+        search small.
+    recover_search_area : float
+        The whole-frame pass of the re-detection matches a template of at most this many
+        pixels (the frame shrunk alike); the place it finds is checked at the template's
+        resolution.
     """
 
     redetect: bool = False
@@ -698,6 +728,11 @@ class RecoverySettings:
     recover_ratio: float = 0.9
     recover_decay: float = 1.0
     recover_floor: float = 0.9
+    recover_memory: float = 0.9
+    recover_warmup: int = 10
+    recover_template_rate: float = 0.05
+    recover_template_area: float = 1600.0
+    recover_search_area: float = 256.0
 
     def __post_init__(self) -> None:
         RecoverySettings.check(self)
@@ -713,6 +748,16 @@ class RecoverySettings:
               f"recover_decay must be in (0, 1], got {self.recover_decay}")
         _need(-1.0 <= self.recover_floor <= 1.0,
               f"recover_floor must be in [-1, 1], got {self.recover_floor}")
+        _check_numbers(self, "recover_memory", "recover_template_rate", "recover_template_area",
+                       "recover_search_area")
+        _check_ints(self, "recover_warmup")
+        _need(0.0 <= self.recover_memory < 1.0,
+              f"recover_memory must be in [0, 1), got {self.recover_memory}")
+        _need(self.recover_warmup >= 0, f"recover_warmup must be >= 0, got {self.recover_warmup}")
+        _need(0.0 < self.recover_template_rate <= 1.0,
+              f"recover_template_rate must be in (0, 1], got {self.recover_template_rate}")
+        _need(self.recover_template_area >= 1.0 and self.recover_search_area >= 1.0,
+              "recover_template_area and recover_search_area must be >= 1")
 
 
 @dataclass(frozen=True)
@@ -786,3 +831,42 @@ class JudgeSettings:
               f"judge_gates must be True or False, got {self.judge_gates!r}")
         _need(isinstance(self.judge_holds, bool),
               f"judge_holds must be True or False, got {self.judge_holds!r}")
+
+
+@dataclass(frozen=True)
+class AppearanceSettings(SearchSettings, ClassifierSettings, BagSettings, FeatureSettings):
+    """The appearance model's settings (:class:`~wmiltrack.engine.appearance.HaarAppearance`):
+    the feature bank, the bags, the weak classifiers and their selection, and the search; the
+    four classes above at once (no field of its own)."""
+
+    def __post_init__(self) -> None:
+        AppearanceSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        for part in (FeatureSettings, BagSettings, ClassifierSettings, SearchSettings):
+            part.check(self)
+
+
+@dataclass(frozen=True)
+class FilterLearning:
+    """When the correlation filters learn, the one rule the translation template
+    (:class:`~wmiltrack.engine.template.CorrelationTemplate`) and the DSST scale filters
+    (:class:`~wmiltrack.engine.template.DSSTScale`, the Haar scale search's vote) share: every
+    ``every``-th frame, among frames whose reported score is at least ``above``; with
+    ``reuse``, from the sample the frame's search already took. Made from the template's
+    settings by :meth:`of` (``template_every``, ``template_gate``, ``template_reuse``)."""
+
+    every: int = 1
+    above: float = 0.0
+    reuse: bool = False
+
+    @classmethod
+    def of(cls, template: TemplateSettings) -> FilterLearning:
+        """The rule that ``template``'s settings give."""
+        return cls(every=template.template_every, above=template.template_gate,
+                   reuse=template.template_reuse)
+
+
+#: The filters' learning rule of the default settings: every frame, whatever its score.
+NO_GATE = FilterLearning()

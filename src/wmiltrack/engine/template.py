@@ -17,12 +17,12 @@ import numpy as np
 from .correlation import CorrelationFilter, CorrelationSettings, Location, SparseUpdates
 from .frames import IntBox
 from .scale import centred, dsst_filter
+from .settings import NO_GATE, FilterLearning, ScaleSettings, TemplateSettings
 
 if TYPE_CHECKING:
     from .appearance import HaarAppearance
-    from .params import Params
 
-__all__ = ["CorrelationTemplate", "DSSTScale"]
+__all__ = ["CorrelationTemplate", "DSSTScale", "dsst_min_side"]
 
 
 def _centre(box: IntBox) -> tuple[float, float]:
@@ -39,24 +39,29 @@ class CorrelationTemplate:
     is at least ``template_gate`` (:attr:`learn_above`). Its ``confidence`` is the last search's
     response peak: HOG's normalised gradients keep it up under a shadow or a change of light,
     where the classifier's confidence and a grey template's correlation both fall.
+
+    ``remembers``: whether to keep the first frame's filter for the judge of ``ok``
+    (``judge_memory > 0``; :attr:`first_peak`), given by
+    :func:`~wmiltrack.engine.tracker.compose`.
     """
 
     #: The core reads this cue's map at each candidate's centre, not its mean over the box.
     at_centre = True
 
-    def __init__(self, settings: Params) -> None:
+    def __init__(self, settings: TemplateSettings, *, remembers: bool = False) -> None:
         self.weight = settings.template_weight
         self.moves = settings.template_motion
-        self.learn_above = settings.template_gate
-        self.updates = SparseUpdates(settings.template_learning_rate, settings.template_every)
-        self.reuse = settings.template_reuse
+        learning = FilterLearning.of(settings)
+        self.learn_above = learning.above
+        self.updates = SparseUpdates(settings.template_learning_rate, learning.every)
+        self.reuse = learning.reuse
         self.filter = CorrelationFilter(CorrelationSettings(
             template_area=settings.template_area, learning_rate=self.updates.rate,
             compressed=settings.template_channels, cell=settings.template_cell))
         self._searched: Location | None = None  # this frame's search, for table()
         self.confidence = math.nan
         # The first frame's filter, never trained again, when the judge of ``ok`` reads it.
-        self.remembers = settings.judge_memory > 0
+        self.remembers = remembers
         self._first: CorrelationFilter | None = None
         self.first_peak = math.nan  # its peak on this frame's search sample
 
@@ -106,17 +111,29 @@ class CorrelationTemplate:
             self.filter.learn(frame, box, from_search=self.reuse)
 
 
+def dsst_min_side(min_box_size: int) -> int:
+    """The smallest side of a box DSST's scale filter gives, for the features' ``min_box_size``
+    (:class:`~wmiltrack.engine.settings.FeatureSettings`)."""
+    return max(min_box_size, 4)
+
+
 class DSSTScale:
     """DSST's scale filter as the scale estimator (``scale_model="dsst"``): after the translation
     search, the best of 33 sizes 1.02 apart by a 1-D correlation filter on fHOG, within
-    ``scale_min``..``scale_max`` of the first box and the frame."""
+    ``scale_min``..``scale_max`` of the first box and the frame, no side below ``min_side``
+    (given by :func:`~wmiltrack.engine.tracker.compose`: :func:`dsst_min_side`). It learns as
+    the translation filter does (``learning``, :class:`~wmiltrack.engine.settings.FilterLearning`)."""
 
-    def __init__(self, params: Params, base_wh: tuple[int, int], frame_wh: tuple[int, int]) -> None:
-        self.settings = params
+    def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
+                 frame_wh: tuple[int, int], *, min_side: int = 4,
+                 learning: FilterLearning = NO_GATE) -> None:
+        self.settings = settings
         self.base_wh = base_wh
         self.frame_wh = frame_wh
-        self.updates, self.estimator = dsst_filter(params)
-        self.learn_above = params.template_gate  # learns as the translation filter does
+        self.min_side = min_side
+        self.reuse = learning.reuse
+        self.updates, self.estimator = dsst_filter(settings.scale_samples, learning)
+        self.learn_above = learning.above
         self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
         self.given = base_wh  # the size of the box this part last gave
         self.tried: list[IntBox] = []
@@ -149,7 +166,7 @@ class DSSTScale:
         s = math.sqrt(w * h / (self.base_wh[0] * self.base_wh[1]))
         s_ok = min(max(s, p.scale_min), p.scale_max)
         w, h = w * s_ok / s, h * s_ok / s
-        min_side = max(p.min_box_size, 4)
+        min_side = self.min_side
         fw, fh = self.frame_wh
         shrink = min(1.0, fw / w, fh / h)
         grow = max(1.0, min_side / (w * shrink), min_side / (h * shrink))
@@ -176,4 +193,4 @@ class DSSTScale:
         frame)."""
         if self.updates.due():
             self.estimator.learn(frame, _centre(box), self.size,
-                                 from_estimate=self.settings.template_reuse)
+                                 from_estimate=self.reuse)

@@ -25,6 +25,7 @@ from . import copying as _copying  # noqa: F401 (installs deepcopy for the core'
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
 from .cues import ColourCue, Cue, check_cue_weights
+from .features import min_box_size
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .judge import LostJudge
 from .motion import VelocityMotion
@@ -32,10 +33,23 @@ from .params import Params
 from .parts import PART_KINDS, Judge, MotionModel, PartFactory, Recovery, ScaleEstimator
 from .policy import ContrastScore, UpdatePolicy, confidence
 from .recovery import Redetector
-from .requests import Steps, drive, run_batches
+from .requests import Search, Steps, drive, run_batches
 from .result import TrackResult
 from .scale import HaarScale
-from .template import CorrelationTemplate, DSSTScale
+from .settings import (
+    AppearanceSettings,
+    ColourSettings,
+    FeatureSettings,
+    FilterLearning,
+    JudgeSettings,
+    MotionSettings,
+    RecoverySettings,
+    ScaleSettings,
+    ScoreSettings,
+    TemplateSettings,
+    own,
+)
+from .template import CorrelationTemplate, DSSTScale, dsst_min_side
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "compose", "confidence",
            "update_many"]
@@ -105,39 +119,49 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
     ``"motion"``, ``"recovery"``: a factory, see :data:`~wmiltrack.engine.parts.PartFactory`)
     made by its factory instead of from ``params``. The appearance model is created but not
     started."""
-    appearance = HaarAppearance(params, seed)
+    appearance = HaarAppearance(own(AppearanceSettings, params), seed, variant=params.variant)
+    learning = FilterLearning.of(own(TemplateSettings, params))  # the filters' one rule
     all_cues: list[Cue] = []
     colour: ColourCue | None = None
-    if ColourCue.wanted(params, frame):
-        colour = ColourCue(params, intensity=not ColourModel.usable(frame))
+    if ColourCue.wanted(own(ColourSettings, params), frame):
+        colour = ColourCue(own(ColourSettings, params), intensity=not ColourModel.usable(frame))
         all_cues.append(colour)
     template = None
     if params.template_weight > 0 or params.template_motion:
-        template = CorrelationTemplate(params)
+        template = CorrelationTemplate(own(TemplateSettings, params),
+                                       remembers=params.judge_memory > 0)
         if params.template_weight > 0:
             all_cues.append(template)
     all_cues.extend(cues)
     fw, fh = frame_size(frame)
     scale: ScaleEstimator | None = None
     if params.scale_steps > 0:
-        kind = DSSTScale if params.scale_model == "dsst" else HaarScale
-        scale = kind(params, (box[2], box[3]), (fw, fh))
+        if params.scale_model == "dsst":
+            scale = DSSTScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
+                              min_side=dsst_min_side(params.min_box_size), learning=learning)
+        else:
+            scale = HaarScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
+                              min_box=min_box_size(own(FeatureSettings, params)),
+                              num_features=params.num_features, learning=learning)
     motion: MotionModel | None = None
     if params.template_motion:
         motion = template
     elif params.motion == "velocity":
-        motion = VelocityMotion(params)
+        motion = VelocityMotion(own(MotionSettings, params))
     report = None
     if (params.score_colour > 0 and colour is not None) or params.score_luma > 0:
-        report = ContrastScore(params, colour.model if colour is not None else None, None)
-    recovery: Recovery | None = Redetector(params) if params.redetect else None
-    judge = LostJudge(params, params) if params.judge_memory > 0 else None
+        report = ContrastScore(own(ScoreSettings, params),
+                               colour.model if colour is not None else None, None)
+    recovery: Recovery | None = (Redetector(own(RecoverySettings, params)) if params.redetect
+                                 else None)
+    judge = (LostJudge(own(JudgeSettings, params), threshold=params.lost_threshold)
+             if params.judge_memory > 0 else None)
     if parts:
         scale = _made(parts, "scale", params, frame, box, scale)
         motion = _made(parts, "motion", params, frame, box, motion)
         recovery = _made(parts, "recovery", params, frame, box, recovery)
-    return Parts(appearance, all_cues, scale, motion, UpdatePolicy(params, report), recovery,
-                 judge, template)
+    return Parts(appearance, all_cues, scale, motion,
+                 UpdatePolicy(own(ScoreSettings, params), report), recovery, judge, template)
 
 
 def _made(parts: Mapping[str, PartFactory], kind: str, params: Params, frame: np.ndarray,
@@ -412,41 +436,93 @@ class Tracker:
     # -- one frame -------------------------------------------------------------------------
     def _update_steps(self, img: np.ndarray, integral: _core.IntegralImage | None) -> Steps:
         """:meth:`update` on a checked frame, as a generator of core requests (see
-        :data:`~wmiltrack.engine.requests.Steps`)."""
+        :data:`~wmiltrack.engine.requests.Steps`): a lost target's frame
+        (:meth:`_redetect_steps`) or a tracked one (:meth:`_tracked_steps`), then the one end
+        of a frame (:meth:`_report`)."""
         self._check_frame(img)
-        parts, p, wh = self._parts, self._params, self._frame_wh
-        model = parts.appearance
         previous = self._box
-        if parts.template is not None:
-            parts.template.first_peak = math.nan  # until its search on this frame
-        if parts.lost:
+        if self._parts.template is not None:
+            self._parts.template.first_peak = math.nan  # until its search on this frame
+        if self._parts.lost:
             self._score = yield from self._redetect_steps(img, previous)
-            return self._report()
+        else:
+            self._score = yield from self._tracked_steps(img, integral, previous)
+        return self._report()
+
+    def _tracked_steps(self, img: np.ndarray, integral: _core.IntegralImage | None,
+                       previous: IntBox) -> Steps:
+        """A frame of a tracked target, stage by stage: locate (the motion model's origin, the
+        search with the cues merged), scale, judge, learn; returns the frame's score. A paper
+        preset runs the locate and learn stages as one core call (:meth:`_fused_steps`).
+        ``integral``: a shared luma table of this frame, borrowed for the frame if it covers
+        the search."""
+        model = self._parts.appearance
         origin = self._origin(img)
         margin = self._margin()
-        roi = roi_around(origin, margin)
         own = model.ii
-        shared = integral is not None and model.covered_by(integral, roi, wh)
+        shared = integral is not None and model.covered_by(integral, roi_around(origin, margin),
+                                                           self._frame_wh)
         if shared:
             assert integral is not None
             model.ii = integral
         try:
-            stages = self._stages
-            search = model.search_on(None if shared else img, origin, margin, stages, wh,
-                                     lambda: self._cue_merge(img, origin))
-            if self._fused:  # (a fused model reads luma only)
-                # The appearance model alone: search, bags and learning in one core call, and
-                # no other part to consult.
-                results = yield from model.fused_step(search, origin)
-                score = confidence(self._move(origin, stages, results), model.k,
-                                   p.confidence_offset)
-                self._verdict(score)
-            else:
-                score = yield from self._composed_steps(img, search, origin, previous)
-            self._score = score
+            search = self._search(img, origin, self._stages, margin, shared=shared)
+            if self._fused:
+                score: float = yield from self._fused_steps(search, origin)
+                return score
+            raw = self._move(origin, self._stages, (yield search))  # locate
+            raw = self._rescale(img, raw)                             # scale
+            conf = confidence(raw, model.k, self._params.confidence_offset)
+            score = self._parts.policy.score(conf, img, self._box)
+            if self._judge(img, conf, score, previous):               # judge
+                return 0.0  # (the score of a frame in the lost state)
+            yield from self._learn_all(img, score)                    # learn
+            if self._parts.motion is not None:
+                self._parts.motion.follow(previous, self._box, self._parts.policy.tracked(conf))
+            return score
         finally:
             model.ii = own  # a shared table is only borrowed for this frame
-        return self._report()
+
+    def _fused_steps(self, search: Search, origin: IntBox) -> Steps:
+        """The appearance model alone: search, bags and learning in one core call, and no
+        other part to consult (a fused model reads luma only); returns the score."""
+        model = self._parts.appearance
+        results = yield from model.fused_step(search, origin)
+        score = confidence(self._move(origin, self._stages, results), model.k,
+                           self._params.confidence_offset)
+        self._verdict(score)
+        return score
+
+    def _rescale(self, img: np.ndarray, raw: float) -> float:
+        """The scale stage: the scale estimator tries other sizes around the located box
+        (when the search found one); the raw score to report."""
+        scale = self._parts.scale
+        if scale is not None:
+            scale.tried = []
+            if math.isfinite(raw):
+                self._box, raw = scale.search(self._parts.appearance, img, self._box, raw,
+                                              self._contrast())
+        return raw
+
+    def _judge(self, img: np.ndarray, conf: float, score: float, previous: IntBox) -> bool:
+        """The judge stage: whether the frame counts as tracked (:meth:`_verdict`), and
+        whether it starts the lost state, by the recovery part (the box goes back to
+        ``previous``) or by the judge of ``ok`` with ``judge_holds`` (the box stays): then
+        True, the box is held and nothing learns."""
+        parts = self._parts
+        if parts.recovery is not None and parts.recovery.judge(conf, img, self._box,
+                                                               self._witnesses()):
+            self._hold(previous)  # the target is lost from this frame on
+            self._verdict(0.0)
+            return True
+        self._verdict(score)
+        judge = parts.judge
+        if (judge is not None and judge.lost and judge.turned and self._params.judge_holds
+                and parts.recovery is not None):
+            parts.recovery.lost, parts.recovery.frames_lost = True, 1  # look for it again
+            self._hold(self._box)
+            return True
+        return False
 
     def _verdict(self, score: float) -> None:
         """Whether the frame of this score counts as tracked: the policy's threshold, or the
@@ -466,35 +542,6 @@ class Tracker:
         """The last frame's result: the box, the score, and whether it counts as tracked."""
         x, y, w, h = self._box
         return TrackResult((float(x), float(y), float(w), float(h)), self._score, self._ok)
-
-    def _composed_steps(self, img: np.ndarray, search: Any, origin: IntBox,
-                        previous: IntBox) -> Steps:
-        """The rest of a frame for a tracker of several parts: the search, the scale
-        estimator, the policy's score, the learning of every part; returns the score."""
-        parts, model = self._parts, self._parts.appearance
-        raw = self._move(origin, self._stages, (yield search))
-        if parts.scale is not None:
-            parts.scale.tried = []
-            if math.isfinite(raw):
-                self._box, raw = parts.scale.search(model, img, self._box, raw, self._contrast())
-        conf = confidence(raw, model.k, self._params.confidence_offset)
-        score = parts.policy.score(conf, img, self._box)
-        if parts.recovery is not None and parts.recovery.judge(conf, img, self._box,
-                                                               self._witnesses()):
-            self._hold(previous)  # the target is lost from this frame on
-            self._verdict(0.0)
-            return 0.0
-        self._verdict(score)
-        judge = parts.judge
-        if (judge is not None and judge.lost and judge.turned and self._params.judge_holds
-                and parts.recovery is not None):
-            parts.recovery.lost, parts.recovery.frames_lost = True, 1  # look for it again
-            self._hold(self._box)
-            return 0.0  # (the score of a frame in the lost state)
-        yield from self._learn_all(img, score)
-        if parts.motion is not None:
-            parts.motion.follow(previous, self._box, parts.policy.tracked(conf))
-        return score
 
     def _learn_all(self, img: np.ndarray, score: float) -> Steps:
         """Every part learns from the frame at the current box (none while the judge, with
@@ -565,11 +612,20 @@ class Tracker:
                      ) -> Steps:
         """The classifier's search from ``origin`` over ``stages`` with every cue merged (its
         own integral image); moves the box and returns the raw score (see :meth:`_move`)."""
-        search = self._parts.appearance.search_on(img, origin, self._margin(), stages,
-                                                  self._frame_wh,
-                                                  lambda: self._cue_merge(img, origin))
+        search = self._search(img, origin, stages, self._margin())
         raw: float = self._move(origin, stages, (yield search))
         return raw
+
+    def _search(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]],
+                margin: int, *, shared: bool = False) -> Search:
+        """The core's search request from ``origin`` over ``stages`` (the one place a frame's
+        search is built): the appearance model makes its integral image ready (``margin``
+        pixels around ``origin``; with ``shared``, the borrowed one it holds), then the cues
+        give their tables (:meth:`_cue_tables`), which the search merges in."""
+        model = self._parts.appearance
+        frame, roi = model.prepare(None if shared else img, origin, margin)
+        return model.search_request(origin, stages, self._frame_wh, frame, roi,
+                                    self._cue_tables(img, origin))
 
     def _origin(self, frame: np.ndarray | None = None) -> IntBox:
         """Where the search on ``frame`` is centred (without the frame: the motion model's
@@ -584,7 +640,7 @@ class Tracker:
             return self._reach
         return self._reach + scale.margin(self._box)
 
-    def _cue_merge(self, img: np.ndarray, origin: IntBox) -> tuple[Any, ...] | None:
+    def _cue_tables(self, img: np.ndarray, origin: IntBox) -> tuple[Any, ...] | None:
         """The cues' merged table for the core's search from ``origin``, or None without
         cues."""
         cues = self._parts.cues
