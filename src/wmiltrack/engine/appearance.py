@@ -27,7 +27,7 @@ from .features import (
     scale_bank,
 )
 from .frames import IntBox
-from .requests import Drawn, Learn, LearnAt, Learnt, Search, Step, Steps
+from .requests import Drawn, Learn, LearnAt, Learnt, Search, Step, Steps, learn_request, search_request
 from .sampling import BagSampler
 from .selection import milboost_select
 
@@ -177,10 +177,10 @@ class HaarAppearance:
         """The core's coarse-to-fine search from ``box``; with ``img`` and ``roi`` the core
         computes the luma integral image of ``roi`` first; ``cue`` is merged into each stage."""
         pool = self.pool
-        return Search(ii=self.ii, bank=self.bank(box[2], box[3]), selected=self.selected,
-                      mu1=pool.mu1, sigma1=pool.sigma1, mu0=pool.mu0, sigma0=pool.sigma0,
-                      guard=self.params.guard, box=box, stages=stages, frame_size=frame_wh,
-                      frame=img, roi=roi, cues=cue)
+        return search_request(ii=self.ii, bank=self.bank(box[2], box[3]), selected=self.selected,
+                              mu1=pool.mu1, sigma1=pool.sigma1, mu0=pool.mu0, sigma0=pool.sigma0,
+                              guard=self.params.guard, box=box, stages=stages,
+                              frame_size=frame_wh, frame=img, roi=roi, cues=cue)
 
     def prepare(self, img: np.ndarray | None, box: IntBox, margin: int
                 ) -> tuple[np.ndarray | None, IntBox | None]:
@@ -308,12 +308,12 @@ class HaarAppearance:
         ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives) of ``box``'s size."""
         pool = self.pool
         lam, direct, mil, floor, guard, k, code = self._rule
-        return Learn(ii=self.ii, bank=self.bank(box[2], box[3]), xs=corners[:, 0],
-                     ys=corners[:, 1], n_pos=n_pos, mu1=pool.mu1, sigma1=pool.sigma1,
-                     mu0=pool.mu0, sigma0=pool.sigma0, lam=lam, first_pos=pool.first(1),
-                     first_neg=pool.first(0), direct_first=direct, mil=mil, sigma_floor=floor,
-                     guard=guard, select=select, w_pos=w, k=k, code_gradient=code,
-                     extra_neg=extra, second=second)
+        return learn_request(ii=self.ii, bank=self.bank(box[2], box[3]), xs=corners[:, 0],
+                             ys=corners[:, 1], n_pos=n_pos, mu1=pool.mu1, sigma1=pool.sigma1,
+                             mu0=pool.mu0, sigma0=pool.sigma0, lam=lam, first_pos=pool.first(1),
+                             first_neg=pool.first(0), direct_first=direct, mil=mil, sigma_floor=floor,
+                             guard=guard, select=select, w_pos=w, k=k, code_gradient=code,
+                             extra_neg=extra, second=second)
 
     def _take_learnt(self, learnt: Learnt, n_pos: int, n_neg: int) -> None:
         """Keep the model and the selection that a learning request returned."""
