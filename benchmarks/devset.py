@@ -32,7 +32,6 @@ import json
 import math
 import os
 import sys
-import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -41,8 +40,9 @@ import numpy as np
 
 from wmiltrack.data.sequences import load_dataset
 from wmiltrack.eval.metrics import iou, ope_metrics, valid_mask
+from wmiltrack.eval.runner import run_sequence
 from wmiltrack.progress import progress
-from wmiltrack.trackers import make_tracker, split_specs
+from wmiltrack.trackers import split_specs
 
 
 def halves(names: list[str]) -> tuple[list[str], list[str]]:
@@ -63,29 +63,21 @@ def _find(roots: list[Path]) -> dict[str, Path]:
 
 
 def _run(job: tuple[str, int, str, str]) -> dict[str, Any]:
-    """One tracker on one sequence with one seed: per-frame boxes, scores, lost flags."""
+    """One tracker on one sequence with one seed (``wmiltrack.eval``'s own run): per-frame
+    boxes (a frame without a box keeps the last one), scores and lost flags."""
     spec, seed, root, name = job
     import cv2
 
     cv2.setNumThreads(1)
     seq = load_dataset(root, [name])[0]
-    frames = seq.load()
-    tracker = make_tracker(spec, seed=seed)
-    box = np.asarray(seq.init_box, dtype=float)
-    tracker.init(frames[0], tuple(box))
-    boxes, lost, scores = [box], [False], [1.0]
-    t0 = time.perf_counter()
-    for frame in frames[1:]:
-        r = tracker.update(frame)
-        b = np.asarray(r.box, dtype=float) if r.box is not None else np.full(4, np.nan)
-        if not np.all(np.isfinite(b)):
-            b = boxes[-1]
-        boxes.append(b)
-        lost.append(not bool(r.ok))
-        scores.append(float(r.score) if r.score is not None else math.nan)
-    dt = time.perf_counter() - t0
-    return {"spec": spec, "seed": seed, "name": name, "boxes": np.array(boxes).tolist(),
-            "lost": lost, "scores": scores, "seconds": dt, "updates": len(frames) - 1}
+    run = run_sequence(spec, seq.load(), seq.init_box, seed=seed, raise_errors=True)
+    boxes = run.boxes.copy()
+    for i in range(1, len(boxes)):
+        if not np.all(np.isfinite(boxes[i])):
+            boxes[i] = boxes[i - 1]
+    return {"spec": spec, "seed": seed, "name": name, "boxes": boxes.tolist(),
+            "lost": (~run.oks).tolist(), "scores": run.scores.tolist(),
+            "seconds": float(np.nansum(run.update_times)), "updates": run.n_updates}
 
 
 def summarise(runs: list[dict[str, Any]], gts: dict[str, np.ndarray], names: list[str]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 
+from .policy import logistic
 from .settings import JudgeSettings
 
 __all__ = ["LostJudge"]
@@ -34,7 +35,6 @@ class LostJudge:
         self.lost = False
         self.turned = False  # whether the last frame changed the verdict
         self._run = 0  # frames in a row that argue for changing the verdict
-        self.confidence = math.nan  # the last frame's judged confidence
 
     def judged(self, score: float, first_peak: float) -> float:
         """The judged confidence in [0, 1] of one frame (NaN without a first-frame peak)."""
@@ -43,12 +43,12 @@ class LostJudge:
             return math.nan
         z = (s.judge_score * (score - self.threshold)
              + s.judge_memory * math.log(max(first_peak, 1e-6) / s.judge_peak))
-        return 1.0 / (1.0 + math.exp(-z)) if z >= 0 else math.exp(z) / (1.0 + math.exp(z))
+        return logistic(z)
 
     def verdict(self, score: float, first_peak: float) -> bool:
         """Fold in one frame; whether the target counts as tracked on it."""
         s = self.settings
-        c = self.confidence = self.judged(score, first_peak)
+        c = self.judged(score, first_peak)
         against = c < s.judge_low if not self.lost else c > s.judge_high  # False for NaN
         self._run = self._run + 1 if against else 0
         self.turned = self._run >= (s.judge_leave if self.lost else s.judge_enter)

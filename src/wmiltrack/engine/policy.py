@@ -11,10 +11,11 @@ from .colour import ColourModel
 from .frames import IntBox
 from .settings import CONFIDENCE_OFFSET, ScoreSettings
 
-__all__ = ["ContrastScore", "UpdatePolicy", "confidence"]
+__all__ = ["ContrastScore", "UpdatePolicy", "confidence", "logistic"]
 
 
-def _sigmoid(z: float) -> float:
+def logistic(z: float) -> float:
+    """``1 / (1 + exp(-z))`` without overflow for any finite ``z``."""
     if z >= 0:
         return 1.0 / (1.0 + math.exp(-z))
     e = math.exp(z)
@@ -31,7 +32,7 @@ def confidence(raw: float, k: int, offset: float = CONFIDENCE_OFFSET) -> float:
     """
     if not math.isfinite(raw):
         return 0.0
-    return _sigmoid(raw / max(k, 1) - offset)
+    return logistic(raw / max(k, 1) - offset)
 
 
 class ContrastScore:

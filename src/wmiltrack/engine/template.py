@@ -41,7 +41,7 @@ class CorrelationTemplate:
     where the classifier's confidence and a grey template's correlation both fall.
 
     ``remembers``: whether to keep the first frame's filter for the judge of ``ok``
-    (``judge_memory > 0``; :attr:`first_peak`), given by
+    (``judge_memory > 0``; :meth:`first_peak_on`), given by
     :func:`~wmiltrack.engine.tracker.compose`.
     """
 
@@ -63,7 +63,8 @@ class CorrelationTemplate:
         # The first frame's filter, never trained again, when the judge of ``ok`` reads it.
         self.remembers = remembers
         self._first: CorrelationFilter | None = None
-        self.first_peak = math.nan  # its peak on this frame's search sample
+        # (frame, its peak on that frame's search)
+        self._first_peak: tuple[np.ndarray | None, float] = (None, math.nan)
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
         self.filter.init(frame, box)
@@ -81,10 +82,17 @@ class CorrelationTemplate:
         self._searched = loc
         self.confidence = loc.peak
         if self._first is not None:
-            self.first_peak = self._first.recall(self.filter)[0]
+            self._first_peak = (frame, self._first.recall(self.filter)[0])
         if not self.moves:
             return box
         return centred(box, box[2], box[3], loc.dx, loc.dy)
+
+    def first_peak_on(self, frame: np.ndarray) -> float:
+        """The first frame's filter's response peak on ``frame``'s search sample, what the
+        judge of ``ok`` reads; NaN when the filter did not search ``frame`` (or keeps no first
+        filter)."""
+        searched, peak = self._first_peak
+        return peak if searched is frame else math.nan
 
     def follow(self, previous: IntBox, box: IntBox, tracked: bool) -> None:
         """(Nothing to keep: the filter searches around the last box every frame.)"""

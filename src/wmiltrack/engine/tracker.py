@@ -441,8 +441,6 @@ class Tracker:
         of a frame (:meth:`_report`)."""
         self._check_frame(img)
         previous = self._box
-        if self._parts.template is not None:
-            self._parts.template.first_peak = math.nan  # until its search on this frame
         if self._parts.lost:
             self._score = yield from self._redetect_steps(img, previous)
         else:
@@ -490,7 +488,7 @@ class Tracker:
         results = yield from model.fused_step(search, origin)
         score = confidence(self._move(origin, self._stages, results), model.k,
                            self._params.confidence_offset)
-        self._verdict(score)
+        self._verdict(score, None)
         return score
 
     def _rescale(self, img: np.ndarray, raw: float) -> float:
@@ -513,9 +511,9 @@ class Tracker:
         if parts.recovery is not None and parts.recovery.judge(conf, img, self._box,
                                                                self._witnesses()):
             self._hold(previous)  # the target is lost from this frame on
-            self._verdict(0.0)
+            self._verdict(0.0, img)
             return True
-        self._verdict(score)
+        self._verdict(score, img)
         judge = parts.judge
         if (judge is not None and judge.lost and judge.turned and self._params.judge_holds
                 and parts.recovery is not None):
@@ -524,12 +522,13 @@ class Tracker:
             return True
         return False
 
-    def _verdict(self, score: float) -> None:
-        """Whether the frame of this score counts as tracked: the policy's threshold, or the
-        judge's verdict (which keeps its own history). Once per frame, before learning."""
+    def _verdict(self, score: float, img: np.ndarray | None) -> None:
+        """Whether the frame ``img`` of this score counts as tracked: the policy's threshold,
+        or the judge's verdict (which keeps its own history). Once per frame, before
+        learning."""
         parts = self._parts
-        if parts.judge is not None and parts.template is not None:
-            self._tracked = parts.judge.verdict(score, parts.template.first_peak)
+        if parts.judge is not None and parts.template is not None and img is not None:
+            self._tracked = parts.judge.verdict(score, parts.template.first_peak_on(img))
         else:
             self._tracked = parts.policy.tracked(score)
 
@@ -586,13 +585,13 @@ class Tracker:
             found = recovery.find(img)
             if found is None:
                 self._hold(previous)
-                self._verdict(0.0)
+                self._verdict(0.0, img)
                 return 0.0
             stages = [(p.fine_radius, p.fine_step)] if p.fine_radius > 0 else self._stages
             raw = yield from self._search_from(img, found, stages)
             conf = confidence(raw, model.k, p.confidence_offset)
         score = parts.policy.score(conf, img, self._box)
-        self._verdict(score)
+        self._verdict(score, img)
         yield from self._learn_all(img, score)
         if parts.motion is not None:  # a jump back is not a velocity
             parts.motion.follow(self._box, self._box, False)
