@@ -50,7 +50,18 @@ except ImportError:  # a checkout that was not installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 import wmiltrack
-from wmiltrack.timing import gc_paused, timed
+
+try:
+    from wmiltrack.timing import gc_paused, timed
+except ImportError:  # a version older than wmiltrack.timing, measured for a before/after table
+    import importlib.util
+
+    _spec = importlib.util.spec_from_file_location(
+        "wmiltrack_timing_of_checkout", Path(__file__).resolve().parents[1] / "src/wmiltrack/timing.py")
+    assert _spec is not None and _spec.loader is not None
+    _timing = importlib.util.module_from_spec(_spec)
+    _spec.loader.exec_module(_timing)
+    gc_paused, timed = _timing.gc_paused, _timing.timed
 
 STAGES = ("integral", "search", "scale", "sampling", "projection", "gaussian update",
           "log ratios", "selection", "learning (one call)", "bags and learning (one call)",
