@@ -5,7 +5,7 @@ One frame's work for it: an integral image of the target's neighbourhood (C++), 
 and fine candidate scoring (C++), the positive and negative bags around the new box (Python
 or C++), their feature values, the Gaussian update and the feature selection (C++). A preset
 made of nothing but this model runs all of that in one call to the core
-(:meth:`HaarAppearance.fused_step`).
+(:meth:`HaarAppearance.fused_request`).
 """
 
 from __future__ import annotations
@@ -27,7 +27,20 @@ from .features import (
     scale_bank,
 )
 from .frames import IntBox
-from .requests import Drawn, Learn, LearnAt, Learnt, Search, Step, Steps, learn_request, search_request
+from .requests import (
+    Drawn,
+    Learn,
+    LearnAt,
+    LearningRule,
+    Learnt,
+    Search,
+    Step,
+    Steps,
+    as_drawn,
+    as_learnt,
+    learn_request,
+    search_request,
+)
 from .sampling import BagSampler
 from .selection import milboost_select
 
@@ -61,10 +74,12 @@ class HaarAppearance:
         self.seed = seed
         self.variant = variant  # the preset's name, for messages
         self.ii = _core.IntegralImage()
-        # the learning step's fixed settings, in LearnRequest's order
-        self._rule = (params.learning_rate, params.first_update == "direct",
-                      params.classifier == "mil", params.sigma_floor, params.guard,
-                      params.num_selected, params.gradient == "code")
+        # the learning step's fixed settings
+        self._rule = LearningRule(lam=params.learning_rate,
+                                  direct_first=params.first_update == "direct",
+                                  mil=params.classifier == "mil", sigma_floor=params.sigma_floor,
+                                  guard=params.guard, k=params.num_selected,
+                                  code_gradient=params.gradient == "code")
         self.first = BagSampler(params, first_frame=True)
         self.track = BagSampler(params)
         self.bags: tuple[Any, ...] = ()
@@ -123,7 +138,7 @@ class HaarAppearance:
 
     @property
     def can_fuse(self) -> bool:
-        """Whether a whole frame step can run as one core call (:meth:`fused_step`): luma
+        """Whether a whole frame step can run as one core call (:meth:`fused_request`): luma
         features only, and negatives the core can draw exactly as numpy would
         (:meth:`~wmiltrack.engine.sampling.BagSampler.drawn_in_core`)."""
         return self.chan_names is None and self.track.drawn_in_core()
@@ -231,8 +246,8 @@ class HaarAppearance:
             request, bags = self._learning_on_core_bags(box, extra, second)
             answer, bags_drawn = yield LearnAt(learn=request, bags=bags, box=box,
                                                frame_size=frame_wh)
-            learnt = Learnt._make(answer)
-            self._take_core_bags(learnt, Drawn._make(bags_drawn), n_extra)
+            learnt = as_learnt(answer)
+            self._take_core_bags(learnt, as_drawn(bags_drawn), n_extra)
             return learnt.second_mu, learnt.second_sigma
         fw, fh = frame_wh
         pos, dist = sampler.positives(box, fw, fh)
@@ -242,7 +257,7 @@ class HaarAppearance:
         w = sampler.weights(dist, self.params.instance_weights) if select == "wmil" else None
         request = self._learn_request(box, np.concatenate((pos, neg)), pos.shape[0], select, w,
                                       extra, second)
-        learnt = Learnt._make((yield request))
+        learnt = as_learnt((yield request))
         self._take_learnt(learnt, pos.shape[0], neg.shape[0] + n_extra)
         return learnt.second_mu, learnt.second_sigma
 
@@ -250,15 +265,20 @@ class HaarAppearance:
         """Record that this frame was not learnt from (no bags)."""
         self.bags = (_NO_CORNERS, _NO_CORNERS)
 
-    def fused_step(self, search: Search, frame_box: IntBox) -> Steps:
+    def fused_request(self, search: Search, frame_box: IntBox) -> Step:
         """The search, the bags and the learning as one core request: the core samples the
         bags where the search lands (drawing the negatives from this model's generator
-        exactly as :class:`~wmiltrack.engine.sampling.BagSampler` would) and learns. The same
-        draws and state changes as a search then :meth:`learn_steps`; returns the search's
-        per-stage results."""
+        exactly as :class:`~wmiltrack.engine.sampling.BagSampler` would) and learns; its
+        answer goes to :meth:`take_fused`. The same draws and state changes as a search then
+        :meth:`learn_steps`."""
         request, bags = self._learning_on_core_bags(frame_box)
-        results, learnt, drawn = yield Step(search=search, learn=request, bags=bags)
-        self._take_core_bags(Learnt._make(learnt), Drawn._make(drawn))
+        return Step(search=search, learn=request, bags=bags)
+
+    def take_fused(self, answer: tuple[Any, Any, Any]) -> Any:
+        """Keep what the core answered to a :meth:`fused_request` (the bags and the model);
+        returns the search's per-stage results."""
+        results, learnt, drawn = answer
+        self._take_core_bags(as_learnt(learnt), as_drawn(drawn))
         return results
 
     def _learning_on_core_bags(self, box: IntBox, extra: np.ndarray | None = None,
@@ -307,13 +327,11 @@ class HaarAppearance:
         """``_core.learn``'s arguments for the bags with these top-left ``corners`` (the
         ``n_pos`` positives, weighted ``w`` for WMIL, then the negatives) of ``box``'s size."""
         pool = self.pool
-        lam, direct, mil, floor, guard, k, code = self._rule
         return learn_request(ii=self.ii, bank=self.bank(box[2], box[3]), xs=corners[:, 0],
-                             ys=corners[:, 1], n_pos=n_pos, mu1=pool.mu1, sigma1=pool.sigma1,
-                             mu0=pool.mu0, sigma0=pool.sigma0, lam=lam, first_pos=pool.first(1),
-                             first_neg=pool.first(0), direct_first=direct, mil=mil, sigma_floor=floor,
-                             guard=guard, select=select, w_pos=w, k=k, code_gradient=code,
-                             extra_neg=extra, second=second)
+                             ys=corners[:, 1], n_pos=n_pos,
+                             model=(pool.mu1, pool.sigma1, pool.mu0, pool.sigma0),
+                             first=(pool.first(1), pool.first(0)), rule=self._rule,
+                             select=select, w_pos=w, extra_neg=extra, second=second)
 
     def _take_learnt(self, learnt: Learnt, n_pos: int, n_neg: int) -> None:
         """Keep the model and the selection that a learning request returned."""

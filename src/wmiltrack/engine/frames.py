@@ -12,14 +12,15 @@ IntBox = tuple[int, int, int, int]
 
 def _check_shape(frame: np.ndarray) -> None:
     """A ``ValueError`` unless ``frame`` is ``H x W`` or ``H x W x C`` (C 1, 3 or 4), not empty."""
-    if frame.ndim not in (2, 3):
-        raise ValueError(f"frame must be H x W or H x W x C, got shape {frame.shape}")
-    if frame.ndim == 3 and frame.shape[2] not in (1, 3, 4):
+    shape = frame.shape  # (read once: each read of an array's shape makes a new tuple)
+    if len(shape) not in (2, 3):
+        raise ValueError(f"frame must be H x W or H x W x C, got shape {shape}")
+    if len(shape) == 3 and shape[2] not in (1, 3, 4):
         raise ValueError(
-            f"frame must have 1, 3 (BGR) or 4 (BGRA) channels, got {frame.shape[2]} (shape {frame.shape})"
+            f"frame must have 1, 3 (BGR) or 4 (BGRA) channels, got {shape[2]} (shape {shape})"
         )
-    if frame.shape[0] == 0 or frame.shape[1] == 0:
-        raise ValueError(f"frame is empty (shape {frame.shape})")
+    if shape[0] == 0 or shape[1] == 0:
+        raise ValueError(f"frame is empty (shape {shape})")
 
 
 def as_frame(frame: Any) -> np.ndarray:
@@ -82,17 +83,18 @@ def as_frame(frame: Any) -> np.ndarray:
 def _rows_contiguous(frame: np.ndarray) -> np.ndarray:
     """``frame`` itself when each row's pixels are contiguous and rows go forward in memory (as
     OpenCV's functions need), else a C-ordered copy."""
-    item = frame.itemsize
-    pixel = item * (frame.shape[2] if frame.ndim == 3 else 1)
-    rows_ok = frame.strides[1] == pixel and (frame.ndim == 2 or frame.strides[2] == item)
-    if rows_ok and frame.strides[0] >= pixel * frame.shape[1]:
+    item, shape, strides = frame.itemsize, frame.shape, frame.strides
+    pixel = item * (shape[2] if len(shape) == 3 else 1)
+    rows_ok = strides[1] == pixel and (len(shape) == 2 or strides[2] == item)
+    if rows_ok and strides[0] >= pixel * shape[1]:
         return frame
     return np.ascontiguousarray(frame)
 
 
 def frame_size(frame: np.ndarray) -> tuple[int, int]:
     """``(width, height)``."""
-    return int(frame.shape[1]), int(frame.shape[0])
+    shape = frame.shape
+    return int(shape[1]), int(shape[0])
 
 
 def clip_box(box: Any, frame_w: int, frame_h: int) -> IntBox:

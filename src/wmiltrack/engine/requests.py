@@ -9,13 +9,14 @@ step together, on the core's threads with the GIL released
 
 from __future__ import annotations
 
-from collections.abc import Generator
+from collections.abc import Callable, Generator
+from functools import partial
 from typing import Any, NamedTuple
 
 from .. import _core
 
-__all__ = ["Drawn", "Learn", "LearnAt", "Learnt", "Search", "Step", "Steps", "drive",
-           "learn_request", "run", "run_batches", "search_request"]
+__all__ = ["Drawn", "Learn", "LearnAt", "LearningRule", "Learnt", "Search", "Step", "Steps",
+           "as_drawn", "as_learnt", "drive", "learn_request", "run", "run_batches", "search_request"]
 
 
 Search = _core.SearchRequest
@@ -36,12 +37,31 @@ def search_request(*, ii: Any, bank: Any, selected: Any, mu1: Any, sigma1: Any, 
                   frame, roi, cues)
 
 
-def learn_request(*, ii: Any, bank: Any, xs: Any, ys: Any, n_pos: int, mu1: Any, sigma1: Any,
-                  mu0: Any, sigma0: Any, lam: float, first_pos: bool, first_neg: bool,
-                  direct_first: bool, mil: bool, sigma_floor: float, guard: float, select: str,
-                  w_pos: Any, k: int, code_gradient: bool, extra_neg: Any, second: Any) -> Learn:
+class LearningRule(NamedTuple):
+    """The fixed settings of an appearance model's learning step (made once per model): the
+    Gaussians' learning rate, whether a class's first update takes the samples' statistics
+    directly, MILTrack's guarded ratio (``mil``), the spread's floor, the log ratios' guard,
+    how many features to select and whether WMIL's gradient is the code's or the paper's."""
+
+    lam: float
+    direct_first: bool
+    mil: bool
+    sigma_floor: float
+    guard: float
+    k: int
+    code_gradient: bool
+
+
+def learn_request(*, ii: Any, bank: Any, xs: Any, ys: Any, n_pos: int, model: tuple[Any, ...],
+                  first: tuple[bool, bool], rule: LearningRule, select: str, w_pos: Any,
+                  extra_neg: Any, second: Any) -> Learn:
     """A :data:`Learn` request, named here and passed by position (see
-    :func:`search_request`)."""
+    :func:`search_request`): ``model`` the Gaussians ``(mu1, sigma1, mu0, sigma0)``, ``first``
+    whether each class (target, background) has not been updated yet. (At most 15 keywords: a
+    call with more builds a dict of them, which costs about 1 µs.)"""
+    mu1, sigma1, mu0, sigma0 = model
+    first_pos, first_neg = first
+    lam, direct_first, mil, sigma_floor, guard, k, code_gradient = rule
     return Learn(ii, bank, xs, ys, n_pos, mu1, sigma1, mu0, sigma0, lam, first_pos, first_neg,
                  direct_first, mil, sigma_floor, guard, select, w_pos, k, code_gradient,
                  extra_neg, second)
@@ -71,6 +91,12 @@ class Drawn(NamedTuple):
     xs: Any
     ys: Any
     n_pos: int
+
+
+# The core's answers read by name: a Learnt or a Drawn made from the core's plain tuple in C
+# (``Learnt._make`` is a Python function: one more Python frame per answer, on every frame).
+as_learnt: Callable[[tuple[Any, ...]], Learnt] = partial(tuple.__new__, Learnt)
+as_drawn: Callable[[tuple[Any, ...]], Drawn] = partial(tuple.__new__, Drawn)
 
 
 class Step(NamedTuple):

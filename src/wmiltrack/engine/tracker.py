@@ -451,8 +451,10 @@ class Tracker:
                        previous: IntBox) -> Steps:
         """A frame of a tracked target, stage by stage: locate (the motion model's origin, the
         search with the cues merged), scale, judge, learn; returns the frame's score. A paper
-        preset runs the locate and learn stages as one core call (:meth:`_fused_steps`).
-        ``integral``: a shared luma table of this frame, borrowed for the frame if it covers
+        preset (the appearance model alone, which reads luma only and has no other part to
+        consult) runs the locate and learn stages as one core call
+        (:meth:`~wmiltrack.engine.appearance.HaarAppearance.fused_request`), then the
+        verdict. ``integral``: a shared luma table of this frame, borrowed for the frame if it covers
         the search."""
         model = self._parts.appearance
         origin = self._origin(img)
@@ -465,8 +467,11 @@ class Tracker:
             model.ii = integral
         try:
             search = self._search(img, origin, self._stages, margin, shared=shared)
-            if self._fused:
-                score: float = yield from self._fused_steps(search, origin)
+            if self._fused:  # locate and learn as one core call, then judge
+                answer = yield model.fused_request(search, origin)
+                raw = self._move(origin, self._stages, model.take_fused(answer))
+                score = confidence(raw, model.k, self._params.confidence_offset)
+                self._verdict(score, None)
                 return score
             raw = self._move(origin, self._stages, (yield search))  # locate
             raw = self._rescale(img, raw)                             # scale
@@ -480,16 +485,6 @@ class Tracker:
             return score
         finally:
             model.ii = own  # a shared table is only borrowed for this frame
-
-    def _fused_steps(self, search: Search, origin: IntBox) -> Steps:
-        """The appearance model alone: search, bags and learning in one core call, and no
-        other part to consult (a fused model reads luma only); returns the score."""
-        model = self._parts.appearance
-        results = yield from model.fused_step(search, origin)
-        score = confidence(self._move(origin, self._stages, results), model.k,
-                           self._params.confidence_offset)
-        self._verdict(score, None)
-        return score
 
     def _rescale(self, img: np.ndarray, raw: float) -> float:
         """The scale stage: the scale estimator tries other sizes around the located box
@@ -533,12 +528,9 @@ class Tracker:
             self._tracked = parts.policy.tracked(score)
 
     def _report(self) -> TrackResult:
-        """The end of a frame: its result (``ok`` from its verdict and the lost state)."""
+        """The end of a frame: its result, the box, the score, and ``ok`` from its verdict and
+        the lost state."""
         self._ok = self._tracked and not self._parts.lost
-        return self._result()
-
-    def _result(self) -> TrackResult:
-        """The last frame's result: the box, the score, and whether it counts as tracked."""
         x, y, w, h = self._box
         return TrackResult((float(x), float(y), float(w), float(h)), self._score, self._ok)
 
