@@ -349,12 +349,18 @@ TranslationResponse TranslationFilter::respond(const Spectrum& zf_in, int exclus
   std::size_t count = 0;
   const float lo = *std::min_element(v.begin(), v.end());
   double energy = 0.0;
+  // The circular distance from the peak, min((i - p) mod n, (p - i) mod n), without a division
+  // per cell (i and p in [0, n): one of the differences is >= 0, the other is its n-complement).
+  const auto circular = [](int i, int p, int n) {
+    const int d = i >= p ? i - p : p - i;
+    return std::min(d, n - d);
+  };
   for (int r = 0; r < rows_; ++r) {
-    const int drr = std::min((r - pr + rows_) % rows_, (pr - r + rows_) % rows_);
+    const int drr = circular(r, pr, rows_);
     for (int c = 0; c < cols_; ++c) {
       const double value = v[static_cast<std::size_t>(r) * cols_ + c];
       energy += (value - lo) * (value - lo);
-      const int dcc = std::min((c - pc + cols_) % cols_, (pc - c + cols_) % cols_);
+      const int dcc = circular(c, pc, cols_);
       if (drr <= exclusion && dcc <= exclusion) continue;
       sum += value;
       sum2 += value * value;
