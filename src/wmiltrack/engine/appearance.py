@@ -30,7 +30,6 @@ from .frames import IntBox
 from .requests import (
     Drawn,
     Learn,
-    LearnAt,
     LearningRule,
     Learnt,
     Search,
@@ -38,8 +37,10 @@ from .requests import (
     Steps,
     as_drawn,
     as_learnt,
+    learn_at_request,
     learn_request,
     search_request,
+    step_request,
 )
 from .sampling import BagSampler
 from .selection import milboost_select
@@ -80,6 +81,9 @@ class HaarAppearance:
                                   mil=params.classifier == "mil", sigma_floor=params.sigma_floor,
                                   guard=params.guard, k=params.num_selected,
                                   code_gradient=params.gradient == "code")
+        # the selection of a learning step on bags the core draws (the core drops WMIL if no
+        # positive fits in the frame)
+        self._core_select = self._select_kind(1)
         self.first = BagSampler(params, first_frame=True)
         self.track = BagSampler(params)
         self.bags: tuple[Any, ...] = ()
@@ -244,7 +248,7 @@ class HaarAppearance:
             # The core draws the bags (as the sampler would, from this model's generator) and
             # learns in the same call.
             request, bags = self._learning_on_core_bags(box, extra, second)
-            answer, bags_drawn = yield LearnAt(learn=request, bags=bags, box=box,
+            answer, bags_drawn = yield learn_at_request(learn=request, bags=bags, box=box,
                                                frame_size=frame_wh)
             learnt = as_learnt(answer)
             self._take_core_bags(learnt, as_drawn(bags_drawn), n_extra)
@@ -272,7 +276,7 @@ class HaarAppearance:
         answer goes to :meth:`take_fused`. The same draws and state changes as a search then
         :meth:`learn_steps`."""
         request, bags = self._learning_on_core_bags(frame_box)
-        return Step(search=search, learn=request, bags=bags)
+        return step_request(search=search, learn=request, bags=bags)
 
     def take_fused(self, answer: tuple[Any, Any, Any]) -> Any:
         """Keep what the core answered to a :meth:`fused_request` (the bags and the model);
@@ -285,7 +289,7 @@ class HaarAppearance:
                                second: tuple[Any, ...] | None = None
                                ) -> tuple[Learn, _core.BagRequest]:
         """A learning request whose bags the core draws (for ``box``'s size), and that draw."""
-        select = self._select_kind(1)  # the core drops WMIL if no positive fits in the frame
+        select = self._core_select
         return (self._learn_request(box, _NO_CORNERS, 0, select, None, extra, second),
                 self._bag_request(select))
 

@@ -47,11 +47,11 @@ def as_frame(frame: Any) -> np.ndarray:
     if type(frame) is not np.ndarray:  # a subclass (np.matrix, a masked array): its plain data,
         frame = np.asarray(frame)      # which numpy's and OpenCV's functions read as expected
     _check_shape(frame)
+    if frame.dtype == np.uint8:  # (the usual frame: nothing else to look at)
+        return _rows_contiguous(frame)
     kind = frame.dtype.kind
     lo: float  # value range, for the messages below (int for integer frames)
     hi: float
-    if frame.dtype == np.uint8:
-        return _rows_contiguous(frame)
     if kind in "ui":
         lo, hi = int(frame.min()), int(frame.max())
         if lo < 0 or hi > 255:

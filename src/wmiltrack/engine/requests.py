@@ -16,7 +16,8 @@ from typing import Any, NamedTuple
 from .. import _core
 
 __all__ = ["Drawn", "Learn", "LearnAt", "LearningRule", "Learnt", "Search", "Step", "Steps",
-           "as_drawn", "as_learnt", "drive", "learn_request", "run", "run_batches", "search_request"]
+           "as_drawn", "as_learnt", "drive", "learn_at_request", "learn_request", "run",
+           "run_batches", "search_request", "step_request"]
 
 
 Search = _core.SearchRequest
@@ -117,6 +118,18 @@ class LearnAt(NamedTuple):
     bags: _core.BagRequest
     box: tuple[int, int, int, int]
     frame_size: tuple[int, int]
+
+
+def step_request(*, search: Search, learn: Learn, bags: _core.BagRequest) -> Step:
+    """A :class:`Step` by keyword: calling the class with keywords builds a dict of them
+    (about 0.2 µs a frame); this call does not."""
+    return tuple.__new__(Step, (search, learn, bags))
+
+
+def learn_at_request(*, learn: Learn, bags: _core.BagRequest, box: tuple[int, int, int, int],
+                     frame_size: tuple[int, int]) -> LearnAt:
+    """A :class:`LearnAt` by keyword (see :func:`step_request`)."""
+    return tuple.__new__(LearnAt, (learn, bags, box, frame_size))
 
 
 Steps = Generator[Any, Any, Any]

@@ -66,7 +66,7 @@ def _one_thread_at_a_time(method: _F) -> _F:
     """RuntimeError when another thread is inside a guarded method of the same tracker."""
     @functools.wraps(method)
     def guarded(self: Tracker, *args: Any, **kwargs: Any) -> Any:
-        if not self._busy.acquire(blocking=False):
+        if not self._busy.acquire(False):  # (not blocking; positional: no keyword matching)
             raise RuntimeError(
                 "this Tracker is in use by another thread: a Tracker may be used by one thread "
                 "at a time (use one Tracker per thread)")
