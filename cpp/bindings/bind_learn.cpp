@@ -168,14 +168,15 @@ void bind_learn(py::module_& m) {
       "(mu, sigma, lam, first) is a second target model updated from the positives alone with\n"
       "its own lambda. Checked when it runs.")
       .def(py::init([](py::object ii, py::object bank, py::object xs, py::object ys, int n_pos,
-                       CArray<double> mu1, CArray<double> sigma1, CArray<double> mu0,
-                       CArray<double> sigma0, double lam, bool first_pos, bool first_neg,
+                       const py::object& mu1, const py::object& sigma1, const py::object& mu0,
+                       const py::object& sigma0, double lam, bool first_pos, bool first_neg,
                        bool direct_first, bool mil, double sigma_floor, double guard,
                        std::string select, py::object w_pos, int k, bool code_gradient,
                        py::object extra_neg, py::object second) {
              return LearnRequest{std::move(ii), std::move(bank), std::move(xs), std::move(ys),
-                                 n_pos, std::move(mu1), std::move(sigma1), std::move(mu0),
-                                 std::move(sigma0), lam, first_pos, first_neg, direct_first, mil,
+                                 n_pos, model_array(mu1, "mu1"), model_array(sigma1, "sigma1"),
+                                 model_array(mu0, "mu0"), model_array(sigma0, "sigma0"), lam,
+                                 first_pos, first_neg, direct_first, mil,
                                  sigma_floor, guard, std::move(select), std::move(w_pos), k,
                                  code_gradient, std::move(extra_neg), std::move(second)};
            }),

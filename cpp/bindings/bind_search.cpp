@@ -132,15 +132,16 @@ void bind_search(py::module_& m) {
       "weight * (mean of the map over the box, or the map at the box's centre pixel) wins, and\n"
       "with `relative` each score is measured from the stage's best finite score. Checked when\n"
       "it runs.")
-      .def(py::init([](py::object ii, py::object bank, py::object selected, CArray<double> mu1,
-                       CArray<double> sigma1, CArray<double> mu0, CArray<double> sigma0,
-                       double guard, Box box, std::vector<std::tuple<int, int>> stages,
-                       std::tuple<int, int> frame_size, py::object frame, std::optional<Box> roi,
-                       py::object cues) {
+      .def(py::init([](py::object ii, py::object bank, py::object selected,
+                       const py::object& mu1, const py::object& sigma1, const py::object& mu0,
+                       const py::object& sigma0, double guard, Box box,
+                       std::vector<std::tuple<int, int>> stages, std::tuple<int, int> frame_size,
+                       py::object frame, std::optional<Box> roi, py::object cues) {
              return SearchRequest{std::move(ii), std::move(bank), std::move(selected),
-                                  std::move(mu1), std::move(sigma1), std::move(mu0),
-                                  std::move(sigma0), guard, box, std::move(stages), frame_size,
-                                  std::move(frame), roi, std::move(cues)};
+                                  model_array(mu1, "mu1"), model_array(sigma1, "sigma1"),
+                                  model_array(mu0, "mu0"), model_array(sigma0, "sigma0"), guard,
+                                  box, std::move(stages), frame_size, std::move(frame), roi,
+                                  std::move(cues)};
            }),
            py::arg("ii"), py::arg("bank"), py::arg("selected"), py::arg("mu1"), py::arg("sigma1"),
            py::arg("mu0"), py::arg("sigma0"), py::arg("guard"), py::arg("box"), py::arg("stages"),
