@@ -420,11 +420,11 @@ void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool a
 namespace {
 
 // A centre cue's value for a candidate of a grid of `step` pixels centred at (px, py) of
-// its map: the map's largest value within half a step of the centre (clipped to the map).
-// A correlation filter's peak is a few pixels wide; read at the grid's points alone, a
-// coarse grid (step 4) can miss it and pick a wide secondary peak instead.
+// its map: the map there, or, pooled, the map's largest value within half a step of it
+// (clipped to the map). A correlation filter's peak is a few pixels wide; read at the grid's
+// points alone, a coarse grid (step 4) can miss it and pick a wide secondary peak instead.
 double centre_value(const CueTable& cue, std::int64_t px, std::int64_t py, int step) {
-  const std::int64_t half = step / 2;
+  const std::int64_t half = cue.pooled ? step / 2 : 0;
   if (half == 0) return cue.table[py * cue.cols + px];
   const std::int64_t c0 = std::max<std::int64_t>(px - half, 0);
   const std::int64_t c1 = std::min<std::int64_t>(px + half, cue.cols - 1);
