@@ -66,6 +66,47 @@ def test_the_core_reads_a_centre_cue_at_the_candidates_centre() -> None:
             1e-30, box, stages, (150, 120), None, None, ([(small, x0, y0, 1.0, True)], 0.0, False)))
 
 
+def test_a_coarse_grid_reads_a_pooled_centre_cue_at_its_best_within_half_a_step() -> None:
+    """A correlation filter's peak is a few pixels wide. On a grid of step 4 a one-pixel peak
+    that falls between the grid's points must still win over a wide lower hill at a grid
+    point when the cue is pooled: each candidate reads the map's best within half a step of its
+    centre (the dtb_MountainBike6 failure: the filter's peak at (-6.5, -15), a secondary hill of
+    0.92 at (+20, 0), and the grid point (-8, -16) reading 0.69 of the peak). Not pooled, the
+    hill wins, as before."""
+    rng = np.random.default_rng(3)
+    frame = rng.integers(0, 256, (160, 200, 3), dtype=np.uint8)
+    ii = _core.IntegralImage()
+    bank = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 4, 4]], np.int32),
+                             np.array([1.0]))
+    box = (80, 60, 20, 20)  # candidate centres (90 + 4i, 70 + 4j)
+    x0, y0 = 50, 30
+    cue = np.zeros((90, 110))
+    peak = (90 - 7, 70 - 13)  # between the grid's points (-8, -12) and (-4, -16)
+    cue[peak[1] - y0, peak[0] - x0] = 1.0
+    hill = (90 + 20, 70)  # a grid point
+    cue[hill[1] - y0 - 3:hill[1] - y0 + 4, hill[0] - x0 - 3:hill[0] - x0 + 4] = 0.9
+
+    def search(stages: list[tuple[int, int]], pooled: bool = True
+               ) -> list[tuple[int, int, float, int]]:
+        return _core.search(_core.SearchRequest(
+            ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
+            1e-30, box, stages, (200, 160), frame, (30, 20, 170, 140),
+            ([(cue, x0, y0, 1.0, True, pooled)], 0.0, False)))
+
+    (dx, dy, _, _), (fx, fy, _, _) = search([(25, 4), (4, 1)])
+    assert abs(dx + 7) <= 2 and abs(dy + 13) <= 2  # the coarse stage: the peak's cell
+    assert (box[0] + dx + fx + 10, box[1] + dy + fy + 10) == peak  # the fine stage: the pixel
+    ((sx, sy, _, _),) = search([(25, 1)])  # step 1 reads the centre pixel alone
+    assert (box[0] + sx + 10, box[1] + sy + 10) == peak
+    (ux, uy, _, _), _ = search([(25, 4), (4, 1)], pooled=False)  # read at the centres: the hill
+    assert (ux, uy) == (20, 0)
+    with pytest.raises(ValueError, match="pooled"):
+        _core.search(_core.SearchRequest(
+            ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
+            1e-30, box, [(25, 4)], (200, 160), frame, (30, 20, 170, 140),
+            ([(np.zeros((91, 111)), x0, y0, 1.0, False, True)], 0.0, False)))
+
+
 def test_a_tracker_composes_the_template_as_asked() -> None:
     seq = make_sequence(12, size=(160, 200), target_size=(36, 30), seed=2, occlusion=False)
     frames, box = seq.load(), tuple(seq.groundtruth[0])
@@ -155,8 +196,8 @@ def test_template_settings_are_checked(overrides: dict[str, object], match: str)
 
 def test_only_rcwmil_cf_has_the_correlation_filters() -> None:
     """The template and DSST's vote are rcwmil-cf's: the paper presets and rcwmil-plus (the
-    fast one) leave them out, and rcwmil-cf is rcwmil-plus with them and nothing else
-    changed."""
+    fast one) leave them out, and rcwmil-cf is rcwmil-plus with them, the judge of ok, a wider
+    coarse grid and a finer scale ladder, and nothing else changed."""
     for name, p in wmiltrack.variants().items():
         if name == "rcwmil-cf":
             continue
@@ -166,8 +207,10 @@ def test_only_rcwmil_cf_has_the_correlation_filters() -> None:
     changed = {k for k, v in cf.as_dict().items() if plus.as_dict()[k] != v}
     assert changed == {"variant", "description", "colour_weight", "template_weight",
                        "template_area", "template_cell", "template_channels", "template_reuse",
-                       "template_gate", "scale_dsst", "scale_samples", "judge_memory",
-                       "judge_gates", "judge_holds"}
+                       "template_gate", "template_pool_psr", "scale_dsst", "scale_samples",
+                       "judge_memory", "judge_gates", "judge_holds", "coarse_radius",
+                       "scale_factor", "scale_steps", "scale_negatives", "scale_penalty",
+                       "scale_min", "scale_max"}
     assert cf.template_weight > 0 and cf.scale_dsst > 0 and cf.scale_model == plus.scale_model
 
 

@@ -16,7 +16,7 @@ void SearchJob::run() {
 namespace {
 
 // The cues' tables and how they merge with the classifier (CueMerge), from
-// cues = (tables, offset, relative), tables = [(table, x0, y0, weight[, centre]), ...].
+// cues = (tables, offset, relative), tables = [(table, x0, y0, weight[, centre[, pooled]]), ...].
 void take_cues(SearchJob& job, const py::object& cues) {
   const auto items = cues.cast<py::tuple>();
   require(items.size() == 3, "cues must be (tables, offset, relative)");
@@ -29,10 +29,12 @@ void take_cues(SearchJob& job, const py::object& cues) {
   double total = 0.0;
   for (const py::handle entry : tables) {
     const auto cue = entry.cast<py::tuple>();
-    require(cue.size() == 4 || cue.size() == 5,
-            "cues: each table must be (table, x0, y0, weight) or (table, x0, y0, weight, centre)");
+    require(cue.size() >= 4 && cue.size() <= 6,
+            "cues: each table must be (table, x0, y0, weight[, centre[, pooled]])");
     CueTable t;
-    t.centre = cue.size() == 5 && cue[4].cast<bool>();
+    t.centre = cue.size() >= 5 && cue[4].cast<bool>();
+    t.pooled = cue.size() == 6 && cue[5].cast<bool>();
+    require(!t.pooled || t.centre, "cues: only a centre map can be pooled");
     const auto table = cue[0].cast<CArray<double>>();
     const py::ssize_t extra = t.centre ? 0 : 1;  // an integral image has a zero row and column
     require(table.ndim() == 2 && table.shape(0) >= 1 && table.shape(1) >= 1,
@@ -125,11 +127,13 @@ void bind_search(py::module_& m) {
       "mu1, sigma1, mu0, sigma0; the log guard; the starting `box` (x, y, w, h); `stages`, a\n"
       "list of (radius, step); `frame_size` (w, h). With `frame` and `roi`, `ii` is first\n"
       "recomputed over roi (luma) in the same call. `cues` = (tables, offset, relative) merges\n"
-      "cues into every stage's choice: `tables` is a list of (table, x0, y0, weight[, centre]),\n"
+      "cues into every stage's choice: `tables` is a list of (table, x0, y0, weight[, centre[,\n"
+      "pooled]]),\n"
       "each `table` an integral image of a cue's map whose region starts at frame pixel (x0,\n"
       "y0) (or, with centre=True, the map itself), the weights adding up to W <= 1; the\n"
       "candidate with the largest (1 - W) logistic(score / len(selected) - offset) + the sum of\n"
-      "weight * (mean of the map over the box, or the map at the box's centre pixel) wins, and\n"
+      "weight * (mean of the map over the box, or the map at the box's centre pixel; with\n"
+      "pooled=True, its best within half a step of it) wins, and\n"
       "with `relative` each score is measured from the stage's best finite score. Checked when\n"
       "it runs.")
       .def(py::init([](py::object ii, py::object bank, py::object selected,

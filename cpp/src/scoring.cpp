@@ -419,10 +419,30 @@ void WeakGaussians::log_ratio(int k, const double* x, int n, double* out, bool a
 
 namespace {
 
-// The candidate chosen by the merged score of CueMerge (-1 when no raw score is finite);
-// `finite` receives the number of candidates with a finite raw score.
+// A centre cue's value for a candidate of a grid of `step` pixels centred at (px, py) of
+// its map: the map there, or, pooled, the map's largest value within half a step of it
+// (clipped to the map). A correlation filter's peak is a few pixels wide; read at the grid's
+// points alone, a coarse grid (step 4) can miss it and pick a wide secondary peak instead.
+double centre_value(const CueTable& cue, std::int64_t px, std::int64_t py, int step) {
+  const std::int64_t half = cue.pooled ? step / 2 : 0;
+  if (half == 0) return cue.table[py * cue.cols + px];
+  const std::int64_t c0 = std::max<std::int64_t>(px - half, 0);
+  const std::int64_t c1 = std::min<std::int64_t>(px + half, cue.cols - 1);
+  const std::int64_t r0 = std::max<std::int64_t>(py - half, 0);
+  const std::int64_t r1 = std::min<std::int64_t>(py + half, cue.rows - 1);
+  double best = -std::numeric_limits<double>::infinity();
+  for (std::int64_t r = r0; r <= r1; ++r) {
+    const double* row = cue.table + r * cue.cols;
+    for (std::int64_t c = c0; c <= c1; ++c) best = std::max(best, row[c]);
+  }
+  return best;
+}
+
+// The candidate chosen by the merged score of CueMerge (-1 when no raw score is finite) on a
+// grid of `step` pixels; `finite` receives the number of candidates with a finite raw score.
 int merged_best(const CueMerge& merge, const Rect& box, const std::vector<int>& dx,
-                const std::vector<int>& dy, const std::vector<double>& raw, int& finite) {
+                const std::vector<int>& dy, int step, const std::vector<double>& raw,
+                int& finite) {
   const double area = static_cast<double>(box.w) * static_cast<double>(box.h);
   const double k = static_cast<double>(std::max(merge.k, 1));
   double total = 0.0;  // the cues' weights
@@ -450,7 +470,7 @@ int merged_best(const CueMerge& merge, const Rect& box, const std::vector<int>& 
         if (px < 0 || py < 0 || px >= cue.cols || py >= cue.rows) {
           throw std::out_of_range("score_grid: a candidate's centre lies outside a cue's map");
         }
-        value += cue.weight * cue.table[py * cue.cols + px];
+        value += cue.weight * centre_value(cue, px, py, step);
         continue;
       }
       if (cx < 0 || cy < 0 || cx + box.w > cue.cols || cy + box.h > cue.rows) {
@@ -612,7 +632,7 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
 
   int best = -1;
   if (cues != nullptr) {
-    best = merged_best(*cues, box, cand_dx, cand_dy, total, result.candidates);
+    best = merged_best(*cues, box, cand_dx, cand_dy, step, total, result.candidates);
     if (best < 0) {
       result.candidates = 0;
       return result;

@@ -57,7 +57,10 @@ struct GridResult {
 // merge. A box-mean cue (centre = false) gives the integral image of its map, (rows + 1) x
 // (cols + 1) with a zero first row and column, and values a candidate by the map's mean over
 // the box; a centre cue (centre = true) gives the map itself, rows x cols, and values a
-// candidate by the map at the box's centre pixel (x + w / 2, y + h / 2, rounded down).
+// candidate by the map at the box's centre pixel (x + w / 2, y + h / 2, rounded down); a pooled
+// centre cue, on a grid of step s, by the map's largest value within s / 2 (rounded down)
+// pixels of that pixel in each direction, so that a sharp peak between the grid's points is
+// not missed.
 struct CueTable {
   const double* table = nullptr;  // row-major
   int rows = 0;
@@ -66,6 +69,7 @@ struct CueTable {
   int y0 = 0;
   double weight = 0.0;
   bool centre = false;
+  bool pooled = false;  // a centre cue read at its best within half a grid step
 };
 
 // Cues merged into the choice of a search's best candidate (rcwmil-plus's colour likelihood,

@@ -34,10 +34,13 @@ frame position ``(x0, y0)``."""
 class Cue(Protocol):
     """What the tracker asks of a cue.
 
-    Three optional attributes: ``at_centre = True`` makes :meth:`table` return the map itself
+    Four optional attributes: ``at_centre = True`` makes :meth:`table` return the map itself
     (``rows x cols`` over the clipped region), read at each candidate's centre pixel instead of
     averaged over the box (a correlation filter's response is such a map), and the region it
-    is asked for is then that of the candidates' centres only; ``learn_above = s``
+    is asked for is then that of the candidates' centres only; ``pooled``, a bool such a cue
+    sets in :meth:`table`, makes a coarse grid (step s) read the map's best within s / 2
+    pixels of each candidate's centre, so that a peak narrower than the step is not missed;
+    ``learn_above = s``
     lets the cue learn only from frames whose reported score is at least ``s``; ``confidence``,
     a float the cue sets in :meth:`table` saying how well it found the target there (on its own
     scale, higher is surer, NaN for no opinion), is one more witness the lost state

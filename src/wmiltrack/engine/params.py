@@ -202,13 +202,19 @@ VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     variant="rcwmil-cf", colour_weight=0.65, template_weight=0.2, template_area=80.0**2,
     template_cell=2, template_channels=10, template_reuse=True, template_gate=0.4,
     scale_dsst=8.0, scale_samples=17, judge_memory=3.0, judge_gates=True, judge_holds=True,
+    coarse_radius=37, scale_factor=1.015, scale_steps=2, scale_negatives=4, scale_penalty=0.1,
+    scale_min=0.05, scale_max=20.0, template_pool_psr=12.0,
     description="rcwmil-plus with correlation filters on fHOG, for accuracy over speed (about "
     "half its frames per second): a translation filter over the target plus twice its mean side "
     "(Staple's template, 40 x 40 cells of 2 px, its 31 channels compressed to 10 as in ECO, "
     "learning from its own search sample on frames whose score is at least 0.4) merged into the "
-    "search at 0.2 beside colour at 0.65, "
+    "search at 0.2 beside colour at 0.65 (on frames where the filter's peak-to-sidelobe ratio "
+    "is at least 12, each coarse candidate reads the filter's best within half a grid step "
+    "of its centre), over a coarse grid of radius 37 (step 4), "
     "and DSST's 1-D scale filter (17 samples over 1.02^-16 .. 1.02^16, as fDSST) voting, at 8 "
-    "times its response divided by its peak, in rcwmil-plus's Haar scale search (learning, as "
+    "times its response divided by its peak, in rcwmil-plus's Haar scale search on a finer "
+    "ladder (1.015^-2 .. 1.015^2 a frame, penalty 0.1 a step, boxes 1.015^+-4 off learnt as "
+    "negatives, sizes 0.05 to 20 times the first box's; learning, as "
     "the translation filter, on frames whose score is at least 0.4); ok is judged with the "
     "first frame's filter as a memory of the target: logistic(8 (score - 0.5) + 3 ln(its peak "
     "/ 0.082)), lost after 3 frames below 0.4, found after 2 above 0.9; while the judge holds "

@@ -631,6 +631,13 @@ class TemplateSettings:
         (ECO: one feature extraction and one transform a frame instead of two), when that box
         is near the searched centre and of about the searched size; otherwise, and without
         this, from a new sample around the final box.
+    template_pool_psr : float
+        On frames where the filter's response has a peak-to-sidelobe ratio of at least this,
+        a coarse search grid (step s) reads the filter's map at its best within s / 2 pixels
+        of each candidate's centre instead of at the centre alone: the peak of a filter on
+        2-pixel cells is narrower than the grid's step, and read at the grid's points a wide
+        secondary hill can outscore it (0: never). A response without a clear peak (the
+        target gone) is read at the centres, where its noise counts least.
     """
 
     template_weight: float = 0.0
@@ -642,6 +649,7 @@ class TemplateSettings:
     template_channels: int = 0
     template_cell: int = 4
     template_reuse: bool = False
+    template_pool_psr: float = 0.0
 
     def __post_init__(self) -> None:
         TemplateSettings.check(self)
@@ -649,7 +657,7 @@ class TemplateSettings:
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
         _check_numbers(self, "template_weight", "template_area", "template_learning_rate",
-                       "template_gate")
+                       "template_gate", "template_pool_psr")
         _need(0.0 <= self.template_weight <= 1.0,
               f"template_weight must be in [0, 1], got {self.template_weight}")
         _need(isinstance(self.template_motion, bool),
@@ -661,6 +669,8 @@ class TemplateSettings:
               f"template_gate must be in [0, 1], got {self.template_gate}")
         _need(_is_int(self.template_every) and 1 <= self.template_every <= 100,
               f"template_every must be an int in 1..100, got {self.template_every!r}")
+        _need(self.template_pool_psr >= 0.0,
+              f"template_pool_psr must be >= 0, got {self.template_pool_psr}")
         _need(_is_int(self.template_channels) and 0 <= self.template_channels <= 31,
               f"template_channels must be an int in 0..31, got {self.template_channels!r}")
         _need(_is_int(self.template_cell) and 1 <= self.template_cell <= 16

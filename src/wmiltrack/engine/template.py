@@ -55,6 +55,8 @@ class CorrelationTemplate:
         self.learn_above = learning.above
         self.updates = SparseUpdates(settings.template_learning_rate, learning.every)
         self.reuse = learning.reuse
+        self.pool_psr = settings.template_pool_psr
+        self.pooled = False  # whether this frame's map is read pooled (see table())
         self.filter = CorrelationFilter(CorrelationSettings(
             template_area=settings.template_area, learning_rate=self.updates.rate,
             compressed=settings.template_channels, cell=settings.template_cell))
@@ -102,7 +104,8 @@ class CorrelationTemplate:
               ) -> tuple[np.ndarray, int, int]:
         """The filter's response at every pixel of ``region`` taken as a target centre
         (bilinear between the response's cells; the response wraps around), divided by its
-        peak and clipped to [0, 1]."""
+        peak and clipped to [0, 1]; read pooled (:attr:`pooled`) on a frame whose response's
+        PSR is at least ``template_pool_psr``."""
         if self._searched is None:  # not the motion model: search around the region's centre
             w, h = self.filter.size  # (the region of centres: its middle pixel's index)
             cx, cy = (region[0] + region[2] - 1) / 2.0, (region[1] + region[3] - 1) / 2.0
@@ -110,6 +113,7 @@ class CorrelationTemplate:
         loc = self._searched
         assert loc is not None
         self._searched = None
+        self.pooled = self.pool_psr > 0 and loc.psr >= self.pool_psr
         fh, fw = frame.shape[:2]
         x0, y0 = max(region[0], 0), max(region[1], 0)
         return loc.map((x0, y0, min(region[2], fw), min(region[3], fh))), x0, y0

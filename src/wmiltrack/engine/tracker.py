@@ -645,7 +645,8 @@ class Tracker:
         tables = []
         for c in cues:
             at_centre = getattr(c, "at_centre", False)
-            tables.append((*c.table(img, centres if at_centre else region), c.weight, at_centre))
+            table = c.table(img, centres if at_centre else region)
+            tables.append((*table, c.weight, at_centre, at_centre and getattr(c, "pooled", False)))
         rel = self._params.colour_relative
         offset = self._params.confidence_offset if rel is None else -rel
         return tables, offset, rel is not None
