@@ -22,6 +22,20 @@ def _textured(seed: int = 0, size: tuple[int, int] = (160, 200)) -> np.ndarray:
     return np.kron(small, np.ones((4, 4, 1), dtype=np.uint8))
 
 
+def _cue_search(box: tuple[int, int, int, int], stages: list[tuple[int, int]],
+                frame_wh: tuple[int, int], frame: np.ndarray | None,
+                roi: tuple[int, int, int, int] | None, cues: tuple[object, ...]
+                ) -> list[tuple[int, int, float, int]]:
+    """The core's search of a classifier with one 4 x 4 feature and a flat model (every
+    candidate scores the same), so that the cues alone choose."""
+    ii = _core.IntegralImage()
+    bank = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 4, 4]], np.int32),
+                             np.array([1.0]))
+    return _core.search(_core.SearchRequest(
+        ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
+        1e-30, box, stages, frame_wh, frame, roi, cues))
+
+
 @pytest.mark.parametrize("shift", [(6, 4), (-5, 7), (0, -8)])
 def test_the_centre_map_peaks_where_the_target_moved(shift: tuple[int, int]) -> None:
     """The map the template gives the search, read at a candidate's centre, is highest for the
@@ -46,24 +60,18 @@ def test_the_core_reads_a_centre_cue_at_the_candidates_centre() -> None:
     search pick the candidate centred there; its score is that candidate's raw score."""
     rng = np.random.default_rng(3)
     frame = rng.integers(0, 256, (120, 150, 3), dtype=np.uint8)
-    ii = _core.IntegralImage()
-    bank = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 4, 4]], np.int32),
-                             np.array([1.0]))
     box, stages = (60, 50, 20, 20), [(10, 1)]
     target = (73, 56)  # a candidate centre inside the radius: (x + 10, y + 10)
     x0, y0 = 30, 20
     bump = np.zeros((90, 110))
     bump[target[1] - y0, target[0] - x0] = 1.0
     cues = ([(bump, x0, y0, 1.0, True)], 0.0, False)
-    ((dx, dy, _, n),) = _core.search(_core.SearchRequest(
-        ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
-        1e-30, box, stages, (150, 120), frame, (20, 10, 110, 100), cues))
+    ((dx, dy, _, n),) = _cue_search(box, stages, (150, 120), frame, (20, 10, 110, 100), cues)
     assert n > 0 and (box[0] + dx + 10, box[1] + dy + 10) == target
     small = np.zeros((5, 5))
     with pytest.raises(IndexError, match="centre"):
-        _core.search(_core.SearchRequest(
-            ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
-            1e-30, box, stages, (150, 120), None, None, ([(small, x0, y0, 1.0, True)], 0.0, False)))
+        _cue_search(box, stages, (150, 120), frame, (20, 10, 110, 100),
+                    ([(small, x0, y0, 1.0, True)], 0.0, False))
 
 
 def test_a_coarse_grid_reads_a_pooled_centre_cue_at_its_best_within_half_a_step() -> None:
@@ -75,9 +83,6 @@ def test_a_coarse_grid_reads_a_pooled_centre_cue_at_its_best_within_half_a_step(
     hill wins, as before."""
     rng = np.random.default_rng(3)
     frame = rng.integers(0, 256, (160, 200, 3), dtype=np.uint8)
-    ii = _core.IntegralImage()
-    bank = _core.FeatureBank(np.array([0, 1], np.int32), np.array([[0, 0, 4, 4]], np.int32),
-                             np.array([1.0]))
     box = (80, 60, 20, 20)  # candidate centres (90 + 4i, 70 + 4j)
     x0, y0 = 50, 30
     cue = np.zeros((90, 110))
@@ -88,10 +93,8 @@ def test_a_coarse_grid_reads_a_pooled_centre_cue_at_its_best_within_half_a_step(
 
     def search(stages: list[tuple[int, int]], pooled: bool = True
                ) -> list[tuple[int, int, float, int]]:
-        return _core.search(_core.SearchRequest(
-            ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
-            1e-30, box, stages, (200, 160), frame, (30, 20, 170, 140),
-            ([(cue, x0, y0, 1.0, True, pooled)], 0.0, False)))
+        return _cue_search(box, stages, (200, 160), frame, (30, 20, 170, 140),
+                           ([(cue, x0, y0, 1.0, True, pooled)], 0.0, False))
 
     (dx, dy, _, _), (fx, fy, _, _) = search([(25, 4), (4, 1)])
     assert abs(dx + 7) <= 2 and abs(dy + 13) <= 2  # the coarse stage: the peak's cell
@@ -101,10 +104,8 @@ def test_a_coarse_grid_reads_a_pooled_centre_cue_at_its_best_within_half_a_step(
     (ux, uy, _, _), _ = search([(25, 4), (4, 1)], pooled=False)  # read at the centres: the hill
     assert (ux, uy) == (20, 0)
     with pytest.raises(ValueError, match="pooled"):
-        _core.search(_core.SearchRequest(
-            ii, bank, np.array([0], np.int32), np.zeros(1), np.ones(1), np.zeros(1), np.ones(1),
-            1e-30, box, [(25, 4)], (200, 160), frame, (30, 20, 170, 140),
-            ([(np.zeros((91, 111)), x0, y0, 1.0, False, True)], 0.0, False)))
+        _cue_search(box, [(25, 4)], (200, 160), frame, (30, 20, 170, 140),
+                    ([(np.zeros((91, 111)), x0, y0, 1.0, False, True)], 0.0, False))
 
 
 def test_a_tracker_composes_the_template_as_asked() -> None:
