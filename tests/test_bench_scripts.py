@@ -232,3 +232,38 @@ def test_devset_halves_and_lost_flag_shares(tmp_path: Path) -> None:
     assert f"rcwmil: half 1 {s['half1']:.3f}, half 2 {s['half2']:.3f}" in r.stdout
     same = _run([str(BENCH / "devset.py"), "--roots", f"{tmp_path / 'one'},{tmp_path / 'one'}"])
     assert same.returncode != 0 and "is in both" in same.stderr
+
+
+def test_lost_study_looks_only_at_frames_flagged_lost_whose_box_misses_a_target_in_view(
+        tmp_path: Path) -> None:
+    """benchmarks/lost_study.py: a generated target hidden behind an occluder on frames 25-54
+    (rcwmil-cf flags them lost), whose ground truth, on frames 30-49, says it is in view 60 px
+    away: those frames are studied, each a box side or more from the box, no frame outside the
+    hidden ones is, and the printed summary is the JSON's."""
+    seq = make_sequence(70, size=(160, 200), target_size=(28, 24), seed=3, occlusion=False,
+                        full_occlusion=(25, 30))
+    d = tmp_path / "dev" / "Hidden" / "img"
+    d.mkdir(parents=True)
+    for i, f in enumerate(seq.load()):
+        assert cv2.imwrite(str(d / f"{i + 1:04d}.png"), f)
+    gt = np.asarray(seq.groundtruth, dtype=np.float64)
+    moved = range(30, 50)
+    for i in moved:
+        gt[i, 0] = (gt[i, 0] + 60.0) % (200 - gt[i, 2])
+        gt[i, 1] = (gt[i, 1] + 60.0) % (160 - gt[i, 3])
+    (d.parent / "groundtruth_rect.txt").write_text(
+        "\n".join(",".join(repr(float(v)) for v in row) for row in gt) + "\n")
+    out = tmp_path / "lost.json"
+    r = _run([str(BENCH / "lost_study.py"), "--roots", str(tmp_path / "dev"), "--json", str(out)])
+    assert r.returncode == 0, r.stderr
+    got = json.loads(out.read_text())
+    rows = got["runs"][0]["rows"]
+    studied = [row["frame"] for row in rows]
+    assert set(moved) <= set(studied) <= set(range(25, 55))
+    assert all(row["distance"] >= 1.0 for row in rows if row["frame"] in moved)
+    assert all(len(row["filter_random"]) <= 6 for row in rows)
+    assert got["summary"]["frames"] == len(rows)
+    assert f"'frames': {len(rows)}," in r.stdout
+    missing = _run([str(BENCH / "lost_study.py"), "--roots", str(tmp_path / "dev"),
+                    "--sequences", "Nope"])
+    assert missing.returncode != 0 and "no such sequence" in missing.stderr

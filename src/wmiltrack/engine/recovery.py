@@ -182,26 +182,14 @@ class Redetector:
         return max(s.recover_floor, relative)
 
     def find(self, frame: np.ndarray) -> IntBox | None:
-        """The box that matches the template best over the whole frame, if it matches well
-        enough to end the lost state (then the lost state ends); else None and one more frame
-        is lost. The box has the size of the last tracked box that matched the template at
-        least as well as usual (:attr:`size`): a target that an occluder covered bit by bit
-        may have had its box shrunk or grown before it counted as lost.
-
-        Two passes: the whole frame at a resolution where the template has at most
-        ``recover_search_area`` pixels (a 32-px target on a 640 x 480 frame: 0.6 instead of 4 ms),
-        then the neighbourhood of its best place at the template's own resolution, whose
-        correlation decides."""
-        if self.template is None or self.size is None:
+        """The box that matches the template best over the whole frame (:meth:`best_place`),
+        if it matches well enough to end the lost state (then the lost state ends); else None
+        and one more frame is lost."""
+        place = self.best_place(frame)
+        if place is None:
             self.frames_lost += 1
             return None
-        w, h = self.size
-        fh, fw = frame.shape[:2]
-        if w > fw or h > fh:
-            self.frames_lost += 1
-            return None
-        grey = _grey(frame)
-        best, (bx, by) = self._whole_frame(grey, w, h)
+        best, box = place
         self.last = best
         if not best >= self.required():
             self.frames_lost += 1
@@ -211,7 +199,35 @@ class Redetector:
         self.reference = None  # the classifier may have fallen behind the target's look
         self.witnesses = []
         self.seen = 0
-        return bx, by, w, h
+        return box
+
+    def best_place(self, frame: np.ndarray) -> tuple[float, IntBox] | None:
+        """The box of the whole frame that matches the template best, and its correlation
+        (None without a template, or when the box would not fit the frame); changes nothing.
+        The box has the size of the last tracked box that matched the template at least as
+        well as usual (:attr:`size`): a target that an occluder covered bit by bit may have
+        had its box shrunk or grown before it counted as lost.
+
+        Two passes: the whole frame at a resolution where the template has at most
+        ``recover_search_area`` pixels (a 32-px target on a 640 x 480 frame: 0.6 instead of 4 ms),
+        then the neighbourhood of its best place at the template's own resolution, whose
+        correlation decides."""
+        if self.template is None or self.size is None:
+            return None
+        w, h = self.size
+        fh, fw = frame.shape[:2]
+        if w > fw or h > fh:
+            return None
+        best, (bx, by) = self._whole_frame(_grey(frame), w, h)
+        return best, (bx, by, w, h)
+
+    def similarity(self, frame: np.ndarray, box: IntBox) -> float:
+        """The correlation of ``box``'s grey pixels with the template (NaN without a template
+        or when the box leaves the frame): what :meth:`best_place` maximises."""
+        patch = self._patch(frame, box)
+        if patch is None or self.template is None:
+            return math.nan
+        return _match(patch, self.template)
 
     def _whole_frame(self, grey: np.ndarray, w: int, h: int) -> tuple[float, tuple[int, int]]:
         """The best correlation of the template with a ``w x h`` box of the grey frame, and that
