@@ -234,15 +234,12 @@ def test_devset_halves_and_lost_flag_shares(tmp_path: Path) -> None:
     assert same.returncode != 0 and "is in both" in same.stderr
 
 
-def test_lost_study_looks_only_at_frames_flagged_lost_whose_box_misses_a_target_in_view(
-        tmp_path: Path) -> None:
-    """benchmarks/lost_study.py: a generated target hidden behind an occluder on frames 25-54
-    (rcwmil-cf flags them lost), whose ground truth, on frames 30-49, says it is in view 60 px
-    away: those frames are studied, each a box side or more from the box, no frame outside the
-    hidden ones is, and the printed summary is the JSON's."""
+def _hidden_target_dataset(root: Path) -> range:
+    """A generated target hidden behind an occluder on frames 25-54 (rcwmil-cf flags them
+    lost), whose ground truth says it is in view 60 px away on frames 30-49 (returned)."""
     seq = make_sequence(70, size=(160, 200), target_size=(28, 24), seed=3, occlusion=False,
                         full_occlusion=(25, 30))
-    d = tmp_path / "dev" / "Hidden" / "img"
+    d = root / "Hidden" / "img"
     d.mkdir(parents=True)
     for i, f in enumerate(seq.load()):
         assert cv2.imwrite(str(d / f"{i + 1:04d}.png"), f)
@@ -253,6 +250,16 @@ def test_lost_study_looks_only_at_frames_flagged_lost_whose_box_misses_a_target_
         gt[i, 1] = (gt[i, 1] + 60.0) % (160 - gt[i, 3])
     (d.parent / "groundtruth_rect.txt").write_text(
         "\n".join(",".join(repr(float(v)) for v in row) for row in gt) + "\n")
+    return moved
+
+
+def test_lost_study_looks_only_at_frames_flagged_lost_whose_box_misses_a_target_in_view(
+        tmp_path: Path) -> None:
+    """benchmarks/lost_study.py: a generated target hidden behind an occluder on frames 25-54
+    (rcwmil-cf flags them lost), whose ground truth, on frames 30-49, says it is in view 60 px
+    away: those frames are studied, each a box side or more from the box, no frame outside the
+    hidden ones is, and the printed summary is the JSON's."""
+    moved = _hidden_target_dataset(tmp_path / "dev")
     out = tmp_path / "lost.json"
     r = _run([str(BENCH / "lost_study.py"), "--roots", str(tmp_path / "dev"), "--json", str(out)])
     assert r.returncode == 0, r.stderr
@@ -267,3 +274,32 @@ def test_lost_study_looks_only_at_frames_flagged_lost_whose_box_misses_a_target_
     missing = _run([str(BENCH / "lost_study.py"), "--roots", str(tmp_path / "dev"),
                     "--sequences", "Nope"])
     assert missing.returncode != 0 and "no such sequence" in missing.stderr
+
+
+def test_lost_study_asks_nanotrack_only_with_its_model_files(tmp_path: Path) -> None:
+    """benchmarks/lost_study.py --nano: a clear error without NanoTrack's files; with them
+    (WMILTRACK_TEST_NANO_BACKBONE / _HEAD, not part of the project), NanoTrack's log-odds at
+    the target and at up to three places whose window misses it, on every studied frame."""
+    _hidden_target_dataset(tmp_path / "dev")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("WMILTRACK_NANO_")}
+    r = subprocess.run([sys.executable, str(BENCH / "lost_study.py"), "--roots",
+                        str(tmp_path / "dev"), "--nano"], capture_output=True, text=True,
+                       timeout=120, check=False, env=env, cwd=REPO)
+    assert r.returncode != 0 and "WMILTRACK_NANO_BACKBONE" in r.stderr
+    backbone = os.environ.get("WMILTRACK_TEST_NANO_BACKBONE", "")
+    head = os.environ.get("WMILTRACK_TEST_NANO_HEAD", "")
+    if not (os.path.isfile(backbone) and os.path.isfile(head)):
+        pytest.skip("NanoTrack's model files are not part of the project: set "
+                    "WMILTRACK_TEST_NANO_BACKBONE and WMILTRACK_TEST_NANO_HEAD to run this part")
+    out = tmp_path / "lost.json"
+    env.update(WMILTRACK_NANO_BACKBONE=backbone, WMILTRACK_NANO_HEAD=head,
+               WMILTRACK_NO_PROGRESS="1")
+    r = subprocess.run([sys.executable, str(BENCH / "lost_study.py"), "--roots",
+                        str(tmp_path / "dev"), "--nano", "--json", str(out)],
+                       capture_output=True, text=True, timeout=300, check=False, env=env,
+                       cwd=REPO)
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(out.read_text())["runs"][0]["rows"]
+    assert rows and all(np.isfinite(row["nano_at_target"]) for row in rows)
+    assert all(len(row["nano_random"]) <= 3 for row in rows)
+    assert "nano_target_above_random_q95" in json.loads(out.read_text())["summary"]
