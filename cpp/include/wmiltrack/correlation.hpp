@@ -10,11 +10,16 @@
 #pragma once
 
 #include <complex>
+#include <memory>
 #include <vector>
 
 #include "wmiltrack/fhog.hpp"
 
 namespace wmiltrack::cf {
+
+namespace detail {
+class Fft2;  // batched 2-D transforms (cpp/src/batch_fft.hpp)
+}  // namespace detail
 
 // A sample as a translation filter takes it: its features (projected onto the filter's
 // compressed channels, if it has any) times the cosine window, as half spectra (channels x
@@ -101,6 +106,9 @@ class TranslationFilter {
   std::vector<float> projection_;             // kept_ x channels_, row-major
   std::vector<float> window_;
   std::vector<float> label_;
+  // The plans of the 2-D transforms of this grid, built once (immutable: shared by copies and
+  // safe to use from several threads at once).
+  std::shared_ptr<const detail::Fft2> fft_;
   // Half spectra (columns 0 .. cols / 2; the rest is their Hermitian mirror).
   std::vector<std::complex<float>> label_f_;  // conj(fft2(label)), rows x (cols / 2 + 1)
   std::vector<std::complex<float>> num_;      // kept x rows x (cols / 2 + 1)
