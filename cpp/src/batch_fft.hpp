@@ -25,6 +25,8 @@
 
 #include <unsupported/Eigen/FFT>
 
+#include "wmiltrack/vmath.hpp"
+
 #if defined(__SSE2__) && !defined(WMILTRACK_NO_SIMD)
 #include <xmmintrin.h>
 #define WMILTRACK_TRANSPOSE_SSE 1
@@ -81,255 +83,313 @@ inline void transpose(const float* src, std::size_t src_stride, std::size_t rows
   }
 }
 
-// One complex transform length and direction: kissfft's plan (kiss_cpx_fft: twiddles, radices).
-// Immutable once built, so one plan serves any number of threads.
+// One complex transform length and direction: kissfft's plan (kiss_cpx_fft: twiddles, radices),
+// and where kissfft's recursion reads each input element. Immutable once built, so one plan
+// serves any number of threads.
+struct FftPlan {
+  int n = 0;
+  bool inverse = false;
+  int max_radix = 0;
+  std::vector<float> tw_re, tw_im;
+  std::vector<int> radix, remainder;  // per stage (kiss_cpx_fft's m_stageRadix, ...Remainder)
+  std::vector<std::size_t> fstride;   // per stage: the product of the radices before it
+  std::vector<std::size_t> perm;      // output position -> input element of the first copy
+};
+
+// The butterflies of kiss_cpx_fft, on lanes (f: the p m elements of one sub-transform).
+WMILTRACK_KERNEL void fft_bfly2(const FftPlan& plan, Lanes f, std::size_t fstride, int m,
+                                std::size_t lanes) {
+  const float* tw_re = plan.tw_re.data();
+  const float* tw_im = plan.tw_im.data();
+  for (int k = 0; k < m; ++k) {
+    const float wr = tw_re[k * fstride], wi = tw_im[k * fstride];
+    float* ar = f.re + k * f.stride;
+    float* ai = f.im + k * f.stride;
+    float* br = f.re + (m + k) * f.stride;
+    float* bi = f.im + (m + k) * f.stride;
+    for (std::size_t b = 0; b < lanes; ++b) {
+      const float tr = br[b] * wr - bi[b] * wi;
+      const float ti = br[b] * wi + bi[b] * wr;
+      br[b] = ar[b] - tr;
+      bi[b] = ai[b] - ti;
+      ar[b] = ar[b] + tr;
+      ai[b] = ai[b] + ti;
+    }
+  }
+}
+
+WMILTRACK_KERNEL void fft_bfly4(const FftPlan& plan, Lanes f, std::size_t fstride, int m,
+                                std::size_t lanes) {
+  const float* tw_re = plan.tw_re.data();
+  const float* tw_im = plan.tw_im.data();
+  const float neg = static_cast<float>(plan.inverse ? -1 : 1);  // negative_if_inverse
+  const std::size_t m_ = static_cast<std::size_t>(m);
+  for (std::size_t k = 0; k < m_; ++k) {
+    const float w1r = tw_re[k * fstride], w1i = tw_im[k * fstride];
+    const float w2r = tw_re[k * fstride * 2], w2i = tw_im[k * fstride * 2];
+    const float w3r = tw_re[k * fstride * 3], w3i = tw_im[k * fstride * 3];
+    float* f0r = f.re + k * f.stride;
+    float* f0i = f.im + k * f.stride;
+    float* f1r = f.re + (k + m_) * f.stride;
+    float* f1i = f.im + (k + m_) * f.stride;
+    float* f2r = f.re + (k + 2 * m_) * f.stride;
+    float* f2i = f.im + (k + 2 * m_) * f.stride;
+    float* f3r = f.re + (k + 3 * m_) * f.stride;
+    float* f3i = f.im + (k + 3 * m_) * f.stride;
+    for (std::size_t b = 0; b < lanes; ++b) {
+      const float s0r = f1r[b] * w1r - f1i[b] * w1i, s0i = f1r[b] * w1i + f1i[b] * w1r;
+      const float s1r = f2r[b] * w2r - f2i[b] * w2i, s1i = f2r[b] * w2i + f2i[b] * w2r;
+      const float s2r = f3r[b] * w3r - f3i[b] * w3i, s2i = f3r[b] * w3i + f3i[b] * w3r;
+      const float s5r = f0r[b] - s1r, s5i = f0i[b] - s1i;
+      float x0r = f0r[b] + s1r, x0i = f0i[b] + s1i;
+      const float s3r = s0r + s2r, s3i = s0i + s2i;
+      const float d4r = s0r - s2r, d4i = s0i - s2i;
+      const float s4r = d4i * neg, s4i = -d4r * neg;
+      f2r[b] = x0r - s3r;
+      f2i[b] = x0i - s3i;
+      x0r = x0r + s3r;
+      x0i = x0i + s3i;
+      f0r[b] = x0r;
+      f0i[b] = x0i;
+      f1r[b] = s5r + s4r;
+      f1i[b] = s5i + s4i;
+      f3r[b] = s5r - s4r;
+      f3i[b] = s5i - s4i;
+    }
+  }
+}
+
+WMILTRACK_KERNEL void fft_bfly3(const FftPlan& plan, Lanes f, std::size_t fstride, int m,
+                                std::size_t lanes) {
+  const float* tw_re = plan.tw_re.data();
+  const float* tw_im = plan.tw_im.data();
+  const std::size_t m_ = static_cast<std::size_t>(m);
+  const float e = tw_im[fstride * m_];  // epi3.imag()
+  for (std::size_t k = 0; k < m_; ++k) {
+    const float w1r = tw_re[k * fstride], w1i = tw_im[k * fstride];
+    const float w2r = tw_re[k * fstride * 2], w2i = tw_im[k * fstride * 2];
+    float* f0r = f.re + k * f.stride;
+    float* f0i = f.im + k * f.stride;
+    float* f1r = f.re + (k + m_) * f.stride;
+    float* f1i = f.im + (k + m_) * f.stride;
+    float* f2r = f.re + (k + 2 * m_) * f.stride;
+    float* f2i = f.im + (k + 2 * m_) * f.stride;
+    for (std::size_t b = 0; b < lanes; ++b) {
+      const float s1r = f1r[b] * w1r - f1i[b] * w1i, s1i = f1r[b] * w1i + f1i[b] * w1r;
+      const float s2r = f2r[b] * w2r - f2i[b] * w2i, s2i = f2r[b] * w2i + f2i[b] * w2r;
+      const float s3r = s1r + s2r, s3i = s1i + s2i;
+      float s0r = s1r - s2r, s0i = s1i - s2i;
+      const float m1r = f0r[b] - 0.5f * s3r, m1i = f0i[b] - 0.5f * s3i;
+      s0r = s0r * e;
+      s0i = s0i * e;
+      f0r[b] = f0r[b] + s3r;
+      f0i[b] = f0i[b] + s3i;
+      f2r[b] = m1r + s0i;
+      f2i[b] = m1i - s0r;
+      f1r[b] = m1r + -s0i;
+      f1i[b] = m1i + s0r;
+    }
+  }
+}
+
+WMILTRACK_KERNEL void fft_bfly5(const FftPlan& plan, Lanes f, std::size_t fstride, int m,
+                                std::size_t lanes) {
+  const float* tw_re = plan.tw_re.data();
+  const float* tw_im = plan.tw_im.data();
+  const std::size_t m_ = static_cast<std::size_t>(m);
+  const float yar = tw_re[fstride * m_], yai = tw_im[fstride * m_];
+  const float ybr = tw_re[fstride * 2 * m_], ybi = tw_im[fstride * 2 * m_];
+  for (std::size_t u = 0; u < m_; ++u) {
+    const float w1r = tw_re[u * fstride], w1i = tw_im[u * fstride];
+    const float w2r = tw_re[2 * u * fstride], w2i = tw_im[2 * u * fstride];
+    const float w3r = tw_re[3 * u * fstride], w3i = tw_im[3 * u * fstride];
+    const float w4r = tw_re[4 * u * fstride], w4i = tw_im[4 * u * fstride];
+    float* f0r = f.re + u * f.stride;
+    float* f0i = f.im + u * f.stride;
+    float* f1r = f.re + (u + m_) * f.stride;
+    float* f1i = f.im + (u + m_) * f.stride;
+    float* f2r = f.re + (u + 2 * m_) * f.stride;
+    float* f2i = f.im + (u + 2 * m_) * f.stride;
+    float* f3r = f.re + (u + 3 * m_) * f.stride;
+    float* f3i = f.im + (u + 3 * m_) * f.stride;
+    float* f4r = f.re + (u + 4 * m_) * f.stride;
+    float* f4i = f.im + (u + 4 * m_) * f.stride;
+    for (std::size_t b = 0; b < lanes; ++b) {
+      const float s0r = f0r[b], s0i = f0i[b];
+      const float s1r = f1r[b] * w1r - f1i[b] * w1i, s1i = f1r[b] * w1i + f1i[b] * w1r;
+      const float s2r = f2r[b] * w2r - f2i[b] * w2i, s2i = f2r[b] * w2i + f2i[b] * w2r;
+      const float s3r = f3r[b] * w3r - f3i[b] * w3i, s3i = f3r[b] * w3i + f3i[b] * w3r;
+      const float s4r = f4r[b] * w4r - f4i[b] * w4i, s4i = f4r[b] * w4i + f4i[b] * w4r;
+      const float s7r = s1r + s4r, s7i = s1i + s4i;
+      const float s10r = s1r - s4r, s10i = s1i - s4i;
+      const float s8r = s2r + s3r, s8i = s2i + s3i;
+      const float s9r = s2r - s3r, s9i = s2i - s3i;
+      float x0r = s0r + s7r, x0i = s0i + s7i;
+      x0r = x0r + s8r;
+      x0i = x0i + s8i;
+      f0r[b] = x0r;
+      f0i[b] = x0i;
+      const float s5r = s0r + ((s7r * yar) + (s8r * ybr));
+      const float s5i = s0i + ((s7i * yar) + (s8i * ybr));
+      const float s6r = (s10i * yai) + (s9i * ybi);
+      const float s6i = -(s10r * yai) - (s9r * ybi);
+      f1r[b] = s5r - s6r;
+      f1i[b] = s5i - s6i;
+      f4r[b] = s5r + s6r;
+      f4i[b] = s5i + s6i;
+      const float s11r = s0r + ((s7r * ybr) + (s8r * yar));
+      const float s11i = s0i + ((s7i * ybr) + (s8i * yar));
+      const float s12r = -(s10i * ybi) + (s9i * yai);
+      const float s12i = (s10r * ybi) - (s9r * yai);
+      f2r[b] = s11r + s12r;
+      f2i[b] = s11i + s12i;
+      f3r[b] = s11r - s12r;
+      f3i[b] = s11i - s12i;
+    }
+  }
+}
+
+WMILTRACK_KERNEL void fft_bfly_generic(const FftPlan& plan, Lanes f, std::size_t fstride, int m,
+                                       int p, std::size_t lanes, float* scratch) {
+  const float* tw_re = plan.tw_re.data();
+  const float* tw_im = plan.tw_im.data();
+  const int norig = static_cast<int>(plan.tw_re.size());
+  float* sr = scratch;
+  float* si = scratch + static_cast<std::size_t>(p) * lanes;
+  for (int u = 0; u < m; ++u) {
+    int k = u;
+    for (int q1 = 0; q1 < p; ++q1) {
+      std::memcpy(sr + q1 * lanes, f.re + k * f.stride, lanes * sizeof(float));
+      std::memcpy(si + q1 * lanes, f.im + k * f.stride, lanes * sizeof(float));
+      k += m;
+    }
+    k = u;
+    for (int q1 = 0; q1 < p; ++q1) {
+      int twidx = 0;
+      float* fr = f.re + k * f.stride;
+      float* fi = f.im + k * f.stride;
+      std::memcpy(fr, sr, lanes * sizeof(float));
+      std::memcpy(fi, si, lanes * sizeof(float));
+      for (int q = 1; q < p; ++q) {
+        twidx += static_cast<int>(fstride) * k;
+        if (twidx >= norig) twidx -= norig;
+        const float wr = tw_re[twidx], wi = tw_im[twidx];
+        const float* xr = sr + q * lanes;
+        const float* xi = si + q * lanes;
+        for (std::size_t b = 0; b < lanes; ++b) {
+          const float tr = xr[b] * wr - xi[b] * wi;
+          const float ti = xr[b] * wi + xi[b] * wr;
+          fr[b] = fr[b] + tr;
+          fi[b] = fi[b] + ti;
+        }
+      }
+      k += m;
+    }
+  }
+}
+
+// kiss_cpx_fft::work(0, out, in, 1, 1) without its recursion: the recursion's leaves copy
+// input element perm[o] to output position o, and each stage's butterflies run on every
+// sub-transform of that stage, deepest stage first. The sub-transforms of a stage are disjoint
+// and each one's butterflies follow all of its own deeper stages, as in the recursion, so every
+// value is computed by the same operations from the same inputs.
+WMILTRACK_KERNEL void fft_run_body(const FftPlan& plan, ConstLanes in, Lanes out,
+                                   std::size_t lanes, float* scratch) {
+  for (int o = 0; o < plan.n; ++o) {
+    const std::size_t at = plan.perm[static_cast<std::size_t>(o)] * in.stride;
+    const std::size_t to = static_cast<std::size_t>(o) * out.stride;
+    std::memcpy(out.re + to, in.re + at, lanes * sizeof(float));
+    if (in.im == nullptr) {
+      std::fill(out.im + to, out.im + to + lanes, 0.0f);
+    } else {
+      std::memcpy(out.im + to, in.im + at, lanes * sizeof(float));
+    }
+  }
+  for (std::size_t stage = plan.radix.size(); stage-- > 0;) {
+    const int p = plan.radix[stage], m = plan.remainder[stage];
+    const std::size_t fstride = plan.fstride[stage];
+    const std::size_t block = static_cast<std::size_t>(p) * static_cast<std::size_t>(m);
+    for (std::size_t first = 0; first < static_cast<std::size_t>(plan.n); first += block) {
+      const Lanes f{out.re + first * out.stride, out.im + first * out.stride, out.stride};
+      switch (p) {
+        case 2: fft_bfly2(plan, f, fstride, m, lanes); break;
+        case 3: fft_bfly3(plan, f, fstride, m, lanes); break;
+        case 4: fft_bfly4(plan, f, fstride, m, lanes); break;
+        case 5: fft_bfly5(plan, f, fstride, m, lanes); break;
+        default: fft_bfly_generic(plan, f, fstride, m, p, lanes, scratch); break;
+      }
+    }
+  }
+}
+
+#ifdef WMILTRACK_AVX2_COPIES
+// The transforms compiled for AVX2 (8 lanes a step): the same IEEE operations in the same order
+// (no fused multiply-add), so the same bits as the baseline copy. Named *_avx2 for the
+// portable-build test (tests/test_core_hardening.py); run only where vmath::avx2().
+__attribute__((target("avx2"))) inline void batch_fft_run_avx2(const FftPlan& plan,
+                                                               ConstLanes in, Lanes out,
+                                                               std::size_t lanes,
+                                                               float* scratch) {
+  fft_run_body(plan, in, out, lanes, scratch);
+}
+#endif
+
 class BatchFft {
  public:
-  BatchFft(int n, bool inverse) : n_(n) {
-    Eigen::internal::kiss_cpx_fft<float> plan;  // Eigen's own twiddles and factors
-    plan.make_twiddles(n, inverse);
-    plan.factorize(n);
-    inverse_ = inverse;
-    tw_re_.resize(plan.m_twiddles.size());
-    tw_im_.resize(plan.m_twiddles.size());
-    for (std::size_t i = 0; i < plan.m_twiddles.size(); ++i) {
-      tw_re_[i] = plan.m_twiddles[i].real();
-      tw_im_[i] = plan.m_twiddles[i].imag();
+  BatchFft(int n, bool inverse) {
+    Eigen::internal::kiss_cpx_fft<float> kiss;  // Eigen's own twiddles and factors
+    kiss.make_twiddles(n, inverse);
+    kiss.factorize(n);
+    plan_.n = n;
+    plan_.inverse = inverse;
+    plan_.tw_re.resize(kiss.m_twiddles.size());
+    plan_.tw_im.resize(kiss.m_twiddles.size());
+    for (std::size_t i = 0; i < kiss.m_twiddles.size(); ++i) {
+      plan_.tw_re[i] = kiss.m_twiddles[i].real();
+      plan_.tw_im[i] = kiss.m_twiddles[i].imag();
     }
-    radix_ = plan.m_stageRadix;
-    remainder_ = plan.m_stageRemainder;
-    max_radix_ = *std::max_element(radix_.begin(), radix_.end());
+    plan_.radix = kiss.m_stageRadix;
+    plan_.remainder = kiss.m_stageRemainder;
+    plan_.max_radix = *std::max_element(plan_.radix.begin(), plan_.radix.end());
+    std::size_t stride = 1;
+    for (int p : plan_.radix) {
+      plan_.fstride.push_back(stride);
+      stride *= static_cast<std::size_t>(p);
+    }
+    plan_.perm.resize(static_cast<std::size_t>(n));
+    leaves(0, 0, 0);
   }
 
-  int size() const { return n_; }
+  int size() const { return plan_.n; }
 
   // Unscaled transforms (kissfft's work) of `lanes` lanes of `in` into `out` (n elements each;
   // out must not overlap in). scratch: at least scratch_size(lanes) floats.
   void run(ConstLanes in, Lanes out, std::size_t lanes, float* scratch) const {
-    work(0, out, in, 1, lanes, scratch);
+#ifdef WMILTRACK_AVX2_COPIES
+    if (vmath::avx2()) return batch_fft_run_avx2(plan_, in, out, lanes, scratch);
+#endif
+    fft_run_body(plan_, in, out, lanes, scratch);
   }
   std::size_t scratch_size(std::size_t lanes) const {
     // bfly_generic's (radices other than 2 .. 5; a length of 1 is one stage of radix 1)
-    return 2 * static_cast<std::size_t>(max_radix_) * lanes;
+    return 2 * static_cast<std::size_t>(plan_.max_radix) * lanes;
   }
 
  private:
-  // kiss_cpx_fft::work with in_stride 1: element j of the input at in + j * in.stride.
-  void work(std::size_t stage, Lanes out, ConstLanes in, std::size_t fstride, std::size_t lanes,
-            float* scratch) const {
-    const int p = radix_[stage];
-    const int m = remainder_[stage];
-    if (m > 1) {
-      for (int q = 0; q < p; ++q) {
-        const std::size_t at = static_cast<std::size_t>(q) * fstride * in.stride;
-        const ConstLanes sub{in.re + at, in.im == nullptr ? nullptr : in.im + at, in.stride};
-        const std::size_t o = static_cast<std::size_t>(q) * m * out.stride;
-        work(stage + 1, Lanes{out.re + o, out.im + o, out.stride}, sub, fstride * p, lanes,
-             scratch);
-      }
-    } else {
-      for (int q = 0; q < p; ++q) {
-        const std::size_t at = static_cast<std::size_t>(q) * fstride * in.stride;
-        const std::size_t o = static_cast<std::size_t>(q) * out.stride;
-        std::memcpy(out.re + o, in.re + at, lanes * sizeof(float));
-        if (in.im == nullptr) {
-          std::fill(out.im + o, out.im + o + lanes, 0.0f);
-        } else {
-          std::memcpy(out.im + o, in.im + at, lanes * sizeof(float));
-        }
-      }
-    }
-    switch (p) {
-      case 2: bfly2(out, fstride, m, lanes); break;
-      case 3: bfly3(out, fstride, m, lanes); break;
-      case 4: bfly4(out, fstride, m, lanes); break;
-      case 5: bfly5(out, fstride, m, lanes); break;
-      default: bfly_generic(out, fstride, m, p, lanes, scratch); break;
-    }
-  }
-
-  void bfly2(Lanes f, std::size_t fstride, int m, std::size_t lanes) const {
-    for (int k = 0; k < m; ++k) {
-      const float wr = tw_re_[k * fstride], wi = tw_im_[k * fstride];
-      float* ar = f.re + k * f.stride;
-      float* ai = f.im + k * f.stride;
-      float* br = f.re + (m + k) * f.stride;
-      float* bi = f.im + (m + k) * f.stride;
-      for (std::size_t b = 0; b < lanes; ++b) {
-        const float tr = br[b] * wr - bi[b] * wi;
-        const float ti = br[b] * wi + bi[b] * wr;
-        br[b] = ar[b] - tr;
-        bi[b] = ai[b] - ti;
-        ar[b] = ar[b] + tr;
-        ai[b] = ai[b] + ti;
+  // The input element each output position of kiss_cpx_fft::work's leaves copies.
+  void leaves(std::size_t stage, std::size_t out_at, std::size_t in_at) {
+    const int p = plan_.radix[stage], m = plan_.remainder[stage];
+    const std::size_t fstride = plan_.fstride[stage];
+    for (int q = 0; q < p; ++q) {
+      if (m > 1) {
+        leaves(stage + 1, out_at + static_cast<std::size_t>(q) * m, in_at + q * fstride);
+      } else {
+        plan_.perm[out_at + static_cast<std::size_t>(q)] = in_at + q * fstride;
       }
     }
   }
 
-  void bfly4(Lanes f, std::size_t fstride, int m, std::size_t lanes) const {
-    const float neg = static_cast<float>(inverse_ ? -1 : 1);  // negative_if_inverse
-    const std::size_t m_ = static_cast<std::size_t>(m);
-    for (std::size_t k = 0; k < m_; ++k) {
-      const float w1r = tw_re_[k * fstride], w1i = tw_im_[k * fstride];
-      const float w2r = tw_re_[k * fstride * 2], w2i = tw_im_[k * fstride * 2];
-      const float w3r = tw_re_[k * fstride * 3], w3i = tw_im_[k * fstride * 3];
-      float* f0r = f.re + k * f.stride;
-      float* f0i = f.im + k * f.stride;
-      float* f1r = f.re + (k + m_) * f.stride;
-      float* f1i = f.im + (k + m_) * f.stride;
-      float* f2r = f.re + (k + 2 * m_) * f.stride;
-      float* f2i = f.im + (k + 2 * m_) * f.stride;
-      float* f3r = f.re + (k + 3 * m_) * f.stride;
-      float* f3i = f.im + (k + 3 * m_) * f.stride;
-      for (std::size_t b = 0; b < lanes; ++b) {
-        const float s0r = f1r[b] * w1r - f1i[b] * w1i, s0i = f1r[b] * w1i + f1i[b] * w1r;
-        const float s1r = f2r[b] * w2r - f2i[b] * w2i, s1i = f2r[b] * w2i + f2i[b] * w2r;
-        const float s2r = f3r[b] * w3r - f3i[b] * w3i, s2i = f3r[b] * w3i + f3i[b] * w3r;
-        const float s5r = f0r[b] - s1r, s5i = f0i[b] - s1i;
-        float x0r = f0r[b] + s1r, x0i = f0i[b] + s1i;
-        const float s3r = s0r + s2r, s3i = s0i + s2i;
-        const float d4r = s0r - s2r, d4i = s0i - s2i;
-        const float s4r = d4i * neg, s4i = -d4r * neg;
-        f2r[b] = x0r - s3r;
-        f2i[b] = x0i - s3i;
-        x0r = x0r + s3r;
-        x0i = x0i + s3i;
-        f0r[b] = x0r;
-        f0i[b] = x0i;
-        f1r[b] = s5r + s4r;
-        f1i[b] = s5i + s4i;
-        f3r[b] = s5r - s4r;
-        f3i[b] = s5i - s4i;
-      }
-    }
-  }
-
-  void bfly3(Lanes f, std::size_t fstride, int m, std::size_t lanes) const {
-    const std::size_t m_ = static_cast<std::size_t>(m);
-    const float e = tw_im_[fstride * m_];  // epi3.imag()
-    for (std::size_t k = 0; k < m_; ++k) {
-      const float w1r = tw_re_[k * fstride], w1i = tw_im_[k * fstride];
-      const float w2r = tw_re_[k * fstride * 2], w2i = tw_im_[k * fstride * 2];
-      float* f0r = f.re + k * f.stride;
-      float* f0i = f.im + k * f.stride;
-      float* f1r = f.re + (k + m_) * f.stride;
-      float* f1i = f.im + (k + m_) * f.stride;
-      float* f2r = f.re + (k + 2 * m_) * f.stride;
-      float* f2i = f.im + (k + 2 * m_) * f.stride;
-      for (std::size_t b = 0; b < lanes; ++b) {
-        const float s1r = f1r[b] * w1r - f1i[b] * w1i, s1i = f1r[b] * w1i + f1i[b] * w1r;
-        const float s2r = f2r[b] * w2r - f2i[b] * w2i, s2i = f2r[b] * w2i + f2i[b] * w2r;
-        const float s3r = s1r + s2r, s3i = s1i + s2i;
-        float s0r = s1r - s2r, s0i = s1i - s2i;
-        const float m1r = f0r[b] - 0.5f * s3r, m1i = f0i[b] - 0.5f * s3i;
-        s0r = s0r * e;
-        s0i = s0i * e;
-        f0r[b] = f0r[b] + s3r;
-        f0i[b] = f0i[b] + s3i;
-        f2r[b] = m1r + s0i;
-        f2i[b] = m1i - s0r;
-        f1r[b] = m1r + -s0i;
-        f1i[b] = m1i + s0r;
-      }
-    }
-  }
-
-  void bfly5(Lanes f, std::size_t fstride, int m, std::size_t lanes) const {
-    const std::size_t m_ = static_cast<std::size_t>(m);
-    const float yar = tw_re_[fstride * m_], yai = tw_im_[fstride * m_];
-    const float ybr = tw_re_[fstride * 2 * m_], ybi = tw_im_[fstride * 2 * m_];
-    for (std::size_t u = 0; u < m_; ++u) {
-      const float w1r = tw_re_[u * fstride], w1i = tw_im_[u * fstride];
-      const float w2r = tw_re_[2 * u * fstride], w2i = tw_im_[2 * u * fstride];
-      const float w3r = tw_re_[3 * u * fstride], w3i = tw_im_[3 * u * fstride];
-      const float w4r = tw_re_[4 * u * fstride], w4i = tw_im_[4 * u * fstride];
-      float* f0r = f.re + u * f.stride;
-      float* f0i = f.im + u * f.stride;
-      float* f1r = f.re + (u + m_) * f.stride;
-      float* f1i = f.im + (u + m_) * f.stride;
-      float* f2r = f.re + (u + 2 * m_) * f.stride;
-      float* f2i = f.im + (u + 2 * m_) * f.stride;
-      float* f3r = f.re + (u + 3 * m_) * f.stride;
-      float* f3i = f.im + (u + 3 * m_) * f.stride;
-      float* f4r = f.re + (u + 4 * m_) * f.stride;
-      float* f4i = f.im + (u + 4 * m_) * f.stride;
-      for (std::size_t b = 0; b < lanes; ++b) {
-        const float s0r = f0r[b], s0i = f0i[b];
-        const float s1r = f1r[b] * w1r - f1i[b] * w1i, s1i = f1r[b] * w1i + f1i[b] * w1r;
-        const float s2r = f2r[b] * w2r - f2i[b] * w2i, s2i = f2r[b] * w2i + f2i[b] * w2r;
-        const float s3r = f3r[b] * w3r - f3i[b] * w3i, s3i = f3r[b] * w3i + f3i[b] * w3r;
-        const float s4r = f4r[b] * w4r - f4i[b] * w4i, s4i = f4r[b] * w4i + f4i[b] * w4r;
-        const float s7r = s1r + s4r, s7i = s1i + s4i;
-        const float s10r = s1r - s4r, s10i = s1i - s4i;
-        const float s8r = s2r + s3r, s8i = s2i + s3i;
-        const float s9r = s2r - s3r, s9i = s2i - s3i;
-        float x0r = s0r + s7r, x0i = s0i + s7i;
-        x0r = x0r + s8r;
-        x0i = x0i + s8i;
-        f0r[b] = x0r;
-        f0i[b] = x0i;
-        const float s5r = s0r + ((s7r * yar) + (s8r * ybr));
-        const float s5i = s0i + ((s7i * yar) + (s8i * ybr));
-        const float s6r = (s10i * yai) + (s9i * ybi);
-        const float s6i = -(s10r * yai) - (s9r * ybi);
-        f1r[b] = s5r - s6r;
-        f1i[b] = s5i - s6i;
-        f4r[b] = s5r + s6r;
-        f4i[b] = s5i + s6i;
-        const float s11r = s0r + ((s7r * ybr) + (s8r * yar));
-        const float s11i = s0i + ((s7i * ybr) + (s8i * yar));
-        const float s12r = -(s10i * ybi) + (s9i * yai);
-        const float s12i = (s10r * ybi) - (s9r * yai);
-        f2r[b] = s11r + s12r;
-        f2i[b] = s11i + s12i;
-        f3r[b] = s11r - s12r;
-        f3i[b] = s11i - s12i;
-      }
-    }
-  }
-
-  void bfly_generic(Lanes f, std::size_t fstride, int m, int p, std::size_t lanes,
-                    float* scratch) const {
-    const int norig = static_cast<int>(tw_re_.size());
-    float* sr = scratch;
-    float* si = scratch + static_cast<std::size_t>(p) * lanes;
-    for (int u = 0; u < m; ++u) {
-      int k = u;
-      for (int q1 = 0; q1 < p; ++q1) {
-        std::memcpy(sr + q1 * lanes, f.re + k * f.stride, lanes * sizeof(float));
-        std::memcpy(si + q1 * lanes, f.im + k * f.stride, lanes * sizeof(float));
-        k += m;
-      }
-      k = u;
-      for (int q1 = 0; q1 < p; ++q1) {
-        int twidx = 0;
-        float* fr = f.re + k * f.stride;
-        float* fi = f.im + k * f.stride;
-        std::memcpy(fr, sr, lanes * sizeof(float));
-        std::memcpy(fi, si, lanes * sizeof(float));
-        for (int q = 1; q < p; ++q) {
-          twidx += static_cast<int>(fstride) * k;
-          if (twidx >= norig) twidx -= norig;
-          const float wr = tw_re_[twidx], wi = tw_im_[twidx];
-          const float* xr = sr + q * lanes;
-          const float* xi = si + q * lanes;
-          for (std::size_t b = 0; b < lanes; ++b) {
-            const float tr = xr[b] * wr - xi[b] * wi;
-            const float ti = xr[b] * wi + xi[b] * wr;
-            fr[b] = fr[b] + tr;
-            fi[b] = fi[b] + ti;
-          }
-        }
-        k += m;
-      }
-    }
-  }
-
-  int n_;
-  bool inverse_ = false;
-  int max_radix_ = 0;
-  std::vector<float> tw_re_, tw_im_;
-  std::vector<int> radix_, remainder_;
+  FftPlan plan_;
 };
 
 // Eigen::FFT<float>'s forward transform of real inputs with the HalfSpectrum flag

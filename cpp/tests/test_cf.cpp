@@ -416,7 +416,10 @@ int main() {
   test_fhog_paths();
   test_translation_filter();
   test_scale_filter();
-  test_batch_fft();
+  test_batch_fft();  // the AVX2 copy where the CPU has it
+  vmath::force_portable(true);
+  test_batch_fft();  // the baseline copy
+  vmath::force_portable(false);
   if (wmiltrack_test::failures) {
     std::fprintf(stderr, "%d check(s) failed\n", wmiltrack_test::failures);
     return 1;
