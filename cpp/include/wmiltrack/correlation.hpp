@@ -1,7 +1,9 @@
 // Discriminative correlation filters (DCF) trained and applied in the Fourier domain:
 // a multi-channel translation filter (Staple / DSST style: one filter per feature channel
 // sharing the denominator, a Gaussian label, a cosine window) and a 1-D scale filter over a
-// pyramid of scale samples (DSST). FFTs are Eigen's (unsupported/Eigen/FFT, kissfft).
+// pyramid of scale samples (DSST). FFTs are Eigen's kissfft (unsupported/Eigen/FFT); the
+// translation filter's 2-D ones run it batched (cpp/src/batch_fft.hpp: every row, then every
+// column, of every plane at once, with kissfft's own arithmetic, so the same bits).
 //
 // Both filters keep the numerator A = conj(Y) X_k and the denominator B = sum_k |X_k|^2
 // (divided by the number of samples) as running averages A <- (1 - rate) A + rate A_new,
