@@ -3,6 +3,8 @@
 
 #include "wmiltrack/vmath.hpp"
 
+#include "batch_fft.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -17,67 +19,6 @@ namespace {
 
 using Complex = std::complex<float>;
 constexpr double kPi = 3.14159265358979323846;
-
-// 2-D transforms of rows x cols row-major real arrays with Eigen's 1-D FFT, rows then columns.
-// Spectra of real arrays are Hermitian (X[r][c] = conj(X[-r][-c])), so only their columns
-// 0 .. cols / 2 are kept ("half spectra", rows x (cols / 2 + 1)): the filters' products and
-// sums run over those, and the inverse rebuilds the rest. Plans are cached in the Eigen
-// objects, so one Fft2 serves every plane of a call; each call makes its own (the filters
-// stay const and need no lock to respond).
-class Fft2 {
- public:
-  Fft2(int rows, int cols)
-      : rows_(rows), cols_(cols), half_(cols / 2 + 1), col_in_(static_cast<std::size_t>(rows)),
-        col_out_(static_cast<std::size_t>(rows)), row_buf_(static_cast<std::size_t>(cols)),
-        full_(static_cast<std::size_t>(rows) * cols) {
-    half_fft_.SetFlag(Eigen::FFT<float>::HalfSpectrum);
-  }
-
-  int half() const { return half_; }
-
-  // Columns 0 .. cols / 2 of numpy's fft2 of a real plane (rows x half()).
-  void forward_half(const float* in, Complex* out) {
-    for (int r = 0; r < rows_; ++r) {
-      half_fft_.fwd(out + static_cast<std::size_t>(r) * half_,
-                    in + static_cast<std::size_t>(r) * cols_, cols_);
-    }
-    columns(out, half_, false);
-  }
-
-  // numpy's real(ifft2(X)) of the Hermitian spectrum X whose half spectrum is `in`.
-  void inverse_half_real(const Complex* in, float* out) {
-    for (int r = 0; r < rows_; ++r) {
-      Complex* row = &full_[static_cast<std::size_t>(r) * cols_];
-      const Complex* mirror = in + static_cast<std::size_t>((rows_ - r) % rows_) * half_;
-      std::copy(in + static_cast<std::size_t>(r) * half_,
-                in + static_cast<std::size_t>(r) * half_ + half_, row);
-      for (int c = half_; c < cols_; ++c) row[c] = std::conj(mirror[cols_ - c]);
-    }
-    columns(full_.data(), cols_, true);
-    for (int r = 0; r < rows_; ++r) {
-      fft_.inv(row_buf_.data(), &full_[static_cast<std::size_t>(r) * cols_], cols_);
-      for (int c = 0; c < cols_; ++c) out[static_cast<std::size_t>(r) * cols_ + c] = row_buf_[c].real();
-    }
-  }
-
- private:
-  // 1-D transforms down each of the first `width` columns of a rows x width array.
-  void columns(Complex* data, int width, bool inverse) {
-    for (int c = 0; c < width; ++c) {
-      for (int r = 0; r < rows_; ++r) col_in_[r] = data[static_cast<std::size_t>(r) * width + c];
-      if (inverse) {
-        fft_.inv(col_out_.data(), col_in_.data(), rows_);
-      } else {
-        fft_.fwd(col_out_.data(), col_in_.data(), rows_);
-      }
-      for (int r = 0; r < rows_; ++r) data[static_cast<std::size_t>(r) * width + c] = col_out_[r];
-    }
-  }
-
-  int rows_, cols_, half_;
-  Eigen::FFT<float> fft_, half_fft_;
-  std::vector<Complex> col_in_, col_out_, row_buf_, full_;
-};
 
 // out (rows x n, row-major) = m (rows x inner, row-major) times x (inner x n, row-major), each
 // row vmath::weighted_rows_f32 of x (its sums in the order j = 0, 1, ...; the same bits on
@@ -168,9 +109,9 @@ TranslationFilter::TranslationFilter(int rows, int cols, int channels, double si
       label_[at] = static_cast<float>(std::exp(-0.5 * (dr * dr + dc * dc) / (sigma * sigma)));
     }
   }
-  Fft2 fft(rows, cols);
-  label_f_.resize(static_cast<std::size_t>(rows) * fft.half());
-  fft.forward_half(label_.data(), label_f_.data());
+  fft_ = std::make_shared<const detail::Fft2>(rows, cols);
+  label_f_.resize(static_cast<std::size_t>(rows) * fft_->half());
+  fft_->forward_half(label_.data(), 1, label_f_.data());
   for (auto& v : label_f_) v = std::conj(v);
 }
 
@@ -238,14 +179,13 @@ Spectrum TranslationFilter::transform(const FeatureMap& x) const {
       for (std::size_t i = 0; i < plane; ++i) dst[i] = src[i] * window_[i];
     }
   }
-  Fft2 fft(rows_, cols_);
-  const std::size_t half = static_cast<std::size_t>(rows_) * fft.half();
+  const std::size_t half = static_cast<std::size_t>(rows_) * fft_->half();
   Spectrum out;
   out.channels = kept_;
   out.rows = rows_;
   out.cols = cols_;
   out.data.resize(half * static_cast<std::size_t>(kept_));
-  for (int k = 0; k < kept_; ++k) fft.forward_half(&windowed[k * plane], &out.data[k * half]);
+  fft_->forward_half(windowed.data(), kept_, out.data.data());
   return out;
 }
 
@@ -327,8 +267,7 @@ TranslationResponse TranslationFilter::respond(const Spectrum& zf_in, int exclus
   out.rows = rows_;
   out.cols = cols_;
   out.values.resize(plane);
-  Fft2 fft(rows_, cols_);
-  fft.inverse_half_real(acc.data(), out.values.data());
+  fft_->inverse_half_real(acc.data(), out.values.data());
 
   const auto& v = out.values;
   const std::size_t best =

@@ -1,7 +1,9 @@
 // Discriminative correlation filters (DCF) trained and applied in the Fourier domain:
 // a multi-channel translation filter (Staple / DSST style: one filter per feature channel
 // sharing the denominator, a Gaussian label, a cosine window) and a 1-D scale filter over a
-// pyramid of scale samples (DSST). FFTs are Eigen's (unsupported/Eigen/FFT, kissfft).
+// pyramid of scale samples (DSST). FFTs are Eigen's kissfft (unsupported/Eigen/FFT); the
+// translation filter's 2-D ones run it batched (cpp/src/batch_fft.hpp: every row, then every
+// column, of every plane at once, with kissfft's own arithmetic, so the same bits).
 //
 // Both filters keep the numerator A = conj(Y) X_k and the denominator B = sum_k |X_k|^2
 // (divided by the number of samples) as running averages A <- (1 - rate) A + rate A_new,
@@ -10,11 +12,16 @@
 #pragma once
 
 #include <complex>
+#include <memory>
 #include <vector>
 
 #include "wmiltrack/fhog.hpp"
 
 namespace wmiltrack::cf {
+
+namespace detail {
+class Fft2;  // batched 2-D transforms (cpp/src/batch_fft.hpp)
+}  // namespace detail
 
 // A sample as a translation filter takes it: its features (projected onto the filter's
 // compressed channels, if it has any) times the cosine window, as half spectra (channels x
@@ -101,6 +108,9 @@ class TranslationFilter {
   std::vector<float> projection_;             // kept_ x channels_, row-major
   std::vector<float> window_;
   std::vector<float> label_;
+  // The plans of the 2-D transforms of this grid, built once (immutable: shared by copies and
+  // safe to use from several threads at once).
+  std::shared_ptr<const detail::Fft2> fft_;
   // Half spectra (columns 0 .. cols / 2; the rest is their Hermitian mirror).
   std::vector<std::complex<float>> label_f_;  // conj(fft2(label)), rows x (cols / 2 + 1)
   std::vector<std::complex<float>> num_;      // kept x rows x (cols / 2 + 1)
