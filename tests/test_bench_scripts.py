@@ -303,3 +303,27 @@ def test_lost_study_asks_nanotrack_only_with_its_model_files(tmp_path: Path) -> 
     assert rows and all(np.isfinite(row["nano_at_target"]) for row in rows)
     assert all(len(row["nano_random"]) <= 3 for row in rows)
     assert "nano_target_above_random_q95" in json.loads(out.read_text())["summary"]
+
+
+def test_interleaved_times_two_interpreters_in_turns(tmp_path: Path) -> None:
+    """benchmarks/interleaved.py: the same interpreter twice gives a line with both speeds and
+    their ratio (no figure is asserted: speed is not tested); a worker that cannot start is an
+    error naming its interpreter."""
+    write_generated_otb(tmp_path, "Seq", seed=1, n=6)
+    args = [str(BENCH / "interleaved.py"), sys.executable, sys.executable, "--otb",
+            str(tmp_path), "--sequences", "Seq", "--frames", "5", "--chunk", "3",
+            "--seconds", "1", "--tracker", "rcwmil"]
+    r = _run(args)
+    assert r.returncode == 0, r.stderr
+    assert re.search(r"rcwmil on Seq \(5 frames each\), \d+ turns of 3 updates each: old \d+ "
+                     r"updates/s, new \d+ updates/s; new / old time: [\d.]+ in all", r.stdout)
+    gen = _run([str(BENCH / "interleaved.py"), sys.executable, sys.executable, "--generated",
+                "128x96/24", "--frames", "5", "--chunk", "3", "--seconds", "1", "--tracker",
+                "rcwmil"])
+    assert gen.returncode == 0, gen.stderr
+    assert "rcwmil on 128x96/24 (5 frames each)" in gen.stdout
+    wrong = _run([str(BENCH / "interleaved.py"), sys.executable, sys.executable, "--generated",
+                  "128x96"])
+    assert wrong.returncode != 0 and "WxH/BOX" in wrong.stderr
+    bad = _run([*args[:2], str(tmp_path / "no-python"), *args[3:]])
+    assert bad.returncode != 0 and "cannot run" in bad.stderr and "no-python" in bad.stderr
