@@ -80,8 +80,8 @@ class NanoScore:
         self.backbone = cv2.dnn.readNet(backbone)
         self.head = cv2.dnn.readNet(head)
         x, y, w, h = (float(v) for v in box)
-        self.side = self._side(w, h)
-        self.backbone.setInput(self._blob(frame, x + w / 2, y + h / 2, self.side, self.EXEMPLAR))
+        self.backbone.setInput(self._blob(frame, x + w / 2, y + h / 2, self._side(w, h),
+                                          self.EXEMPLAR))
         self.head.setInput(self.backbone.forward(), "input1")
 
     def _side(self, w: float, h: float) -> float:
@@ -106,8 +106,7 @@ class NanoScore:
     def at(self, frame: np.ndarray, cx: float, cy: float, w: float, h: float) -> float:
         """The largest target log-odds over the search window centred at ``(cx, cy)`` for a
         target of ``w x h``."""
-        side = self._side(w, h) * self.INSTANCE / self.EXEMPLAR
-        self.backbone.setInput(self._blob(frame, cx, cy, side, self.INSTANCE))
+        self.backbone.setInput(self._blob(frame, cx, cy, self.window(w, h), self.INSTANCE))
         self.head.setInput(self.backbone.forward(), "input2")
         logits = self.head.forward("output1").reshape(2, -1).astype(np.float64)
         return float((logits[1] - logits[0]).max())  # the log-odds of the two classes' softmax
