@@ -12,11 +12,18 @@ Usage::
 
 The default runs rcwmil, rcwmil-plus and rcwmil-plus with the lost state and re-detection
 (``redetect=True``).
+
+``--export DIR`` writes the three sequences instead, as OTB-layout folders (``hidden_s0`` ...,
+``img/0001.jpg`` and ``groundtruth_rect.txt`` with ``NaN`` on the frames where the target is
+hidden or out of view), for ``wmiltrack eval DIR --protocol longterm``; an existing folder of
+that name is an error, never overwritten.
 """
 
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -37,17 +44,46 @@ def back_after(boxes: np.ndarray, gt: np.ndarray, start: int, limit: int = 30) -
     return int(hits[0]) if hits.size else None
 
 
+def generated(seed: int) -> Any:
+    """The generated sequence of ``seed``: a full occlusion and a spell out of view."""
+    return make_sequence(170, seed=seed, occlusion=False, full_occlusion=OCCLUDED, out_of_view=OUT)
+
+
+def export(root: Path, seeds: list[int]) -> None:
+    """The sequences of ``seeds`` as OTB-layout folders under ``root`` (absent: NaN)."""
+    import cv2
+
+    for seed in seeds:
+        seq = generated(seed)
+        folder = root / f"hidden_s{seed}"
+        if folder.exists():
+            raise SystemExit(f"{folder} exists: choose another --export folder")
+        (folder / "img").mkdir(parents=True)
+        for i, frame in enumerate(seq.load()):
+            cv2.imwrite(str(folder / "img" / f"{i + 1:04d}.jpg"), frame,
+                        [cv2.IMWRITE_JPEG_QUALITY, 95])
+        gt = np.asarray(seq.groundtruth, dtype=np.float64)
+        gt[~seq.meta["visible"]] = np.nan
+        (folder / "groundtruth_rect.txt").write_text(
+            "\n".join(",".join(f"{v:.3f}" for v in row) for row in gt) + "\n")
+        print(f"wrote {folder}")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--trackers", default="rcwmil,rcwmil-plus,rcwmil-plus:redetect=True")
     ap.add_argument("--seeds", default="0,1,2")
+    ap.add_argument("--export", type=Path, default=None,
+                    help="write the sequences as OTB-layout folders here instead of tracking")
     args = ap.parse_args(argv)
+    if args.export is not None:
+        export(args.export, [int(s) for s in args.seeds.split(",")])
+        return 0
     print(f"{'tracker':<40} {'seed':>4} {'lost while hidden':>17} {'back after occl.':>16} "
           f"{'back after out':>14}")
     for spec in split_specs(args.trackers):
         for seed in (int(s) for s in args.seeds.split(",")):
-            seq = make_sequence(170, seed=seed, occlusion=False, full_occlusion=OCCLUDED,
-                                out_of_view=OUT)
+            seq = generated(seed)
             frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
             tracker = make_tracker(spec, seed=seed)
             tracker.init(frames[0], tuple(gt[0]))
