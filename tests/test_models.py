@@ -16,7 +16,6 @@ import pickle
 import threading
 from collections.abc import Iterator
 from pathlib import Path
-from types import MappingProxyType
 
 import numpy as np
 import pytest
@@ -78,7 +77,7 @@ def fake(monkeypatch: pytest.MonkeyPatch) -> dict[str, dict[str, bytes]]:
         for i, (role, f) in enumerate(s.files.items()):
             data[role] = rng.bytes(3000 + 500 * k + 100 * i)
             files[role] = ModelFile(role, f.path, hashlib.sha1(data[role]).hexdigest(), len(data[role]))
-        monkeypatch.setitem(MODELS, name, dataclasses.replace(s, files=MappingProxyType(files)))
+        monkeypatch.setitem(MODELS, name, dataclasses.replace(s, files=files))
         contents[name] = data
     return contents
 
@@ -174,6 +173,7 @@ def test_the_sets_pin_the_repository_commit_and_paths() -> None:
             urls.append(s.url(role, "http://mirror.example/x/"))
     assert urls == [f"http://mirror.example/x{p}" for p in REPO_FILES]
     assert MODELS["nanotrack-v3"].url("head", None).startswith("http://127.0.0.1:9/")  # $WMILTRACK_MODELS_URL
+    assert pickle.loads(pickle.dumps(MODELS)) == MODELS  # a tracker holding a set can be copied
 
 
 def test_the_default_url_is_githubs_raw_files(monkeypatch: pytest.MonkeyPatch) -> None:

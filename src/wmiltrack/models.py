@@ -29,7 +29,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from http.client import HTTPException
 from pathlib import Path, PurePosixPath
-from types import MappingProxyType
 from typing import BinaryIO
 
 from .progress import progress
@@ -137,9 +136,8 @@ class ModelSet:
 
 _SIAMTRACKERS = "HonglinChu/SiamTrackers"
 _SIAMTRACKERS_COMMIT = "248663fde6bf7c40190cf10ee396d5662919ecd3"
-_NANO_ENV = MappingProxyType({"backbone": MODEL_ENV["Nano"]["backbone"],
-                              "head": MODEL_ENV["Nano"]["neckhead"]})
-_NANO_OPTIONS = MappingProxyType({"backbone": "--nano-backbone", "head": "--nano-head"})
+_NANO_ENV = {"backbone": MODEL_ENV["Nano"]["backbone"], "head": MODEL_ENV["Nano"]["neckhead"]}
+_NANO_OPTIONS = {"backbone": "--nano-backbone", "head": "--nano-head"}
 
 
 def _nanotrack(version: str, backbone: tuple[str, str, int], head: tuple[str, str, int]) -> ModelSet:
@@ -149,7 +147,7 @@ def _nanotrack(version: str, backbone: tuple[str, str, int], head: tuple[str, st
              for role, (name, sha1, size) in (("backbone", backbone), ("head", head))}
     return ModelSet(name=f"nanotrack-{version}", title=f"NanoTrack {version}", version=version,
                     repository=_SIAMTRACKERS, commit=_SIAMTRACKERS_COMMIT, license="Apache-2.0",
-                    files=MappingProxyType(files), env=_NANO_ENV, options=_NANO_OPTIONS)
+                    files=files, env=dict(_NANO_ENV), options=dict(_NANO_OPTIONS))
 
 
 MODELS: dict[str, ModelSet] = {
@@ -240,7 +238,7 @@ def _check_given(s: ModelSet, role: str, path: Path, label: str) -> str | None:
     if not path.is_file():
         return f"{label}{path} is not a file"
     known = _known_file(path)
-    if known is not None and known[1] is not s.files[role]:
+    if known is not None and known[1] != s.files[role]:
         other_set, other = known
         return f"{label}{path} is {other_set.title}'s {other.role}, not {s.title}'s {role}"
     return None
