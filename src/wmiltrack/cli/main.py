@@ -64,6 +64,7 @@ SUBCOMMANDS: list[tuple[str, str]] = [
     (".variants", "add_variants"),
     (".eval", "add_eval"),
     (".inspect", "add_inspect"),
+    (".models", "add_models"),
 ]
 
 
