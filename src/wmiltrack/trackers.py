@@ -99,6 +99,10 @@ MODEL_FILES: dict[tuple[str, str], str] = {
 help."""
 
 _PREFIX = "opencv:"
+#: ``nanotrack:v2`` / ``nanotrack:v3``: NanoTrack alone by its published tracking step
+#: (:class:`~wmiltrack.engine.siamese.NanoTracker`; keyword overrides ``backbone``, ``head``,
+#: ``runtime``, ``threads``); deterministic, so ``seed`` is not used.
+NANOTRACK_PREFIX = "nanotrack:"
 
 BoxLike = Sequence[float] | npt.NDArray[Any]
 
@@ -513,6 +517,10 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     kw = {**overrides, **params}
     if s.lower().startswith(_PREFIX):
         return OpenCVTracker(s[len(_PREFIX) :], seed=seed, **kw)
+    if s.lower().startswith(NANOTRACK_PREFIX):
+        from .engine.siamese import NanoTracker
+
+        return NanoTracker(s[len(NANOTRACK_PREFIX):].lower() or "v3", **kw)
     from .engine.params import variants
 
     presets = list(variants())
