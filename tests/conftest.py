@@ -94,3 +94,56 @@ def otb_root() -> Path:
             pytest.fail(msg)
         pytest.skip(msg)
     return root.resolve()
+
+
+MODELS_ENV = "WMILTRACK_TEST_MODELS"
+#: NanoTrack's two files per version, as laid out in ``shared/models/nanotrack``.
+NANOTRACK_FILES = {"v2": ("v2/nanotrack_backbone_sim.onnx", "v2/nanotrack_head_sim.onnx"),
+                   "v3": ("v3/nanotrack_backbone.onnx", "v3/nanotrack_head.onnx")}
+
+
+def _shared_models() -> Path:
+    env = os.environ.get(MODELS_ENV, "").strip()
+    return Path(env).expanduser() if env else REPO_ROOT.parent / "shared" / "models" / "nanotrack"
+
+
+@pytest.fixture(scope="session")
+def nanotrack_models() -> dict[str, tuple[Path, Path]]:
+    """NanoTrack's model files by version (never part of the project): ``$WMILTRACK_TEST_MODELS``
+    if set, else ``<repo root>/../shared/models/nanotrack``. Missing: a failure under CI
+    (env ``CI`` set), a skip elsewhere."""
+    root = _shared_models()
+    files = {v: (root / b, root / h) for v, (b, h) in NANOTRACK_FILES.items()}
+    missing = [str(p) for pair in files.values() for p in pair if not p.is_file()]
+    if missing:
+        msg = f"NanoTrack's model files not found ({', '.join(missing)}); set {MODELS_ENV}"
+        if os.environ.get("CI"):
+            pytest.fail(msg)
+        pytest.skip(msg)
+    return files
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _models_folder(tmp_path_factory: pytest.TempPathFactory) -> object:
+    """A models folder (``WMILTRACK_MODELS``) laid out as ``wmiltrack models fetch`` leaves it,
+    its files linked to NanoTrack's shared copies when they are there, so that every preset,
+    rcwmil-nano included, can start in tests that go over all presets. A test of the lookup
+    sets its own folder."""
+    root = _shared_models()
+    folder = tmp_path_factory.mktemp("models")
+    for version, names in NANOTRACK_FILES.items():
+        (folder / f"nanotrack-{version}").mkdir()
+        for name in names:
+            if (root / name).is_file():
+                (folder / f"nanotrack-{version}" / Path(name).name).symlink_to((root / name).resolve())
+    before = {k: os.environ.get(k) for k in ("WMILTRACK_MODELS", "WMILTRACK_NANO_BACKBONE",
+                                              "WMILTRACK_NANO_HEAD")}
+    os.environ["WMILTRACK_MODELS"] = str(folder)
+    for k in ("WMILTRACK_NANO_BACKBONE", "WMILTRACK_NANO_HEAD"):
+        os.environ.pop(k, None)
+    yield folder
+    for k, v in before.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v

@@ -135,10 +135,12 @@ def track_checked(tracker: wmiltrack.Tracker, frames: Sequence[Frame], box: Any)
         if not (math.isfinite(r.score) and 0.0 <= r.score <= 1.0):
             return boxes, f"frame {i}: score {r.score} not in [0, 1]"
         # ok is the score against the threshold (or, with a judge, its verdict), except in
-        # the lost state (score 0, ok False)
+        # the lost state (score 0, ok False); with two experts, their judge's verdict alone
         lost = tracker.parts.lost
         judge = tracker.parts.judge
         tracked = r.score >= tracker.params.lost_threshold if judge is None else not judge.lost
+        if tracker.parts.experts is not None:
+            lost, tracked = False, not tracker.parts.experts.judge.lost
         if r.ok != (tracked and not lost) or (lost and r.score):
             return boxes, f"frame {i}: ok={r.ok} disagrees with score {r.score} (lost: {lost})"
     return boxes, None

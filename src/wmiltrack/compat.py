@@ -12,9 +12,11 @@ from .integrations.opencv import (
     TrackerOSIL,
     TrackerRCWMIL,
     TrackerRCWMILCF,
+    TrackerRCWMILNano,
     TrackerRCWMILPlus,
     TrackerWMIL,
 )
 
 __all__ = ["COMPAT_CLASSES", "TrackerCT", "TrackerCompat", "TrackerFCT", "TrackerMILBoost",
-           "TrackerOSIL", "TrackerRCWMIL", "TrackerRCWMILCF", "TrackerRCWMILPlus", "TrackerWMIL"]
+           "TrackerOSIL", "TrackerRCWMIL", "TrackerRCWMILCF", "TrackerRCWMILNano", "TrackerRCWMILPlus",
+           "TrackerWMIL"]

@@ -24,6 +24,7 @@ from .settings import (
     BagSettings,
     ClassifierSettings,
     ColourSettings,
+    ExpertSettings,
     FeatureSettings,
     JudgeSettings,
     MotionSettings,
@@ -40,7 +41,7 @@ __all__ = ["CONFIDENCE_OFFSET", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_
 #: The part settings a :class:`Params` is made of, in the order their fields are listed.
 PARTS: tuple[type[Any], ...] = (FeatureSettings, BagSettings, ClassifierSettings, SearchSettings,
                            ScaleSettings, MotionSettings, ColourSettings, ScoreSettings,
-                           TemplateSettings, RecoverySettings, JudgeSettings)
+                           TemplateSettings, RecoverySettings, JudgeSettings, ExpertSettings)
 
 
 @dataclass(frozen=True)
@@ -49,7 +50,7 @@ class _Named:
 
 
 @dataclass(frozen=True)
-class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings,
+class Params(ExpertSettings, JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, ColourSettings,
              MotionSettings, ScaleSettings, AppearanceSettings, _Named):
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
 
@@ -64,7 +65,8 @@ class Params(JudgeSettings, RecoverySettings, TemplateSettings, ScoreSettings, C
     :class:`~wmiltrack.engine.settings.ScoreSettings` (the reported score and lost state),
     :class:`~wmiltrack.engine.settings.TemplateSettings` (the correlation-filter template),
     :class:`~wmiltrack.engine.settings.RecoverySettings` (the lost state and re-detection) and
-    :class:`~wmiltrack.engine.settings.JudgeSettings` (the judge of ``ok``).
+    :class:`~wmiltrack.engine.settings.JudgeSettings` (the judge of ``ok``) and
+    :class:`~wmiltrack.engine.settings.ExpertSettings` (a Siamese network as a second expert).
     The defaults of the last seven leave their part out, so the paper presets run the paper's
     code path.
 
@@ -220,6 +222,21 @@ VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
     "/ 0.082)), lost after 3 frames below 0.4, found after 2 above 0.9; while the judge holds "
     "the target for lost nothing learns, and when it turns to lost the tracker enters the lost "
     "state and looks for the target over the whole frame.",
+)
+
+VARIANTS["rcwmil-nano"] = VARIANTS["rcwmil-cf"].replace(
+    variant="rcwmil-nano", network="nanotrack-v3",
+    description="rcwmil-cf and NanoTrack v3's Siamese network (two ONNX files, run by "
+    "onnxruntime or OpenCV's dnn; not shipped: `wmiltrack models fetch nanotrack-v3`) as two "
+    "experts under one judge. The network leads; where the two boxes agree (IoU >= 0.3) the box "
+    "is 0.8 the network's and 0.2 the tracker's, where they do not the tracker is moved to the "
+    "network's box keeping what it learnt. ok is judged from how alike the network's choice "
+    "is to the first frame's target (the cosine of the backbone's feature maps): lost after 3 "
+    "frames in a row below 0.45 or below 0.8 of the tracked frames' running mean on which the "
+    "experts do not agree, found after 2 above both 0.6 and that floor; while lost, the network "
+    "also searches "
+    "the tracker's box and 4 windows a frame of a sweep over the whole frame, and takes the "
+    "likeliest.",
 )
 
 

@@ -880,3 +880,94 @@ class FilterLearning:
 
 #: The filters' learning rule of the default settings: every frame, whatever its score.
 NO_GATE = FilterLearning()
+
+
+NETWORKS: tuple[str, ...] = ("", "nanotrack-v2", "nanotrack-v3")
+"""The Siamese networks :class:`ExpertSettings` can add ("" for none)."""
+
+
+@dataclass(frozen=True)
+class ExpertSettings:
+    """A Siamese network as a second expert beside the tracker, and the judge between the two
+    (:class:`wmiltrack.engine.experts.TwoExperts`; rcwmil-nano).
+
+    The network (NanoTrack, :mod:`wmiltrack.engine.siamese`) leads: it is the more accurate
+    locator on the development set, and its first-frame template is a memory of the target
+    that never learns. Each frame the judge compares the two experts' boxes and asks the
+    network's backbone how alike the network's box is to the first frame's target (the cosine
+    of their feature maps, the *likeness*). Where the boxes agree (IoU >= ``expert_agree``) the
+    box is their mix, the filter's share ``expert_blend``; where they do not, the network's box
+    is taken and the filter is moved there (keeping what it learnt). ``ok`` comes from the
+    likeness with hysteresis: lost after ``lost_frames`` frames in a row below ``like_low``,
+    found again after ``found_frames`` frames in a row above ``like_high``. While lost, the
+    network searches ``redetect_windows`` more windows a frame over the whole frame (nearest
+    first, then sweeping) besides its own, and the judge takes the likeliest.
+
+    Attributes
+    ----------
+    network : str
+        ``"nanotrack-v3"`` or ``"nanotrack-v2"``; ``""`` leaves the network out.
+    backbone, head : str
+        The model files' paths; ``""`` finds them (:func:`wmiltrack.models.nanotrack_files`:
+        ``WMILTRACK_NANO_BACKBONE`` / ``WMILTRACK_NANO_HEAD``, then the models folder).
+    network_runtime : str
+        ``"auto"`` (onnxruntime when installed, else OpenCV's dnn), ``"onnxruntime"`` or
+        ``"opencv"``.
+    network_threads : int
+        Threads of the network's runtime.
+    expert_agree : float
+        The two boxes' IoU at which the experts agree.
+    expert_blend : float
+        The filter's share of the box where they agree, in [0, 1].
+    like_low, like_high : float
+        The likeness below which a frame counts against the target and above which it counts
+        for it.
+    like_drop : float
+        The share of the running mean below which a frame counts against the target (0: never).
+    like_rate : float
+        The running mean's learning rate, in (0, 1].
+    lost_frames, found_frames : int
+        Frames in a row that start and end the lost state.
+    redetect_windows : int
+        Whole-frame search windows a lost frame tries besides the network's own (0: none).
+    """
+
+    network: str = ""
+    backbone: str = ""
+    head: str = ""
+    network_runtime: str = "auto"
+    network_threads: int = 1
+    expert_agree: float = 0.3
+    expert_blend: float = 0.2
+    like_low: float = 0.45
+    like_high: float = 0.6
+    like_drop: float = 0.8
+    like_rate: float = 0.05
+    lost_frames: int = 3
+    found_frames: int = 2
+    redetect_windows: int = 4
+
+    def __post_init__(self) -> None:
+        ExpertSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        _check_choices(self, {"network": NETWORKS,
+                              "network_runtime": ("auto", "onnxruntime", "opencv")})
+        _need(isinstance(self.backbone, str) and isinstance(self.head, str),
+              "backbone and head must be paths as strings ('' to find them)")
+        _check_ints(self, "network_threads", "lost_frames", "found_frames", "redetect_windows")
+        _check_numbers(self, "expert_agree", "expert_blend", "like_low", "like_high", "like_drop",
+                       "like_rate")
+        _need(0.0 <= self.like_drop <= 1.0, f"like_drop must be in [0, 1], got {self.like_drop}")
+        _need(0.0 < self.like_rate <= 1.0, f"like_rate must be in (0, 1], got {self.like_rate}")
+        _need(self.network_threads >= 1, f"network_threads must be >= 1, got {self.network_threads}")
+        _need(0.0 <= self.expert_agree <= 1.0, f"expert_agree must be in [0, 1], got {self.expert_agree}")
+        _need(0.0 <= self.expert_blend <= 1.0, f"expert_blend must be in [0, 1], got {self.expert_blend}")
+        _need(-1.0 <= self.like_low <= self.like_high <= 1.0,
+              f"like_low and like_high must satisfy -1 <= like_low <= like_high <= 1, got "
+              f"{self.like_low} and {self.like_high}")
+        _need(self.lost_frames >= 1, f"lost_frames must be >= 1, got {self.lost_frames}")
+        _need(self.found_frames >= 1, f"found_frames must be >= 1, got {self.found_frames}")
+        _need(self.redetect_windows >= 0,
+              f"redetect_windows must be >= 0, got {self.redetect_windows}")

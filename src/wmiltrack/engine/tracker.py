@@ -25,6 +25,7 @@ from . import copying as _copying  # noqa: F401 (installs deepcopy for the core'
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
 from .cues import ColourCue, Cue, check_cue_weights
+from .experts import TwoExperts
 from .features import min_box_size
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .judge import LostJudge
@@ -39,6 +40,7 @@ from .scale import HaarScale
 from .settings import (
     AppearanceSettings,
     ColourSettings,
+    ExpertSettings,
     FeatureSettings,
     FilterLearning,
     JudgeSettings,
@@ -89,13 +91,15 @@ class Parts:
     recovery: Recovery | None = None
     judge: Judge | None = None
     template: CorrelationTemplate | None = None  # (the judge reads its first-frame filter)
+    experts: TwoExperts | None = None  # a second expert and the judge between the two
 
     @property
     def appearance_only(self) -> bool:
         """Whether nothing but the appearance model (and the paper's policy) makes up the
         tracker, so that a frame can run as one core call."""
         return (not self.cues and self.scale is None and self.motion is None
-                and self.recovery is None and self.policy.plain and self.judge is None)
+                and self.recovery is None and self.policy.plain and self.judge is None
+                and self.experts is None)
 
     @property
     def lost(self) -> bool:
@@ -160,8 +164,10 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
         scale = _made(parts, "scale", params, frame, box, scale)
         motion = _made(parts, "motion", params, frame, box, motion)
         recovery = _made(parts, "recovery", params, frame, box, recovery)
+    experts = TwoExperts(own(ExpertSettings, params)) if params.network else None
     return Parts(appearance, all_cues, scale, motion,
-                 UpdatePolicy(own(ScoreSettings, params), report), recovery, judge, template)
+                 UpdatePolicy(own(ScoreSettings, params), report), recovery, judge, template,
+                 experts)
 
 
 def _made(parts: Mapping[str, PartFactory], kind: str, params: Params, frame: np.ndarray,
@@ -315,6 +321,8 @@ class Tracker:
     def box(self) -> tuple[float, float, float, float]:
         """The current box ``(x, y, w, h)``."""
         self._require_init()
+        if self._parts.experts is not None:
+            return self._parts.experts.box
         x, y, w, h = self._box
         return float(x), float(y), float(w), float(h)
 
@@ -338,6 +346,8 @@ class Tracker:
             part.start(img, b)
         if parts.policy.report is not None:
             _start_report(parts.policy.report, self._params, img, b)
+        if parts.experts is not None:
+            parts.experts.start(img, (float(b[0]), float(b[1]), float(b[2]), float(b[3])))
         self._parts = parts
         self._frame_wh = (fw, fh)
         self._box = b
@@ -445,7 +455,25 @@ class Tracker:
             self._score = yield from self._redetect_steps(img, previous)
         else:
             self._score = yield from self._tracked_steps(img, integral, previous)
-        return self._report()
+        result = self._report()
+        if self._parts.experts is not None:  # the second expert, and the judge of the two
+            return self._parts.experts.step(img, result, self.recentre)
+        return result
+
+    def recentre(self, box: Any) -> None:
+        """Move the target to the centre of ``box = (x, y, w, h)`` keeping its current size and
+        everything learnt (the models, the first-frame memories; a lost state ends): how
+        another expert hands the target over (:mod:`wmiltrack.engine.experts`). Unlike
+        :meth:`init`, nothing is relearnt."""
+        self._require_init()
+        x, y, w, h = (float(v) for v in box)
+        _, _, bw, bh = self._box
+        fw, fh = self._frame_wh
+        nx = min(max(int(round(x + w / 2 - bw / 2)), 0), max(fw - bw, 0))
+        ny = min(max(int(round(y + h / 2 - bh / 2)), 0), max(fh - bh, 0))
+        self._box = (nx, ny, bw, bh)
+        if self._parts.recovery is not None and self._parts.recovery.lost:
+            self._parts.recovery.lost, self._parts.recovery.frames_lost = False, 0
 
     def _tracked_steps(self, img: np.ndarray, integral: _core.IntegralImage | None,
                        previous: IntBox) -> Steps:

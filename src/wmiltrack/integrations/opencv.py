@@ -33,6 +33,7 @@ __all__ = [
     "TrackerOSIL",
     "TrackerRCWMIL",
     "TrackerRCWMILCF",
+    "TrackerRCWMILNano",
     "TrackerRCWMILPlus",
     "TrackerWMIL",
 ]
@@ -194,6 +195,14 @@ class TrackerRCWMILCF(TrackerCompat):
     the target's position and size): ``TrackerRCWMILCF.create()``."""
 
     VARIANT = "rcwmil-cf"
+
+
+class TrackerRCWMILNano(TrackerCompat):
+    """OpenCV-shaped ``rcwmil-nano`` (rcwmil-cf and NanoTrack v3's network as two experts under
+    one judge; the model files by path or from the models folder):
+    ``TrackerRCWMILNano.create()``, or ``.create({"backbone": ..., "head": ...})``."""
+
+    VARIANT = "rcwmil-nano"
 
 
 COMPAT_CLASSES: dict[str, type[TrackerCompat]] = {

@@ -1,0 +1,227 @@
+"""Two experts under one judge: the engine's tracker and a Siamese network (rcwmil-nano).
+
+The tracker (rcwmil-cf: the classifier, colour and correlation filters) and NanoTrack's
+network fail on different frames: the network finds targets that move fast, deform or are
+small, and the tracker holds on where the network jumps to a look-alike. Neither one's own
+score says when it is wrong (the network's best score is close to 1 on almost every frame).
+:class:`TwoExperts` runs both each frame and :class:`ExpertJudge` decides, from a memory of the
+target that neither expert's search changes (the network's first-frame template, compared with
+the network's choice: the *likeness*), whether the target is tracked, doubtful, lost or found
+again; see :class:`~wmiltrack.engine.settings.ExpertSettings` for the rules and their values.
+
+One frame::
+
+    network locates -> judge's verdict from the likeness ->
+      tracked or doubtful: the box (the mix where the experts agree, else the network's; the
+                           tracker moved to it, keeping what it learnt, when they disagree)
+      lost:                the network also searches whole-frame windows and the tracker's box;
+                           the likeliest is the best guess, and the verdict turns to found
+                           after enough frames alike the target; then both experts move there.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from enum import Enum
+from pathlib import Path
+
+import numpy as np
+
+from .result import TrackResult
+from .settings import ExpertSettings
+from .siamese import INSTANCE, NANO_VERSIONS, SiameseLocator, as_bgr, context_side, load_network
+
+__all__ = ["ExpertJudge", "TwoExperts", "Verdict"]
+
+FloatBox = tuple[float, float, float, float]
+
+
+class Verdict(Enum):
+    """The judge's word on one frame."""
+
+    TRACKED = "tracked"    # the target is where the box is
+    DOUBTFUL = "doubtful"  # a frame against it, not yet enough to call it lost
+    LOST = "lost"          # hidden, gone, or somewhere the experts are not looking
+    FOUND = "found"        # lost until now, and the likeliest place has been alike enough
+
+
+class ExpertJudge:
+    """The verdict of each frame from its likeness and the experts' agreement, with
+    hysteresis, and the reported confidence.
+
+    A frame counts against the target when its likeness is below ``like_low``, or below
+    ``like_drop`` times the running mean of the tracked frames' likeness (``like_rate`` per
+    frame: a target whose look drifts slowly keeps its own level), unless the experts agree on
+    the box and the tracker says ``ok`` (two experts that agree are rarely both wrong, even
+    where the target no longer looks like the first frame's). ``lost_frames`` such frames in a
+    row start the lost state; ``found_frames`` in a row above both ``like_high`` and the
+    dropped mean end it.
+    """
+
+    def __init__(self, settings: ExpertSettings) -> None:
+        self.settings = settings
+        self.lost = False
+        self.typical = math.nan  # the running mean of the tracked frames' likeness
+        self._run = 0
+
+    def verdict(self, likeness: float, agree: bool) -> Verdict:
+        """The verdict of a frame whose best place has ``likeness``, the experts agreeing on
+        it (and the tracker saying ``ok``) or not (``agree``)."""
+        s = self.settings
+        if math.isnan(self.typical):
+            self.typical = likeness
+        floor = s.like_drop * self.typical
+        if not self.lost:
+            against = (likeness < s.like_low or likeness < floor) and not agree
+            self._run = self._run + 1 if against else 0
+            if self._run == 0:
+                self.typical += s.like_rate * (likeness - self.typical)
+                return Verdict.TRACKED
+            if self._run < s.lost_frames:
+                return Verdict.DOUBTFUL
+            self.lost, self._run = True, 0
+            return Verdict.LOST
+        self._run = self._run + 1 if likeness > max(s.like_high, floor) else 0
+        if self._run < s.found_frames:
+            return Verdict.LOST
+        self.lost, self._run = False, 0
+        return Verdict.FOUND
+
+    def confidence(self, likeness: float) -> float:
+        """The likeness mapped to [0, 1]: 0.5 at the lower of ``like_low`` and the dropped
+        running mean, rising with the likeness (a logistic of slope 20)."""
+        s = self.settings
+        typical = self.typical if math.isfinite(self.typical) else 1.0
+        z = 20.0 * (likeness - max(s.like_low, s.like_drop * typical))
+        return 1.0 / (1.0 + math.exp(-z)) if math.isfinite(z) else 0.0
+
+
+class TwoExperts:
+    """The network expert and the judge beside a tracker (see the module's docstring).
+
+    ``settings``: its own; the tracker is reached only through the frame's result and the
+    ``recentre`` callback that each :meth:`step` receives.
+    """
+
+    def __init__(self, settings: ExpertSettings) -> None:
+        from ..models import nanotrack_files
+
+        version = settings.network.rsplit("-", 1)[-1]
+        files = nanotrack_files(version, settings.backbone or None, settings.head or None)
+        network = load_network(Path(files[0]), Path(files[1]), settings.network_runtime,
+                               settings.network_threads)
+        self.settings = settings
+        self.locator = SiameseLocator(network, NANO_VERSIONS[version])
+        self.judge = ExpertJudge(settings)
+        self.box: FloatBox = (0.0, 0.0, 0.0, 0.0)
+        self._held: FloatBox = self.box
+        self._sweep: list[tuple[float, float]] = []
+
+    def start(self, frame: np.ndarray, box: FloatBox) -> None:
+        """Take the network's template at ``box`` of the first frame."""
+        self.locator.start(as_bgr(frame), box)
+        self.judge = ExpertJudge(self.settings)
+        self.box = self._held = tuple(float(v) for v in box)  # type: ignore[assignment]
+        self._sweep = []
+
+    def step(self, frame: np.ndarray, tracker: TrackResult,
+             recentre: Callable[[FloatBox], None]) -> TrackResult:
+        """The frame's result from the tracker's (``tracker``) and the network's; ``recentre``
+        moves the tracker to a box without forgetting what it learnt."""
+        img = as_bgr(frame)
+        if self.judge.lost:
+            return self._lost_step(img, tracker, recentre)
+        found = self.locator.locate(img)
+        likeness = self.locator.likeness(img, found.box)
+        agree = _iou(found.box, tracker.box) >= self.settings.expert_agree
+        verdict = self.judge.verdict(likeness, agree and tracker.ok)
+        box = _inside(self._merge(found.box, tracker.box, agree, recentre, verdict), img)
+        if verdict is Verdict.TRACKED:
+            self._held = box
+        self.box = box
+        return TrackResult(box, self.judge.confidence(likeness), verdict is not Verdict.LOST)
+
+    def _merge(self, network: FloatBox, tracker: FloatBox, agree: bool,
+               recentre: Callable[[FloatBox], None], verdict: Verdict) -> FloatBox:
+        """The network's box, mixed with the tracker's where they agree; the tracker is moved
+        to the network's box where they do not (only on a tracked frame)."""
+        if agree:
+            b = self.settings.expert_blend
+            return tuple((1 - b) * n + b * t for n, t in zip(network, tracker))  # type: ignore[return-value]
+        if verdict is Verdict.TRACKED:
+            recentre(network)
+        return network
+
+    def _lost_step(self, img: np.ndarray, tracker: TrackResult,
+                   recentre: Callable[[FloatBox], None]) -> TrackResult:
+        """A frame of the lost state: the likeliest of the network's own search, the
+        tracker's box and this frame's share of whole-frame windows."""
+        best = self.locator.locate(img)
+        likeness = self.locator.likeness(img, best.box)
+        for place in self._places(img, tracker.box):
+            cand = self.locator.search_at(img, place, self.locator.size, window=False)
+            like = self.locator.likeness(img, cand.box)
+            if like > likeness:
+                best, likeness = cand, like
+        verdict = self.judge.verdict(likeness, False)
+        if likeness > self.settings.like_high:
+            self.locator.recentre(best.box)
+        if verdict is Verdict.FOUND:
+            recentre(best.box)
+            self._held = best.box
+            self._sweep = []
+        self.box = _inside(best.box, img)
+        return TrackResult(self.box, self.judge.confidence(likeness), verdict is Verdict.FOUND)
+
+    def _places(self, img: np.ndarray, tracker: FloatBox) -> list[tuple[float, float]]:
+        """The centres this lost frame searches besides the network's own: the tracker's box,
+        then the next ``redetect_windows`` of the whole-frame sweep."""
+        places = [_centre(tracker)]
+        n = self.settings.redetect_windows
+        if n <= 0:
+            return places
+        if not self._sweep:
+            self._sweep = _sweep(img.shape[1], img.shape[0], self.locator.size, _centre(self._held))
+        places += self._sweep[:n]
+        self._sweep = self._sweep[n:]
+        return places
+
+
+def _sweep(fw: int, fh: int, size: tuple[float, float], near: tuple[float, float]
+           ) -> list[tuple[float, float]]:
+    """Search-window centres covering a ``fw x fh`` frame for a target of ``size`` (windows
+    0.8 of the network's reach apart), nearest to ``near`` first."""
+    reach = context_side(*size) * (INSTANCE / 127) * 0.44  # half the answer grid's span
+    step = max(0.8 * 2 * reach, 8.0)
+    xs = np.arange(step / 2, fw + step / 2, step).clip(0, fw)
+    ys = np.arange(step / 2, fh + step / 2, step).clip(0, fh)
+    centres = [(float(x), float(y)) for y in ys for x in xs]
+    centres.sort(key=lambda c: (c[0] - near[0]) ** 2 + (c[1] - near[1]) ** 2)
+    return centres
+
+
+def _inside(box: FloatBox, img: np.ndarray) -> FloatBox:
+    """``box`` cut to the frame (the network's step keeps the centre in the frame, not the
+    box), at least one pixel wide and high."""
+    fh, fw = img.shape[:2]
+    x, y, w, h = box
+    x0, y0 = min(max(x, 0.0), fw - 1.0), min(max(y, 0.0), fh - 1.0)
+    x1, y1 = min(max(x + w, x0 + 1.0), float(fw)), min(max(y + h, y0 + 1.0), float(fh))
+    return x0, y0, x1 - x0, y1 - y0
+
+
+def _centre(box: FloatBox) -> tuple[float, float]:
+    x, y, w, h = box
+    return x + w / 2, y + h / 2
+
+
+def _iou(a: FloatBox, b: FloatBox) -> float:
+    ax, ay, aw, ah = a
+    bx, by, bw, bh = b
+    iw = max(0.0, min(ax + aw, bx + bw) - max(ax, bx))
+    ih = max(0.0, min(ay + ah, by + bh) - max(ay, by))
+    inter = iw * ih
+    union = aw * ah + bw * bh - inter
+    return inter / union if union > 0 else 0.0
+

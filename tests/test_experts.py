@@ -1,0 +1,168 @@
+"""rcwmil-nano's parts: NanoTrack's network and step (engine/siamese.py), and the two experts
+under one judge (engine/experts.py).
+
+The judge's rules are checked without the network; everything that runs the network reads
+NanoTrack's model files from ``nanotrack_models`` (conftest: ``../shared/models/nanotrack``
+or ``$WMILTRACK_TEST_MODELS``; skipped without them, a failure under CI).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import wmiltrack
+from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.experts import ExpertJudge, Verdict
+from wmiltrack.engine.settings import ExpertSettings
+from wmiltrack.eval.metrics import iou
+
+
+def test_judge_needs_enough_frames_in_a_row_to_turn() -> None:
+    """lost_frames below like_low turn the verdict to lost, found_frames above like_high turn
+    it back; a good frame in between restarts the count."""
+    judge = ExpertJudge(ExpertSettings(like_low=0.5, like_high=0.6, like_drop=0.0,
+                                       lost_frames=3, found_frames=2))
+    seen = [judge.verdict(v, False) for v in (0.9, 0.4, 0.4, 0.9, 0.4, 0.4, 0.4, 0.7, 0.55, 0.7, 0.7)]
+    assert seen == [Verdict.TRACKED, Verdict.DOUBTFUL, Verdict.DOUBTFUL, Verdict.TRACKED,
+                    Verdict.DOUBTFUL, Verdict.DOUBTFUL, Verdict.LOST, Verdict.LOST,
+                    Verdict.LOST, Verdict.LOST, Verdict.FOUND]
+    assert not judge.lost
+
+
+def test_judge_drop_from_the_running_mean_and_agreement() -> None:
+    """A fall to below like_drop of the tracked frames' mean counts against the target even
+    above like_low; frames on which the experts agree never count against it."""
+    judge = ExpertJudge(ExpertSettings(like_low=0.3, like_high=0.6, like_drop=0.8, like_rate=0.05,
+                                       lost_frames=2, found_frames=1))
+    assert [judge.verdict(v, False) for v in (0.9, 0.9)] == [Verdict.TRACKED] * 2
+    assert judge.typical == pytest.approx(0.9)
+    assert judge.verdict(0.65, True) is Verdict.TRACKED       # agreement outvotes the drop
+    assert judge.verdict(0.65, False) is Verdict.DOUBTFUL     # 0.65 < 0.8 x typical
+    assert judge.verdict(0.65, False) is Verdict.LOST
+    assert judge.verdict(0.65, False) is Verdict.LOST         # above like_high, not the floor
+    assert judge.verdict(0.95, False) is Verdict.FOUND
+
+
+def test_judge_confidence_is_monotone_and_half_at_the_middle() -> None:
+    judge = ExpertJudge(ExpertSettings(like_low=0.5, like_high=0.6, like_drop=0.0))
+    values = [judge.confidence(v) for v in np.linspace(-1, 1, 41)]
+    assert all(a <= b for a, b in zip(values, values[1:]))
+    assert judge.confidence(0.5) == pytest.approx(0.5)
+    assert 0.0 <= values[0] < 0.01 and 0.99 < values[-1] <= 1.0
+
+
+@pytest.mark.parametrize("bad", [{"network": "nanotrack-v9"}, {"network_runtime": "cuda"},
+                                 {"network_threads": 0}, {"expert_blend": 1.5},
+                                 {"like_low": 0.7, "like_high": 0.6}, {"lost_frames": 0},
+                                 {"redetect_windows": -1}])
+def test_expert_settings_are_checked(bad: dict[str, object]) -> None:
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        wmiltrack.Tracker("rcwmil-nano", **bad)
+
+
+def test_missing_model_files_are_one_clear_error(tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without the files: one error naming them, the keyword and the fetch command, at
+    init (the tracker can be made and described without them)."""
+    monkeypatch.setenv("WMILTRACK_MODELS", str(tmp_path))
+    monkeypatch.delenv("WMILTRACK_NANO_BACKBONE", raising=False)
+    monkeypatch.delenv("WMILTRACK_NANO_HEAD", raising=False)
+    seq = make_sequence(3, seed=0)
+    t = wmiltrack.Tracker("rcwmil-nano")
+    with pytest.raises(FileNotFoundError) as info:
+        t.init(seq.load()[0], seq.groundtruth[0])
+    text = str(info.value)
+    assert "nanotrack_backbone.onnx" in text and "backbone" in text
+    assert "wmiltrack models fetch nanotrack-v3" in text
+
+
+def test_both_runtimes_give_the_same_features(nanotrack_models: dict[str, tuple[Path, Path]]
+                                              ) -> None:
+    """onnxruntime (its backbone made size-free on load) and OpenCV's dnn give the same
+    feature maps for the 127 px exemplar and the 255 px search crop, and the same head."""
+    pytest.importorskip("onnxruntime")
+    from wmiltrack.engine.siamese import load_network
+
+    rng = np.random.default_rng(0)
+    for version, files in nanotrack_models.items():
+        ort, dnn = load_network(*files, "onnxruntime"), load_network(*files, "opencv")
+        z, x = (rng.integers(0, 256, (n, n, 3), dtype=np.uint8) for n in (127, 255))
+        fz, fx = ort.features(z), ort.features(x)
+        assert fz.shape[-2:] == (8, 8) and fx.shape[-2:] == (16, 16)
+        np.testing.assert_allclose(fz, dnn.features(z), atol=1e-3, rtol=1e-4)
+        np.testing.assert_allclose(fx, dnn.features(x), atol=1e-3, rtol=1e-4)
+        for a, b in zip(ort.head(fz, fx), dnn.head(fz, fx)):
+            np.testing.assert_allclose(a, b, atol=1e-3, rtol=1e-4)
+        assert ort.head(fz, fx)[0].shape[-1] == (16 if version == "v2" else 15)
+
+
+@pytest.mark.parametrize("version", ["v2", "v3"])
+def test_nanotrack_alone_follows_a_generated_target(
+        version: str, nanotrack_models: dict[str, tuple[Path, Path]]) -> None:
+    """The published step with either version keeps the box on a moving generated target."""
+    tracker = wmiltrack.trackers.make_tracker(f"nanotrack:{version}",
+                                              backbone=str(nanotrack_models[version][0]),
+                                              head=str(nanotrack_models[version][1]))
+    seq = make_sequence(60, seed=1, occlusion=False)
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    tracker.init(frames[0], tuple(gt[0]))
+    boxes = np.array([tracker.update(f).box for f in frames[1:]])
+    assert np.nanmean(iou(boxes, gt[1:])) > 0.5
+
+
+def _run(tracker: wmiltrack.Tracker, frames: list[np.ndarray], box: tuple[float, ...]
+         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    tracker.init(frames[0], box)
+    out = [tracker.update(f) for f in frames[1:]]
+    return (np.array([r.box for r in out]), np.array([r.score for r in out]),
+            np.array([r.ok for r in out]))
+
+
+@pytest.mark.usefixtures("nanotrack_models")
+def test_rcwmil_nano_tracks_flags_a_hidden_target_and_takes_it_back() -> None:
+    """A generated target hidden behind a block for 20 frames: rcwmil-nano follows it before,
+    flags most hidden frames lost, and is back on it soon after; the same inputs give the same
+    boxes, and a copy made mid-run goes on exactly as the original."""
+    seq = make_sequence(110, seed=0, occlusion=False, full_occlusion=(50, 20))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    boxes, scores, oks = _run(wmiltrack.Tracker("rcwmil-nano", seed=0), frames, tuple(gt[0]))
+    ov = iou(boxes, gt[1:])
+    assert np.mean(ov[:45] > 0.5) > 0.9
+    hidden = ~seq.meta["visible"][1:]
+    assert hidden.sum() == 20 and np.mean(~oks[hidden]) >= 0.7
+    assert np.mean(oks[:45]) > 0.95
+    assert np.mean(ov[80:] > 0.5) > 0.8
+    assert np.all((scores >= 0) & (scores <= 1))
+    again = _run(wmiltrack.Tracker("rcwmil-nano", seed=0), frames, tuple(gt[0]))
+    np.testing.assert_array_equal(boxes, again[0])
+    np.testing.assert_array_equal(oks, again[2])
+
+    t = wmiltrack.Tracker("rcwmil-nano", seed=0)
+    t.init(frames[0], tuple(gt[0]))
+    for f in frames[1:30]:
+        t.update(f)
+    fork = copy.deepcopy(t)
+    rest = [(t.update(f).box, fork.update(f).box) for f in frames[30:60]]
+    assert all(a == b for a, b in rest)
+
+
+@pytest.mark.usefixtures("nanotrack_models")
+def test_recentre_moves_the_tracker_and_keeps_what_it_learnt() -> None:
+    """Tracker.recentre moves the box to the given centre at the tracker's own size; the
+    models are not restarted (the next update from there matches a copy's)."""
+    seq = make_sequence(20, seed=2, occlusion=False)
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    t = wmiltrack.Tracker("rcwmil-cf", seed=0)
+    t.init(frames[0], tuple(gt[0]))
+    for f in frames[1:10]:
+        t.update(f)
+    w, h = t.box[2], t.box[3]
+    t.recentre((50.0, 40.0, 10.0, 10.0))
+    x, y, w2, h2 = t.box
+    assert (w2, h2) == (w, h)
+    assert math.isclose(x + w / 2, 55.0, abs_tol=1) and math.isclose(y + h / 2, 45.0, abs_tol=1)
