@@ -24,7 +24,7 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 
 #: Top-level module -> the extra of pyproject.toml that installs it.
 EXTRA_OF = {"got10k": "integrations", "six": "integrations", "trax": "integrations",
-            "distributed": "cluster", "dask": "cluster"}
+            "distributed": "cluster", "dask": "cluster", "onnxruntime": "nano", "onnx": "nano"}
 
 
 def write_generated_otb(root: Path, name: str, *, seed: int, n: int) -> None:

@@ -25,7 +25,7 @@ from wmiltrack.eval.metrics import iou
 def test_judge_needs_enough_frames_in_a_row_to_turn() -> None:
     """lost_frames below like_low turn the verdict to lost, found_frames above like_high turn
     it back; a good frame in between restarts the count."""
-    judge = ExpertJudge(ExpertSettings(like_low=0.5, like_high=0.6, like_drop=0.0,
+    judge = ExpertJudge(ExpertSettings(like_low=0.5, like_high=0.6, like_drop=0.0, like_found=0.0,
                                        lost_frames=3, found_frames=2))
     seen = [judge.verdict(v, False) for v in (0.9, 0.4, 0.4, 0.9, 0.4, 0.4, 0.4, 0.7, 0.55, 0.7, 0.7)]
     assert seen == [Verdict.TRACKED, Verdict.DOUBTFUL, Verdict.DOUBTFUL, Verdict.TRACKED,
@@ -81,11 +81,11 @@ def test_missing_model_files_are_one_clear_error(tmp_path: Path,
     assert "wmiltrack models fetch nanotrack-v3" in text
 
 
+@pytest.mark.extras("onnxruntime", "onnx")
 def test_both_runtimes_give_the_same_features(nanotrack_models: dict[str, tuple[Path, Path]]
                                               ) -> None:
     """onnxruntime (its backbone made size-free on load) and OpenCV's dnn give the same
     feature maps for the 127 px exemplar and the 255 px search crop, and the same head."""
-    pytest.importorskip("onnxruntime")
     from wmiltrack.engine.siamese import load_network
 
     rng = np.random.default_rng(0)

@@ -55,8 +55,9 @@ class ExpertJudge:
     frame: a target whose look drifts slowly keeps its own level), unless the experts agree on
     the box and the tracker says ``ok`` (two experts that agree are rarely both wrong, even
     where the target no longer looks like the first frame's). ``lost_frames`` such frames in a
-    row start the lost state; ``found_frames`` in a row above both ``like_high`` and the
-    dropped mean end it.
+    row start the lost state; ``found_frames`` in a row above both ``like_high`` and
+    ``like_found`` times the mean end it (a gap between the two levels, so that a place that
+    looks like the target's surroundings, as an occluder in front of it does, does not end it).
     """
 
     def __init__(self, settings: ExpertSettings) -> None:
@@ -69,6 +70,9 @@ class ExpertJudge:
         """The verdict of a frame whose best place has ``likeness``, the experts agreeing on
         it (and the tracker saying ``ok``) or not (``agree``)."""
         s = self.settings
+        if math.isnan(likeness):  # not measured: a frame the experts vouch for
+            self._run = 0 if not self.lost else self._run
+            return Verdict.LOST if self.lost else Verdict.TRACKED
         if math.isnan(self.typical):
             self.typical = likeness
         floor = s.like_drop * self.typical
@@ -82,11 +86,17 @@ class ExpertJudge:
                 return Verdict.DOUBTFUL
             self.lost, self._run = True, 0
             return Verdict.LOST
-        self._run = self._run + 1 if likeness > max(s.like_high, floor) else 0
+        self._run = self._run + 1 if likeness > self.found_level() else 0
         if self._run < s.found_frames:
             return Verdict.LOST
         self.lost, self._run = False, 0
         return Verdict.FOUND
+
+    def found_level(self) -> float:
+        """The likeness above which a lost frame counts for the target."""
+        s = self.settings
+        typical = self.typical if math.isfinite(self.typical) else 0.0
+        return max(s.like_high, s.like_found * typical)
 
     def confidence(self, likeness: float) -> float:
         """The likeness mapped to [0, 1]: 0.5 at the lower of ``like_low`` and the dropped
@@ -117,6 +127,9 @@ class TwoExperts:
         self.box: FloatBox = (0.0, 0.0, 0.0, 0.0)
         self._held: FloatBox = self.box
         self._sweep: list[tuple[float, float]] = []
+        self._since = 0
+        self._score = 1.0
+        self._lost_for = 0
 
     def start(self, frame: np.ndarray, box: FloatBox) -> None:
         """Take the network's template at ``box`` of the first frame."""
@@ -124,6 +137,9 @@ class TwoExperts:
         self.judge = ExpertJudge(self.settings)
         self.box = self._held = tuple(float(v) for v in box)  # type: ignore[assignment]
         self._sweep = []
+        self._since = 0  # vouched frames since the likeness was last measured
+        self._score = 1.0
+        self._lost_for = 0  # frames in the lost state
 
     def step(self, frame: np.ndarray, tracker: TrackResult,
              recentre: Callable[[FloatBox], None]) -> TrackResult:
@@ -133,14 +149,21 @@ class TwoExperts:
         if self.judge.lost:
             return self._lost_step(img, tracker, recentre)
         found = self.locator.locate(img)
-        likeness = self.locator.likeness(img, found.box)
         agree = _iou(found.box, tracker.box) >= self.settings.expert_agree
-        verdict = self.judge.verdict(likeness, agree and tracker.ok)
+        vouched = agree and tracker.ok
+        self._since += 1
+        if not vouched or self._since >= self.settings.likeness_every:
+            self._since = 0
+            likeness = self.locator.likeness(img, found.box)
+            verdict = self.judge.verdict(likeness, vouched)
+            self._score = self.judge.confidence(likeness)
+        else:  # the experts vouch for the box: no need to ask the memory this frame
+            verdict = self.judge.verdict(math.nan, vouched)
         box = _inside(self._merge(found.box, tracker.box, agree, recentre, verdict), img)
         if verdict is Verdict.TRACKED:
             self._held = box
         self.box = box
-        return TrackResult(box, self.judge.confidence(likeness), verdict is not Verdict.LOST)
+        return TrackResult(box, self._score, verdict is not Verdict.LOST)
 
     def _merge(self, network: FloatBox, tracker: FloatBox, agree: bool,
                recentre: Callable[[FloatBox], None], verdict: Verdict) -> FloatBox:
@@ -155,22 +178,27 @@ class TwoExperts:
 
     def _lost_step(self, img: np.ndarray, tracker: TrackResult,
                    recentre: Callable[[FloatBox], None]) -> TrackResult:
-        """A frame of the lost state: the likeliest of the network's own search, the
-        tracker's box and this frame's share of whole-frame windows."""
+        """A frame of the lost state: the network's own search, unless the tracker's box or
+        this frame's share of whole-frame windows holds a place alike the target (above the
+        judge's level for found, :meth:`ExpertJudge.found_level`) and more alike than the
+        network's: then the network moves there. A place merely less unlike the target than
+        the network's own never takes the box (a target that changed its look is still best
+        followed by the network)."""
+        self._lost_for += 1
         best = self.locator.locate(img)
         likeness = self.locator.likeness(img, best.box)
+        level = self.judge.found_level()
         for place in self._places(img, tracker.box):
             cand = self.locator.search_at(img, place, self.locator.size, window=False)
             like = self.locator.likeness(img, cand.box)
-            if like > likeness:
+            if like > max(likeness, level):
                 best, likeness = cand, like
+                self.locator.recentre(best.box)
         verdict = self.judge.verdict(likeness, False)
-        if likeness > self.settings.like_high:
-            self.locator.recentre(best.box)
         if verdict is Verdict.FOUND:
             recentre(best.box)
             self._held = best.box
-            self._sweep = []
+            self._sweep, self._lost_for = [], 0
         self.box = _inside(best.box, img)
         return TrackResult(self.box, self.judge.confidence(likeness), verdict is Verdict.FOUND)
 
@@ -179,7 +207,7 @@ class TwoExperts:
         then the next ``redetect_windows`` of the whole-frame sweep."""
         places = [_centre(tracker)]
         n = self.settings.redetect_windows
-        if n <= 0:
+        if n <= 0 or self._lost_for < self.settings.redetect_after:
             return places
         if not self._sweep:
             self._sweep = _sweep(img.shape[1], img.shape[0], self.locator.size, _centre(self._held))

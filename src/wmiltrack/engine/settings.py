@@ -900,8 +900,9 @@ class ExpertSettings:
     is taken and the filter is moved there (keeping what it learnt). ``ok`` comes from the
     likeness with hysteresis: lost after ``lost_frames`` frames in a row below ``like_low``,
     found again after ``found_frames`` frames in a row above ``like_high``. While lost, the
-    network searches ``redetect_windows`` more windows a frame over the whole frame (nearest
-    first, then sweeping) besides its own, and the judge takes the likeliest.
+    network searches, after ``redetect_after`` lost frames, ``redetect_windows`` more windows a
+    frame over the whole frame (nearest first, then sweeping) besides its own and the
+    tracker's box, and moves to one that is alike the target and more alike than its own.
 
     Attributes
     ----------
@@ -924,12 +925,24 @@ class ExpertSettings:
         for it.
     like_drop : float
         The share of the running mean below which a frame counts against the target (0: never).
+    like_found : float
+        The share of the running mean above which a lost frame counts for the target (with
+        ``like_high``), at least ``like_drop``.
     like_rate : float
         The running mean's learning rate, in (0, 1].
     lost_frames, found_frames : int
         Frames in a row that start and end the lost state.
     redetect_windows : int
         Whole-frame search windows a lost frame tries besides the network's own (0: none).
+    redetect_after : int
+        Lost frames before the whole-frame windows start: a short spell (a turn, a brief
+        occlusion) is better left to the network's own search than risked on a far place that
+        looks like the target's surroundings.
+    likeness_every : int
+        On frames where the experts agree and the tracker says ``ok`` (which never count
+        against the target), the likeness is measured only every ``likeness_every``-th such
+        frame (it costs one more pass of the backbone); the reported score repeats the last
+        measured one in between. 1: every frame.
     """
 
     network: str = ""
@@ -942,10 +955,13 @@ class ExpertSettings:
     like_low: float = 0.45
     like_high: float = 0.6
     like_drop: float = 0.8
+    like_found: float = 0.9
     like_rate: float = 0.05
     lost_frames: int = 3
     found_frames: int = 2
     redetect_windows: int = 4
+    redetect_after: int = 10
+    likeness_every: int = 1
 
     def __post_init__(self) -> None:
         ExpertSettings.check(self)
@@ -956,10 +972,15 @@ class ExpertSettings:
                               "network_runtime": ("auto", "onnxruntime", "opencv")})
         _need(isinstance(self.backbone, str) and isinstance(self.head, str),
               "backbone and head must be paths as strings ('' to find them)")
-        _check_ints(self, "network_threads", "lost_frames", "found_frames", "redetect_windows")
+        _check_ints(self, "network_threads", "lost_frames", "found_frames", "redetect_windows",
+                    "redetect_after", "likeness_every")
+        _need(self.redetect_after >= 0, f"redetect_after must be >= 0, got {self.redetect_after}")
+        _need(self.likeness_every >= 1, f"likeness_every must be >= 1, got {self.likeness_every}")
         _check_numbers(self, "expert_agree", "expert_blend", "like_low", "like_high", "like_drop",
-                       "like_rate")
-        _need(0.0 <= self.like_drop <= 1.0, f"like_drop must be in [0, 1], got {self.like_drop}")
+                       "like_found", "like_rate")
+        _need(0.0 <= self.like_drop <= self.like_found <= 1.0,
+              f"like_drop and like_found must satisfy 0 <= like_drop <= like_found <= 1, got "
+              f"{self.like_drop} and {self.like_found}")
         _need(0.0 < self.like_rate <= 1.0, f"like_rate must be in (0, 1], got {self.like_rate}")
         _need(self.network_threads >= 1, f"network_threads must be >= 1, got {self.network_threads}")
         _need(0.0 <= self.expert_agree <= 1.0, f"expert_agree must be in [0, 1], got {self.expert_agree}")
