@@ -19,6 +19,7 @@ from .options import (
     set_model_paths,
     trackers_help,
 )
+from .outputs import check_output_folder
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
@@ -28,6 +29,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         raise UsageError(f"{args.dataset} is a file, not a dataset folder: eval takes a folder of "
                          "sequences (OTB, LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70, "
                          "TrackingNet or VOT layout); to track one video use `wmiltrack track`")
+    check_output_folder("--out", args.out, args.dataset)
     trackers = split_specs(args.trackers)
     if args.results is None and not trackers:
         raise UsageError("give --trackers (or --results DIR to score existing box files)")
@@ -103,7 +105,7 @@ def add_eval(sub: Subparsers) -> None:
     """
     p = sub.add_parser(
         "eval",
-        help="benchmark trackers on an OTB-layout dataset (OPE or VOT protocol)",
+        help="benchmark trackers on an OTB-layout dataset (OPE, VOT or long-term protocol)",
         description="Run trackers on every sequence of an OTB-layout dataset (or score box "
         "files of other trackers with --results) and write a markdown table, a JSON file with "
         "every figure, success/precision plots and per-sequence box files to --out.",
@@ -153,10 +155,13 @@ def add_eval(sub: Subparsers) -> None:
     )
     p.add_argument(
         "--protocol",
-        choices=("ope", "vot"),
+        choices=("ope", "vot", "longterm"),
         default="ope",
         help="ope: OTB one-pass (default); vot: VOT-style supervised with resets (VOT2015's "
-        "rules on OTB's axis-aligned boxes)",
+        "rules on OTB's axis-aligned boxes); longterm: one pass scored with the VOT long-term "
+        "measures, tracking precision, recall and F-score over each tracker's confidence "
+        "thresholds and at its own lost flag, absent frames counted (rewards a tracker that "
+        "says when it has lost the target)",
     )
     p.add_argument("--sequences", default=None, help="comma-separated names (default all)")
     p.add_argument("--seed", type=int, default=0, help="first tracker seed (default 0)")
