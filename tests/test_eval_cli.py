@@ -292,7 +292,7 @@ def test_bad_arguments(
                 str(tmp_path / "o"),
             ]
         )
-        == 1
+        == 2  # a sequence not in the dataset: a bad command line
     )
     assert "Nope" in capsys.readouterr().err
     assert (

@@ -111,3 +111,32 @@ def test_plots_are_written_at_150_dpi(tmp_path: Path) -> None:
     plot_fscore_bars({n: 0.5 for n in NAMES}, {n: 0.4 for n in NAMES}, tmp_path / "f.png")
     for name in ("pr.png", "f.png"):
         assert cv2.imread(str(tmp_path / name)).shape[1] >= 5 * 150
+
+
+def test_home_figures_come_from_one_run_on_every_root(tmp_path: Path) -> None:
+    """benchmarks/home_figures.py links the sequences of several roots into one dataset and
+    runs eval once: the accuracy-speed, success and precision plots of that one run."""
+    import json
+    import subprocess
+    import sys
+
+    from conftest import REPO_ROOT, write_generated_otb
+
+    write_generated_otb(tmp_path / "shared", "A", seed=1, n=8)
+    write_generated_otb(tmp_path / "pool", "B", seed=2, n=8)
+    out = tmp_path / "home"
+    cmd = [sys.executable, str(REPO_ROOT / "benchmarks" / "home_figures.py"), "--roots",
+           f"{tmp_path / 'shared'},{tmp_path / 'pool'}", "--out", str(out), "--trackers",
+           "rcwmil,ct", "--repeats", "1", "-j", "1"]
+    done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    doc = json.loads((out / "eval" / "eval_ope.json").read_text())
+    assert sorted(doc["sequences"]) == ["A", "B"] and doc["trackers"] == ["rcwmil", "ct"]
+    for name in ("accuracy_speed.png", "success_ope.png", "precision_ope.png"):
+        assert (out / "eval" / name).is_file()
+    assert (out / "dataset" / "A").is_symlink()
+    # a second run reuses its own links; an entry of the user's there is never replaced
+    (out / "dataset" / "C").mkdir()
+    write_generated_otb(tmp_path / "pool", "C", seed=3, n=8)
+    again = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert again.returncode != 0 and "is not a link" in again.stderr

@@ -81,13 +81,20 @@ def _report(args: argparse.Namespace, doc: dict[str, Any]) -> int:
 def score_runs(trackers: list[str], frames: list[Any], gt: Any, seed: int
                ) -> Iterator[tuple[str, tuple[float, float, float, float], str | None]]:
     """Each tracker run on ``frames`` from ``gt[0]`` and scored as ``eval`` scores it (the last
-    box held): ``(name, (AUC, SR@0.5, P@20, update frames/s), error)`` (for ``demo``)."""
+    box held): ``(name, (AUC, SR@0.5, P@20, update frames/s), error)`` (for ``demo``). A
+    tracker that cannot be made (not installed, model files not given) or that fails gives its
+    error and NaN figures; the others still run."""
     from ..eval.metrics import ope_metrics
     from ..eval.runner import run_sequence
     from ..eval.scoring import scored_boxes
+    from ..trackers import TrackerUnavailable
 
     for name in (t.strip() for t in trackers):
-        run = run_sequence(name, frames, gt[0], seed=seed)
+        try:
+            run = run_sequence(name, frames, gt[0], seed=seed)
+        except TrackerUnavailable as exc:  # not installed, or its model files not given
+            yield name, (math.nan,) * 4, str(exc)
+            continue
         if run.error:
             yield name, (math.nan,) * 4, run.error
             continue

@@ -217,8 +217,8 @@ def _sequence_paths(dataset: Path, names: Sequence[str] | None) -> list[Path]:
     if names:
         by_name = {p.name: p for p in paths}
         missing = [n for n in names if n not in by_name]
-        if missing:
-            raise FileNotFoundError(
+        if missing:  # a bad --sequences: a command line that cannot run as given
+            raise EvalArgumentError(
                 f"sequence(s) not found: {', '.join(missing)}; available: "
                 f"{', '.join(sorted(by_name))}"
             )
@@ -326,7 +326,8 @@ def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
         try:
             make_tracker(spec)
         except TrackerUnavailable as exc:
-            notes.append(f"skipped {spec}: {str(exc).split('. ')[0]}")
+            # the whole message, its install commands or model options included, on one line
+            notes.append(f"skipped {spec}: {' '.join(line.strip() for line in str(exc).splitlines())}")
             continue
         if spec not in ok:
             ok.append(spec)
