@@ -137,3 +137,16 @@ def test_the_contrib_swap_command_uses_the_wheels_version_and_checks_first() -> 
 
     assert got == version("opencv-python-headless")  # 5.0.0.93, a version the wheel has
     assert block.index("--dry-run") < block.index("pip uninstall")
+
+
+def test_the_home_page_caption_quotes_its_figures_own_run() -> None:
+    """The home page's accuracy-speed figure is the headline run's: its caption gives
+    rcwmil-cf's AUC of that run (the one the figure plots), and says the README's is another."""
+    perf = (REPO_ROOT / "docs" / "performance.md").read_text(encoding="utf-8")
+    headline = perf.split("## Accuracy and speed in one run", 1)[1].split("\n## ", 1)[0]
+    row = next(line for line in headline.splitlines() if line.startswith("| rcwmil-cf |"))
+    auc = row.split("|")[2].split("±")[0].strip()
+    index = (REPO_ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    assert "accuracy_speed_otb17.png" in index and "accuracy_speed_otb17.png" in headline
+    assert f"rcwmil-cf is at {auc} there" in index
+    assert "42 sequences" in index

@@ -257,7 +257,7 @@ def write_longterm_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> di
         {t: s["f_score"] for t, s in summ.items()},
         {t: s["ok_f_score"] for t, s in summ.items()},
         f_path,
-        title=f"Tracking F-score ({n_seq} sequences): best threshold and own lost flag",
+        title=f"Tracking F-score ({n_seq} sequences)",
     )
     return {"precision_recall_plot": str(pr_path), "fscore_plot": str(f_path)}
 
