@@ -15,6 +15,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -50,6 +51,18 @@ def dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     for i in range(4):
         write_generated_otb(root, f"S{i}", seed=i, n=N_FRAMES)
     return root
+
+
+@pytest.fixture(autouse=True)
+def sigint_default() -> Iterator[None]:
+    """The command must start with SIGINT's default disposition: an ignored signal is inherited
+    through exec, and a test before this one may have left it ignored in this process (the
+    command line ignores SIGINT while it reports an interrupt)."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
 
 
 def start_eval(dataset: Path, out: Path) -> subprocess.Popen[bytes]:
