@@ -74,8 +74,9 @@ sequence, per repeat), ``success_ope.png`` and ``precision_ope.png`` (OPE), and 
 ``boxes/<tracker>/<seq>.txt`` (OPE; repeat ``k`` > 0 in ``<seq>.r<k>.txt``) or
 ``boxes_vot/...`` (VOT; NaN rows on frames not tracked) or ``boxes_longterm/...`` (long-term;
 the boxes as given), each with a ``<seq>[.r<k>].run.json`` record (seed, error, frames reported
-lost; for the long-term protocol also every frame's score and lost flag) that ``--resume`` reads.  The box files hold the boxes that
-were scored (after the ``--missing`` rule; NaN rows are misses).  Tracker names are made
+lost; for the long-term protocol also every frame's score and lost flag) that ``--resume``
+reads.  The OPE box files hold the boxes that were scored (after the ``--missing`` rule; NaN
+rows are misses).  Tracker names are made
 filesystem-safe (``opencv:MIL`` -> ``opencv_MIL``).  ``--results DIR`` reads exactly this
 layout (``DIR/<tracker>/<seq>.txt``), e.g. ``--results OUT/boxes``.
 """
