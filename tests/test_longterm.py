@@ -197,3 +197,12 @@ def test_longterm_refuses_what_has_no_scores(absent_dataset: Path, tmp_path: Pat
     status = cli.main(["eval", str(absent_dataset), "--protocol", "longterm", "--out",
                        str(tmp_path / "o"), *extra])
     assert status == 2 and "long-term" in capsys.readouterr().err
+
+
+def test_a_sequence_without_the_target_after_the_first_frame_is_left_out_and_said() -> None:
+    gone = GT.copy()
+    gone[1:] = NAN
+    s = longterm_scores([run("t", "A", BOXES, SCORES, OKS), run("t", "Gone", BOXES, SCORES, OKS)],
+                        {"A": GT, "Gone": gone})
+    assert s["left_out"] == ["Gone"] and list(s["results"]["t"]) == ["A"]
+    assert s["summary"]["t"]["f_score"] == pytest.approx(1.6 / 3)

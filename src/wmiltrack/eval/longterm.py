@@ -267,14 +267,18 @@ def longterm_scores(runs: Sequence[Any], gts: Mapping[str, FloatArray]) -> dict[
     -------
     dict
         ``{"summary": {tracker: figures}, "results": {tracker: {sequence: figures}},
-        "errors": {tracker: failed runs}}``. A tracker's summary: ``errors`` (its failed
-        runs), ``f_score``, ``precision``, ``recall``, ``threshold`` (at the maximum F-score
+        "errors": {tracker: failed runs}, "left_out": [sequences]}``; ``left_out``: the
+        sequences where the target is present on no frame after the first (no recall).
+        A tracker's summary: ``errors`` (its failed runs), ``f_score``, ``precision``, ``recall``, ``threshold`` (at the maximum F-score
         of the averaged curve), ``ok_precision``, ``ok_recall``, ``ok_f_score`` (at its own lost
         flag), ``confidence`` (``"score"`` or ``"ok"``) and ``curve`` (lists per threshold).
         A sequence's figures: ``precision``, ``recall``, ``f_score`` at the tracker's best
         threshold, the sequence's own maximum ``f_score_max``, ``ok_*`` at the lost flag,
         ``absent_frames`` and ``repeats``.
     """
+    # recall is not defined without a frame where the target is present (after the first)
+    left_out = sorted(n for n, g in gts.items() if not np.any(valid_mask(g)[1:]))
+    gts = {n: g for n, g in gts.items() if n not in left_out}
     by_tracker: dict[str, list[Any]] = {}
     errors: dict[str, int] = {}
     for r in runs:
@@ -289,4 +293,4 @@ def longterm_scores(runs: Sequence[Any], gts: Mapping[str, FloatArray]) -> dict[
         figures = _tracker_figures(rs, gts)
         results[t] = figures.pop("sequences")
         summary[t] = {**figures, "errors": errors.get(t, 0)}
-    return {"summary": summary, "results": results, "errors": errors}
+    return {"summary": summary, "results": results, "errors": errors, "left_out": left_out}

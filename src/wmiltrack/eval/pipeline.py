@@ -483,6 +483,9 @@ def _score_and_write(
         from .longterm import longterm_scores
 
         scored = longterm_scores(runs, gts)
+        if scored["left_out"]:
+            notes.append(f"not scored: {', '.join(scored['left_out'])} (the target is present on "
+                         "no frame after the first, so there is no recall to measure)")
         table = format_longterm_table(scored, title=title)
     else:
         scored = score_vot(runs, reference=REFERENCE)
