@@ -271,7 +271,8 @@ def longterm_scores(runs: Sequence[Any], gts: Mapping[str, FloatArray]) -> dict[
         sequences where the target is present on no frame after the first (no recall).
         A tracker's summary: ``errors`` (its failed runs), ``f_score``, ``precision``,
         ``recall``, ``threshold`` (at the maximum F-score of the averaged curve),
-        ``ok_precision``, ``ok_recall``, ``ok_f_score`` (at its own lost flag), ``confidence`` (``"score"`` or ``"ok"``) and ``curve`` (lists per threshold).
+        ``ok_precision``, ``ok_recall``, ``ok_f_score`` (at its own lost flag),
+        ``confidence`` (``"score"`` or ``"ok"``) and ``curve`` (lists per threshold).
         A sequence's figures: ``precision``, ``recall``, ``f_score`` at the tracker's best
         threshold, the sequence's own maximum ``f_score_max``, ``ok_*`` at the lost flag,
         ``absent_frames`` and ``repeats``.
