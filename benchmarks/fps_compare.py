@@ -124,12 +124,25 @@ def _parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _can_make(spec: str) -> bool:
+    """Whether the tracker can be made here; if not (TrackerNano without its model files), a
+    note with the reason, as for a tracker missing from cv2."""
+    from wmiltrack.trackers import TrackerUnavailable, make_tracker
+
+    try:
+        make_tracker(spec)
+    except TrackerUnavailable as exc:
+        print(f"note: {spec} skipped ({' '.join(str(exc).split())})", file=sys.stderr)
+        return False
+    return True
+
+
 def _trackers(ap: argparse.ArgumentParser, chosen: str | None) -> list[str]:
     """The trackers to run: every variant and available OpenCV tracker, or the --trackers
     subset (checked) plus the reference."""
-    cv_names = available_opencv_trackers()
+    cv_names = [n for n in available_opencv_trackers() if _can_make(f"opencv:{n}")]
     for n in OPENCV_TRACKERS:
-        if n not in cv_names:
+        if n not in available_opencv_trackers():
             print(f"note: opencv:{n} skipped (not in this cv2)", file=sys.stderr)
     trackers = list(VARIANTS) + [f"opencv:{n}" for n in cv_names]
     if not chosen:

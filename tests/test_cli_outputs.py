@@ -101,11 +101,11 @@ def test_a_video_that_cannot_be_written_leaves_the_box_file_alone(
         otb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     keep = tmp_path / "keep.txt"
     keep.write_text("K1\nK2\n")
-    status = cli.main(["track", str(otb), "-o", str(keep), "--video", str(tmp_path / "out.xyz")])
+    status = cli.main(["track", str(otb), "-o", str(keep), "--video", str(tmp_path / "no" / "out.avi")])
     assert status == 1 and "cannot write video" in capsys.readouterr().err
     assert keep.read_text() == "K1\nK2\n"
     new = tmp_path / "new.txt"  # a box file the failed run created is removed again
-    assert cli.main(["track", str(otb), "-o", str(new), "--video", str(tmp_path / "out.xyz")]) == 1
+    assert cli.main(["track", str(otb), "-o", str(new), "--video", str(tmp_path / "no" / "out.avi")]) == 1
     assert not new.exists()
 
 

@@ -86,7 +86,8 @@ def test_create_with_params_and_overrides() -> None:
     assert TrackerCompat("wmil").tracker.variant == "wmil"
     with pytest.raises(TypeError, match="params"):
         TrackerRCWMIL.create(42)  # type: ignore[arg-type]
-    assert TrackerRCWMIL.create().getTrackingScore() == 1.0
+    with pytest.raises(ValueError, match="before getTrackingScore"):  # no target yet
+        TrackerRCWMIL.create().getTrackingScore()
 
 
 def test_score_drops_when_the_target_vanishes() -> None:

@@ -126,7 +126,8 @@ def test_eval_skips_nano_without_models_with_a_note(tmp_path: Path, capsys: pyte
                str(tmp_path / "out"), "--no-progress", "--no-plots"])
     captured = capsys.readouterr()
     assert rc == 0
-    assert "skipped opencv:Nano: opencv:Nano needs NanoTrack's backbone" in captured.err
+    assert "skipped opencv:Nano: opencv:Nano needs 2 model file(s)" in captured.err
+    assert "--nano-backbone" in captured.err and "--nano-head" in captured.err
 
 
 def real_models() -> tuple[str, str]:

@@ -21,9 +21,14 @@ dependency (``pip install "wmiltrack[cluster]"``), imported only when a Dask exe
 
 from __future__ import annotations
 
+import os
+import signal
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
-from multiprocessing import get_context
+from contextlib import contextmanager
+from multiprocessing import active_children, get_context
 from typing import Any, Literal, Protocol, TypeVar
 
 __all__ = [
@@ -121,32 +126,100 @@ class ProcessExecutor:
         self.cv_threads = cv_threads
 
     def map(self, fn: Callable[[T], R], items: Sequence[T]) -> Iterator[R]:
-        """Submit every job; yield results as they finish.  Closing the iterator early (an
-        interruption) cancels the jobs not yet started."""
+        """Submit every job; yield results as they finish.
+
+        Closing the iterator early (an interruption, an exception in the caller) cancels the
+        jobs not yet started and terminates the workers at once, without waiting for the jobs
+        they are running: their results would be thrown away, and a Ctrl-C must not take as
+        long as a job. Only a run that yields every result waits for the workers to exit.
+        """
         if not items:
             return
+        before = {p.pid for p in active_children()}
         pool = ProcessPoolExecutor(
             max_workers=min(self.jobs, len(items)),
             mp_context=get_context("spawn"),
             initializer=_start_worker,
-            initargs=(self.cv_threads,),
+            initargs=(self.cv_threads, os.getpid()),
         )
+        finished = False
         try:
             futures: list[Future[R]] = [pool.submit(fn, item) for item in items]
             for fut in as_completed(futures):
                 yield fut.result()
+            finished = True
         finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+            if finished:
+                pool.shutdown(wait=True)
+            else:
+                _stop_pool(pool, before)
 
 
-def _start_worker(cv_threads: int | None) -> None:
-    """A worker process's set-up: OpenCV's threads, and Ctrl-C left to the parent. A Ctrl-C at
-    a terminal reaches every process of the group; the parent stops the run and reports it in
-    one line, while a worker that took it would print its own traceback."""
-    import signal
+#: Seconds a terminated worker is given to exit before it is killed.
+_TERMINATE_GRACE = 1.0
 
+
+def _stop_pool(pool: ProcessPoolExecutor, before: set[int | None]) -> None:
+    """Cancel the pool's queued jobs and end its workers now: SIGTERM, then SIGKILL for any
+    still alive after :data:`_TERMINATE_GRACE` seconds; each is joined (no zombie left).
+
+    The workers are this process's children started since ``before`` (the children's ids when
+    the pool was made), found with :func:`multiprocessing.active_children`, which is public,
+    rather than through the pool's private attributes. SIGINT is ignored meanwhile (in the main
+    thread), so that a second Ctrl-C cannot cut the clean-up short and leave workers for
+    Python's exit to wait on for good.
+    """
+    with _sigint_ignored():
+        pool.shutdown(wait=False, cancel_futures=True)
+        workers = [p for p in active_children() if p.pid not in before]
+        for p in workers:
+            p.terminate()
+        deadline = time.monotonic() + _TERMINATE_GRACE
+        for p in workers:
+            p.join(max(0.0, deadline - time.monotonic()))
+            if p.is_alive():
+                p.kill()
+                p.join()
+        # the pool's manager thread sees its workers gone and ends; join it so that Python's
+        # exit finds nothing to wait for
+        pool.shutdown(wait=True)
+
+
+@contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore SIGINT inside the block when called in the main thread (elsewhere a no-op:
+    signal handlers belong to the main thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _start_worker(cv_threads: int | None, parent: int) -> None:
+    """A worker process's set-up: OpenCV's threads, Ctrl-C left to the parent, and an end
+    when the parent is gone.
+
+    A Ctrl-C at a terminal reaches every process of the group; the parent stops the run and
+    terminates the workers, while a worker that took it would print its own traceback. A parent
+    killed outright (SIGKILL) can terminate nothing, so a daemon thread of the worker checks
+    every half second that its parent is still the one that started it and ends the worker
+    otherwise.
+    """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     set_cv_threads(cv_threads)
+    threading.Thread(target=_exit_with_parent, args=(parent,), daemon=True,
+                     name="wmiltrack-parent-watch").start()
+
+
+def _exit_with_parent(parent: int) -> None:
+    """End this process as soon as ``parent`` is no longer its parent process."""
+    while os.getppid() == parent:
+        time.sleep(0.5)
+    os._exit(1)
 
 
 def require_distributed() -> Any:

@@ -154,8 +154,10 @@ def _swap_hint(name: str) -> str:
     return (
         f"OpenCV tracker {name!r} is not in the installed cv2 ({dist} {ver}): it comes with "
         f"the contrib wheel {contrib} (as {where}). Both wheels install the same 'cv2' "
-        "package and overwrite each other, so swap one for the other:\n"
-        f"    pip uninstall -y {dist} && pip install {contrib}=={ver}\n"
+        "package and overwrite each other, so swap one for the other (the dry run first, so "
+        "that a failed install cannot leave you without cv2):\n"
+        f"    pip install --dry-run {contrib}=={ver} && pip uninstall -y {dist} && "
+        f"pip install {contrib}=={ver}\n"
         f"and to go back:\n"
         f"    pip uninstall -y {contrib} && pip install {dist}=={ver}"
     )
@@ -196,6 +198,13 @@ def is_opencv_spec(spec: str) -> bool:
     return spec.strip().lower().startswith(_PREFIX)
 
 
+def model_option(kind: str, attr: str) -> str:
+    """The command line's option for a model file: ``--nano-backbone``, ``--nano-head``,
+    ``--vit-model``."""
+    short = {"neckhead": "head", "net": "model"}.get(attr, attr)
+    return f"--{kind.lower()}-{short}"
+
+
 def model_paths(kind: str, params: dict[str, Any]) -> dict[str, str]:
     """The model files of OpenCV tracker ``kind`` (none for the trackers that need none):
     each from ``params`` or else from its environment variable (:data:`MODEL_ENV`).
@@ -203,24 +212,29 @@ def model_paths(kind: str, params: dict[str, Any]) -> dict[str, str]:
     Raises
     ------
     TrackerUnavailable
-        A model file is not given or does not exist; the message names the parameter, the
-        environment variable and the file.
+        A model file is not given or does not exist; the message names every such file, with
+        the command-line option, the tracker parameter and the environment variable that
+        give it.
     """
     import os
 
     out: dict[str, str] = {}
+    problems: list[str] = []
     for attr, env in MODEL_ENV.get(kind, {}).items():
         value = params.get(attr) or os.environ.get(env, "")
         what = MODEL_FILES[(kind, attr)]
         if not value:
-            raise TrackerUnavailable(
-                f"opencv:{kind} needs {what}: give its path as opencv:{kind}:{attr}=FILE or in "
-                f"the environment variable {env}. The model files are not part of OpenCV's wheels")
-        if not os.path.isfile(str(value)):
+            problems.append(f"{what}: give its path with {model_option(kind, attr)} FILE (or "
+                            f"opencv:{kind}:{attr}=FILE, or the environment variable {env})")
+        elif not os.path.isfile(str(value)):
             source = f"{attr}=" if params.get(attr) else f"{env}="
-            raise TrackerUnavailable(
-                f"opencv:{kind} needs {what}, and {source}{value} is not a file. Check the path")
-        out[attr] = str(value)
+            problems.append(f"{what}: {source}{value} is not a file; check the path")
+        else:
+            out[attr] = str(value)
+    if problems:
+        raise TrackerUnavailable(
+            f"opencv:{kind} needs {len(problems)} model file(s) it does not have: "
+            + "; ".join(problems) + ". The model files are not part of OpenCV's wheels")
     return out
 
 

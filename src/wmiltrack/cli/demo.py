@@ -21,13 +21,17 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     assert gt is not None
     print(f"built-in sequence: {len(frames)} frames of {frames[0].shape[1]}x{frames[0].shape[0]}, "
           "moving textured target with partial occlusion, illumination change and clutter")
-    print(f"{'tracker':<10} {'AUC':>6} {'SR@0.5':>7} {'P@20':>6} {'fps':>8}")
+    width = max(len("tracker"), *(len(t) for t in trackers))
+    print(f"{'tracker':<{width}} {'AUC':>6} {'SR@0.5':>7} {'P@20':>6} {'fps':>8}")
     for name, scores, error in score_runs(trackers, frames, gt, args.seed):
         if error:
-            print(f"{name:<10} failed: {error}")
+            first, *rest = error.splitlines()
+            print(f"{name:<{width}} failed: {first}")
+            for line in rest:  # e.g. the install commands of a tracker not installed
+                print(f"{'':<{width}} {line}")
             continue
         auc, success_50, precision_20, fps = scores
-        print(f"{name:<10} {auc:6.3f} {success_50:7.3f} {precision_20:6.3f} {fps:8.0f}")
+        print(f"{name:<{width}} {auc:6.3f} {success_50:7.3f} {precision_20:6.3f} {fps:8.0f}")
     return 0
 
 

@@ -19,6 +19,7 @@ from .options import (
     set_model_paths,
     trackers_help,
 )
+from .outputs import check_output_folder
 
 
 def _cmd_eval(args: argparse.Namespace) -> int:
@@ -28,6 +29,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
         raise UsageError(f"{args.dataset} is a file, not a dataset folder: eval takes a folder of "
                          "sequences (OTB, LaSOT, GOT-10k, UAV123, UAV123_10fps, UAV20L, DTB70, "
                          "TrackingNet or VOT layout); to track one video use `wmiltrack track`")
+    check_output_folder("--out", args.out, args.dataset)
     trackers = split_specs(args.trackers)
     if args.results is None and not trackers:
         raise UsageError("give --trackers (or --results DIR to score existing box files)")
@@ -79,13 +81,20 @@ def _report(args: argparse.Namespace, doc: dict[str, Any]) -> int:
 def score_runs(trackers: list[str], frames: list[Any], gt: Any, seed: int
                ) -> Iterator[tuple[str, tuple[float, float, float, float], str | None]]:
     """Each tracker run on ``frames`` from ``gt[0]`` and scored as ``eval`` scores it (the last
-    box held): ``(name, (AUC, SR@0.5, P@20, update frames/s), error)`` (for ``demo``)."""
+    box held): ``(name, (AUC, SR@0.5, P@20, update frames/s), error)`` (for ``demo``). A
+    tracker that cannot be made (not installed, model files not given) or that fails gives its
+    error and NaN figures; the others still run."""
     from ..eval.metrics import ope_metrics
     from ..eval.runner import run_sequence
     from ..eval.scoring import scored_boxes
+    from ..trackers import TrackerUnavailable
 
     for name in (t.strip() for t in trackers):
-        run = run_sequence(name, frames, gt[0], seed=seed)
+        try:
+            run = run_sequence(name, frames, gt[0], seed=seed)
+        except TrackerUnavailable as exc:  # not installed, or its model files not given
+            yield name, (math.nan,) * 4, str(exc)
+            continue
         if run.error:
             yield name, (math.nan,) * 4, run.error
             continue
@@ -103,7 +112,7 @@ def add_eval(sub: Subparsers) -> None:
     """
     p = sub.add_parser(
         "eval",
-        help="benchmark trackers on an OTB-layout dataset (OPE or VOT protocol)",
+        help="benchmark trackers on an OTB-layout dataset (OPE, VOT or long-term protocol)",
         description="Run trackers on every sequence of an OTB-layout dataset (or score box "
         "files of other trackers with --results) and write a markdown table, a JSON file with "
         "every figure, success/precision plots and per-sequence box files to --out.",
@@ -153,10 +162,13 @@ def add_eval(sub: Subparsers) -> None:
     )
     p.add_argument(
         "--protocol",
-        choices=("ope", "vot"),
+        choices=("ope", "vot", "longterm"),
         default="ope",
         help="ope: OTB one-pass (default); vot: VOT-style supervised with resets (VOT2015's "
-        "rules on OTB's axis-aligned boxes)",
+        "rules on OTB's axis-aligned boxes); longterm: one pass scored with the VOT long-term "
+        "measures, tracking precision, recall and F-score over each tracker's confidence "
+        "thresholds and at its own lost flag, absent frames counted (rewards a tracker that "
+        "says when it has lost the target)",
     )
     p.add_argument("--sequences", default=None, help="comma-separated names (default all)")
     p.add_argument("--seed", type=int, default=0, help="first tracker seed (default 0)")

@@ -25,6 +25,9 @@ def _cmd_inspect(args: argparse.Namespace) -> int:
     if args.frame < 2:
         raise UsageError("--frame must be >= 2 (frames count from 1; the first one has no update)")
     check_outputs([("-o", args.output)], [args.input])
+    if not cv2.haveImageWriter(str(args.output)):
+        raise UsageError(f"-o {args.output}: OpenCV cannot write a {args.output.suffix or 'extension-less'} "
+                         "image; name it .png (or .jpg)")
     t = tracker_from_args(args, ours=True)
     seq = open_frames(args.input, has_box=args.box is not None)
     if args.box is not None:

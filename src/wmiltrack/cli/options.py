@@ -162,8 +162,9 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
 
 def _model_option(kind: str, attr: str) -> str:
     """``--nano-backbone``, ``--nano-head``, ``--vit-model``: the option of a model file."""
-    short = {"neckhead": "head", "net": "model"}.get(attr, attr)
-    return f"--{kind.lower()}-{short}"
+    from ..trackers import model_option
+
+    return model_option(kind, attr)
 
 
 def set_model_paths(args: argparse.Namespace) -> None:

@@ -404,6 +404,7 @@ def _track(args: argparse.Namespace, stop: _StopRequest) -> int:
         raise UsageError("--scores goes with one target; --boxes lines already hold a score")
     check_outputs([("-o", args.output), ("--video", args.video)],
                   [p for p in (args.input, args.boxes) if p is not None])
+    check_video_name(args.video)
     tracker: Any = tracker_from_args(args, several=several)
     seq = open_frames(args.input, has_box=args.box is not None or several)
     starts = _start_boxes(args, seq)
@@ -545,6 +546,20 @@ def _mot_line(index: int, target: int, box: Sequence[float], score: float, held:
     return f"{index + 1},{target + 1},{format_box(box)},{s:.4g},-1,-1,-1"
 
 
+#: The containers ``--video`` writes, by file extension, with the codec each gets.
+VIDEO_CODECS = {".avi": "MJPG", ".mp4": "mp4v"}
+
+
+def check_video_name(path: Path | None) -> None:
+    """A :class:`UsageError` for a ``--video`` name whose extension is not a container the
+    writer makes (:data:`VIDEO_CODECS`), said before anything runs; OpenCV's writer would only
+    fail to open, without a reason. ``None`` (no ``--video``) passes."""
+    if path is not None and path.suffix.lower() not in VIDEO_CODECS:
+        kinds = " or ".join(f"{ext} ({codec})" for ext, codec in VIDEO_CODECS.items())
+        raise UsageError(f"--video {path}: cannot write a {path.suffix or 'extension-less'} "
+                         f"video; name it {kinds}")
+
+
 def _write_video_frame(writer: Any, path: Path, frame: Any, boxes: Sequence[Sequence[float]],
                        number: int, score: float, fps: float | None,
                        color: tuple[int, int, int] = (0, 255, 0)) -> Any:
@@ -556,10 +571,11 @@ def _write_video_frame(writer: Any, path: Path, frame: Any, boxes: Sequence[Sequ
 
     if writer is None:
         h, w = frame.shape[:2]
-        fourcc = cv2.VideoWriter.fourcc(*("mp4v" if str(path).lower().endswith(".mp4") else "MJPG"))
+        fourcc = cv2.VideoWriter.fourcc(*VIDEO_CODECS[path.suffix.lower()])
         writer = cv2.VideoWriter(str(path), fourcc, float(fps or 25.0), (w, h))
         if not writer.isOpened():
-            raise RuntimeError(f"cannot write video {path}")
+            raise RuntimeError(f"cannot write video {path}: OpenCV's video writer could not open "
+                               "it (is its folder there and writable?)")
     img = (frame if frame.ndim == 3 and frame.shape[2] == 3
            else cv2.cvtColor(np.ascontiguousarray(frame), cv2.COLOR_GRAY2BGR))
     for k, box in enumerate(boxes):  # frame number and score written once

@@ -1,11 +1,11 @@
-"""``wmiltrack eval``: benchmark trackers on an OTB-layout dataset (OPE or VOT protocol).
+"""``wmiltrack eval``: benchmark trackers on an OTB-layout dataset (OPE, VOT or long-term).
 
 Usage::
 
     wmiltrack eval DATASET --trackers rcwmil,fct,opencv:MIL --out DIR [-j N] [--repeats R]
                    [--executor serial|process|dask] [--scheduler ADDRESS] [--resume]
                    [--layout otb|lasot|got10k|uav123|uav123_10fps|uav20l|dtb70|trackingnet|vot]
-                   [--protocol ope|vot] [--sequences A,B] [--seed S]
+                   [--protocol ope|vot|longterm] [--sequences A,B] [--seed S]
     wmiltrack eval DATASET --results BOXDIR --out DIR      # score another tracker's files
 
 ``DATASET`` is a folder of OTB sequence folders (``<Seq>/img/`` + ``groundtruth_rect.txt``,
@@ -29,6 +29,13 @@ Protocols
     last box; ``miss`` takes away the box of every frame the tracker reports lost.  A frame
     left without a box is a miss in every figure, the mean centre error included
     (:mod:`wmiltrack.eval.scoring`).
+``longterm`` (VOT long-term measures)
+    One pass from the first frame as ``ope``; scored by :mod:`wmiltrack.eval.longterm`:
+    tracking precision, recall and F-score over the tracker's confidence thresholds (and at
+    its own lost flag), frames where the target is absent counted, per sequence and averaged
+    as the VOT toolkit does. Needs each frame's confidence, so neither ``--results`` nor
+    ``--resume``; box files as given (NaN where the tracker gave none) in ``boxes_longterm/``;
+    plots ``precision_recall_longterm.png`` and ``fscore_longterm.png``.
 ``vot`` (VOT-style supervised: VOT2015's rules on OTB's axis-aligned boxes, not VOT's numbers)
     :func:`wmiltrack.eval.vot_style.run_supervised`: failure when the overlap drops to 0,
     re-initialisation 5 frames later, accuracy without the 10 frames after each
@@ -65,9 +72,11 @@ Outputs in ``--out DIR``
 ``eval_<protocol>.md`` (table), ``eval_<protocol>.json`` (every figure per tracker and
 sequence, per repeat), ``success_ope.png`` and ``precision_ope.png`` (OPE), and the boxes:
 ``boxes/<tracker>/<seq>.txt`` (OPE; repeat ``k`` > 0 in ``<seq>.r<k>.txt``) or
-``boxes_vot/...`` (VOT; NaN rows on frames not tracked), each with a ``<seq>[.r<k>].run.json``
-record (seed, error, frames reported lost) that ``--resume`` reads.  The box files hold the boxes that
-were scored (after the ``--missing`` rule; NaN rows are misses).  Tracker names are made
+``boxes_vot/...`` (VOT; NaN rows on frames not tracked) or ``boxes_longterm/...`` (long-term;
+the boxes as given), each with a ``<seq>[.r<k>].run.json`` record (seed, error, frames reported
+lost; for the long-term protocol also every frame's score and lost flag) that ``--resume``
+reads.  The OPE box files hold the boxes that were scored (after the ``--missing`` rule; NaN
+rows are misses).  Tracker names are made
 filesystem-safe (``opencv:MIL`` -> ``opencv_MIL``).  ``--results DIR`` reads exactly this
 layout (``DIR/<tracker>/<seq>.txt``), e.g. ``--results OUT/boxes``.
 """
@@ -93,11 +102,13 @@ from .report import (
     box_path,
     caption,
     environment,
+    format_longterm_table,
     format_ope_table,
     format_vot_table,
     json_safe,
     read_results,
     safe_name,
+    write_longterm_plots,
     write_plots,
     write_run_boxes,
 )
@@ -107,7 +118,7 @@ from .scoring import Missing, run_boxes, score_ope, score_vot
 __all__ = ["EvalArgumentError", "EvalConfig", "make_tasks", "run_eval", "run_tasks"]
 
 FloatArray = npt.NDArray[np.float64]
-Protocol = Literal["ope", "vot"]
+Protocol = Literal["ope", "vot", "longterm"]
 REFERENCE = "opencv:MIL"
 
 
@@ -142,8 +153,9 @@ def make_tasks(
     -------
     list of Task
     """
+    run_as: Literal["ope", "vot"] = "vot" if protocol == "vot" else "ope"  # longterm: one pass
     return [
-        Task(t, str(p), seed, r, protocol, skip, burnin, layout, dataset)
+        Task(t, str(p), seed, r, run_as, skip, burnin, layout, dataset)
         for p in paths
         for r, seed in enumerate(seeds)
         for t in trackers
@@ -207,8 +219,8 @@ def _sequence_paths(dataset: Path, names: Sequence[str] | None) -> list[Path]:
     if names:
         by_name = {p.name: p for p in paths}
         missing = [n for n in names if n not in by_name]
-        if missing:
-            raise FileNotFoundError(
+        if missing:  # a bad --sequences: a command line that cannot run as given
+            raise EvalArgumentError(
                 f"sequence(s) not found: {', '.join(missing)}; available: "
                 f"{', '.join(sorted(by_name))}"
             )
@@ -316,7 +328,8 @@ def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
         try:
             make_tracker(spec)
         except TrackerUnavailable as exc:
-            notes.append(f"skipped {spec}: {str(exc).split('. ')[0]}")
+            # the whole message, its install commands or model options included, on one line
+            notes.append(f"skipped {spec}: {' '.join(line.strip() for line in str(exc).splitlines())}")
             continue
         if spec not in ok:
             ok.append(spec)
@@ -412,7 +425,7 @@ def _box_writer(
 
     def save(run: RunOutcome) -> None:
         run = _full_length(run, lengths)
-        boxes = run_boxes(run, missing) if protocol == "ope" else run.boxes
+        boxes = run_boxes(run, missing) if protocol == "ope" else run.boxes  # longterm: as given
         path = write_run_boxes(box_root, run, boxes)
         record = {
             "tracker": run.tracker,
@@ -423,6 +436,9 @@ def _box_writer(
             "missing": missing,
             "error": run.error,
         }
+        if protocol == "longterm":  # what the figures are made of, besides the boxes
+            record["scores"] = [None if not np.isfinite(v) else float(v) for v in run.scores]
+            record["oks"] = [bool(v) for v in run.oks]
         _run_record(path).write_text(json.dumps(record) + "\n", encoding="utf-8")
         if run.error is not None:
             say(f"{run.tracker} on {run.sequence} (seed {run.seed}) failed: {run.error}")
@@ -463,13 +479,22 @@ def _score_and_write(
         if ds.layout == "got10k":
             got10k, section = _got10k_section(runs, gts, ds.metas, missing)
             table += section
+    elif protocol == "longterm":
+        from .longterm import longterm_scores
+
+        scored = longterm_scores(runs, gts)
+        if scored["left_out"]:
+            notes.append(f"not scored: {', '.join(scored['left_out'])} (the target is present on "
+                         "no frame after the first, so there is no recall to measure)")
+        table = format_longterm_table(scored, title=title)
     else:
         scored = score_vot(runs, reference=REFERENCE)
         table = format_vot_table(scored, repeats, settings["skip"], settings["burnin"], title=title)
     if notes:
         table += "\nNotes:\n" + "".join(f"- {n}\n" for n in notes)
     if want_plots:
-        files.update(write_plots(scored, out, len(gts)))
+        write = write_longterm_plots if protocol == "longterm" else write_plots
+        files.update(write(scored, out, len(gts)))
     table_path = out / f"eval_{protocol}.md"
     table_path.write_text(table, encoding="utf-8")
     files["table"] = str(table_path)
@@ -502,13 +527,14 @@ def _check_eval_arguments(repeats: int, jobs: int, protocol: str, missing: str, 
         raise EvalArgumentError(f"--repeats must be at least 1, got {repeats}")
     if jobs < 1:
         raise EvalArgumentError(f"-j must be at least 1, got {jobs}")
-    if protocol not in ("ope", "vot"):
-        raise EvalArgumentError(f"protocol must be 'ope' or 'vot', not {protocol!r}")
+    if protocol not in ("ope", "vot", "longterm"):
+        raise EvalArgumentError(f"protocol must be 'ope', 'vot' or 'longterm', not {protocol!r}")
     if missing not in ("hold", "miss"):
         raise EvalArgumentError(f"missing must be 'hold' or 'miss', not {missing!r}")
     if resume and (protocol != "ope" or results is not None):
         raise EvalArgumentError(
-            "--resume reads OPE box files back; the VOT protocol's figures need the run itself"
+            f"--resume reads OPE box files back; the {protocol} protocol's figures need the run "
+            "itself (the VOT protocol's resets, the long-term protocol's confidences)"
             if results is None
             else "--resume is for running trackers, not with --results"
         )
@@ -516,6 +542,11 @@ def _check_eval_arguments(repeats: int, jobs: int, protocol: str, missing: str, 
         raise EvalArgumentError(
             "--results scores box files with the OPE protocol; the VOT protocol "
             "re-initialises the tracker, so it has to run it"
+        )
+    if results is not None and protocol == "longterm":
+        raise EvalArgumentError(
+            "--results scores box files with the OPE protocol; the long-term protocol needs "
+            "each frame's confidence, which box files do not hold, so it has to run the trackers"
         )
 
 
@@ -562,6 +593,12 @@ def _run_trackers(ds: Any, tracker_names: list[str], cfg: EvalConfig, ex: Execut
         [_full_length(r, lengths) for r in new] + resumed,
         key=lambda r: order.get((r.tracker, r.sequence, r.repeat), len(order)),
     )
+    skipped = {r.sequence: r.skipped_frames for r in runs if r.skipped_frames}
+    for seq, problems in skipped.items():
+        more = f" and {len(problems) - 3} more" if len(problems) > 3 else ""
+        notes.append(f"{seq}: {len(problems)} frame(s) could not be decoded and were skipped, "
+                     f"every tracker keeping its last box there ({'; '.join(problems[:3])}{more})")
+        say(notes[-1])
     unscored_errors = 0
     for r in runs:
         if ds.metas[r.sequence].get("first_frame_only") and r.error is not None:
@@ -701,7 +738,7 @@ def run_eval(config: EvalConfig | str | os.PathLike[str],
     say = cfg.log if cfg.log is not None else (lambda s: print(s, file=sys.stderr))
     protocol, results = cfg.protocol, cfg.results
     _check_eval_arguments(cfg.repeats, cfg.jobs, protocol, cfg.missing, cfg.resume, results)
-    want_plots = cfg.plots and protocol == "ope"
+    want_plots = cfg.plots and protocol in ("ope", "longterm")
     if want_plots:
         from .plots import require_matplotlib
 
@@ -736,7 +773,7 @@ def run_eval(config: EvalConfig | str | os.PathLike[str],
             say(n)
         if not tracker_names:
             raise ValueError("no tracker left to run")
-        box_root = out_p / ("boxes" if protocol == "ope" else "boxes_vot")
+        box_root = out_p / {"ope": "boxes", "vot": "boxes_vot"}.get(protocol, f"boxes_{protocol}")
         files["boxes"] = str(box_root)
         ex = _executor(cfg.executor, cfg.jobs, cfg.cv_threads, cfg.scheduler, say)
         runs, n_resumed, unscored_errors = _run_trackers(ds, tracker_names, cfg, ex, box_root,

@@ -5,7 +5,10 @@ Each tracker is one curve; the legend reads ``name [score]`` and is sorted by th
 best first, as OTB's ``perfPlot.m`` does: the success plot is ranked by AUC (the mean of the
 21 success-curve points), the precision plot by the precision at 20 px. The accuracy-speed
 plot puts each tracker at its mean AUC against its update frames per second, both from the same
-run, so that the trade-off between trackers is read at a glance.
+run, so that the trade-off between trackers is read at a glance; its labels are placed so that
+none overlaps another or leaves the axes (:func:`place_labels`). The long-term protocol's plots
+are the tracking precision-recall curve and the F-score bars. Every plot is written at
+:data:`DPI` (150) dots per inch.
 
 matplotlib is an optional dependency (the ``eval`` extra).  :func:`require_matplotlib`
 raises a :class:`RuntimeError` that tells the user to ``pip install "wmiltrack[eval]"``.
@@ -23,8 +26,13 @@ import numpy.typing as npt
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 
 __all__ = [
+    "DPI",
     "INSTALL_HINT",
+    "accuracy_speed_figure",
+    "place_labels",
     "plot_accuracy_speed",
+    "plot_fscore_bars",
+    "plot_precision_recall",
     "plot_precision",
     "plot_success",
     "ranked",
@@ -35,6 +43,16 @@ INSTALL_HINT = 'plots need matplotlib: pip install "wmiltrack[eval]"'
 """Message of the error raised when matplotlib is missing."""
 
 FloatArray = npt.NDArray[np.float64]
+
+#: Resolution of every plot: a 5 x 3.9 inch figure is 750 x 585 pixels, readable on a page.
+DPI = 150
+
+#: Distances (pixels) from its point at which a label is tried, nearest first.
+_LABEL_RADII = (5, 9, 14, 20, 28, 38, 50, 65, 82, 100, 125, 150, 180, 215, 255, 300)
+#: Directions (degrees) tried at each distance: right first, then up and down, left last.
+_LABEL_ANGLES = (0, 30, -30, 60, -60, 90, -90, 120, -120, 150, -150, 180)
+#: Gap (pixels) kept around every label and marker.
+_LABEL_PAD = 1.5
 
 #: Up to this many curves the legend sits inside the axes (OTB's style); with more it would
 #: cover the curves, so it goes beside them.
@@ -134,7 +152,7 @@ def plot_success(
     path: str | os.PathLike[str],
     *,
     title: str = "Success plots of OPE",
-    dpi: int = 80,
+    dpi: int = DPI,
 ) -> None:
     """Write the success plot (fraction of frames with IoU > t against t) as a PNG.
 
@@ -149,7 +167,7 @@ def plot_success(
     title:
         Plot title.
     dpi:
-        Resolution (80 keeps the file around 30-40 KB).
+        Resolution (:data:`DPI`).
 
     Raises
     ------
@@ -176,7 +194,7 @@ def plot_precision(
     path: str | os.PathLike[str],
     *,
     title: str = "Precision plots of OPE",
-    dpi: int = 80,
+    dpi: int = DPI,
 ) -> None:
     """Write the precision plot (fraction of frames with centre error <= t px) as a PNG.
 
@@ -212,16 +230,162 @@ def plot_precision(
     )
 
 
+def _free(box: Any, area: Any, taken: Sequence[Any]) -> bool:
+    """Whether the text box ``box`` lies inside ``area`` and overlaps nothing in ``taken``."""
+    inside = (box.x0 >= area.x0 and box.y0 >= area.y0 and box.x1 <= area.x1
+              and box.y1 <= area.y1)
+    return inside and not any(box.overlaps(t) for t in taken)
+
+
+def _alignment(angle: float) -> tuple[str, str]:
+    """Text alignment that puts a label on the side of its point that ``angle`` points to."""
+    c, s = np.cos(np.radians(angle)), np.sin(np.radians(angle))
+    ha = "left" if c > 0.3 else "right" if c < -0.3 else "center"
+    va = "bottom" if s > 0.3 else "top" if s < -0.3 else "center"
+    return ha, va
+
+
+def place_labels(ax: Any, xs: Sequence[float], ys: Sequence[float], labels: Sequence[str],
+                 *, fontsize: float = 8.0) -> list[Any]:
+    """Write one label beside each point so that no two labels overlap, no label covers a
+    point's marker, and every label lies inside the axes.
+
+    Each label in turn is tried at growing distances from its point (:data:`_LABEL_RADII`) in
+    several directions (:data:`_LABEL_ANGLES`), and takes the first place where its drawn text
+    box, as the figure's renderer measures it, is free; a label put more than 20 pixels away
+    gets a thin line to its point. A label that finds no place at its size is tried one point
+    smaller (down to 5 pt). Call it after the axes' limits and the figure's layout are final:
+    the places are in pixels.
+
+    Parameters
+    ----------
+    ax:
+        The matplotlib axes, points already drawn.
+    xs, ys:
+        The points, in data coordinates.
+    labels:
+        One label per point.
+    fontsize:
+        Points.
+
+    Returns
+    -------
+    list of matplotlib.text.Annotation
+        The labels, in the order given.
+
+    Raises
+    ------
+    ValueError
+        Lengths that differ.
+    RuntimeError
+        A label that fits nowhere even at 5 pt (more labels than the axes can hold).
+    """
+    if not len(xs) == len(ys) == len(labels):
+        raise ValueError(f"{len(xs)} x, {len(ys)} y and {len(labels)} labels: give one of each "
+                         "per point")
+    fig = ax.figure
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    area = ax.get_window_extent(renderer)
+    from matplotlib.transforms import Bbox
+
+    points = ax.transData.transform(np.column_stack([xs, ys]).astype(np.float64))
+
+    half = 4.0 + _LABEL_PAD  # a marker's half size in pixels, with the gap
+    taken: list[Any] = [Bbox.from_extents(px - half, py - half, px + half, py + half)
+                        for px, py in points]
+    per_pixel = 72.0 / fig.dpi  # offset points per pixel
+    texts = []
+    for x, y, label in zip(xs, ys, labels):
+        placed = None
+        size = fontsize
+        while placed is None and size >= 5.0:
+            text = ax.annotate(label, (x, y), xytext=(0.0, 0.0), textcoords="offset points",
+                               fontsize=size)
+            placed = _first_free(text, renderer, area, taken, per_pixel)
+            if placed is None:
+                text.remove()
+                size -= 1.0
+        if placed is None:
+            raise RuntimeError(f"no room for the label {label!r}: the plot holds too many points "
+                               "close together")
+        text, box, (dx, dy) = placed
+        taken.append(box.padded(_LABEL_PAD))
+        if np.hypot(dx, dy) > 20.0:
+            ax.annotate("", (x, y), xytext=(dx * per_pixel, dy * per_pixel),
+                        textcoords="offset points",
+                        arrowprops={"arrowstyle": "-", "linewidth": 0.5, "color": "0.45",
+                                    "shrinkA": 0.0, "shrinkB": 3.0})
+        texts.append(text)
+    return texts
+
+
+def _first_free(text: Any, renderer: Any, area: Any, taken: Sequence[Any], per_pixel: float
+                ) -> tuple[Any, Any, tuple[float, float]] | None:
+    """Move ``text`` to the first free place around its point: ``(text, box, offset)``."""
+    for r in _LABEL_RADII:
+        for angle in _LABEL_ANGLES:
+            dx, dy = r * np.cos(np.radians(angle)), r * np.sin(np.radians(angle))
+            ha, va = _alignment(angle)
+            text.set_horizontalalignment(ha)
+            text.set_verticalalignment(va)
+            text.set_position((dx * per_pixel, dy * per_pixel))
+            box = text.get_window_extent(renderer)
+            if _free(box.padded(_LABEL_PAD), area, taken):
+                return text, box, (dx, dy)
+    return None
+
+
+def accuracy_speed_figure(
+    aucs: Mapping[str, float],
+    fps: Mapping[str, float],
+    *,
+    title: str = "Accuracy and speed",
+    dpi: int = DPI,
+) -> tuple[Any, Any, list[str], list[Any]]:
+    """The accuracy-speed figure (see :func:`plot_accuracy_speed`), not yet saved or closed:
+    ``(figure, axes, trackers shown, their labels)``; the caller closes the figure."""
+    shown = [t for t in ranked(aucs)
+             if t in fps and np.isfinite(float(aucs[t])) and np.isfinite(float(fps[t]))
+             and float(fps[t]) > 0]
+    if not shown:
+        raise ValueError("no tracker has both an AUC and a speed to plot")
+    plt = require_matplotlib()
+    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=dpi)
+    try:
+        xs = np.array([float(fps[t]) for t in shown])
+        ys = np.array([float(aucs[t]) for t in shown])
+        markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
+        for i, (x, y) in enumerate(zip(xs, ys)):
+            ax.scatter([x], [y], marker=markers[i % len(markers)], s=30, zorder=3)
+        ax.set_xscale("log")
+        lo, hi = float(xs.min()), float(xs.max())
+        ax.set_xlim(lo / 2.5, hi * 4.0)  # room for labels on either side of the extreme points
+        span = max(float(ys.max() - ys.min()), 0.05)
+        ax.set_ylim(max(0.0, float(ys.min()) - 0.35 * span), min(1.0, float(ys.max()) + 0.35 * span))
+        ax.set_xlabel("Update frames per second (log scale, same run)")
+        ax.set_ylabel("Mean success AUC")
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, which="both", linewidth=0.4, alpha=0.6)
+        fig.tight_layout()
+        texts = place_labels(ax, list(xs), list(ys), shown, fontsize=8.0)
+    except BaseException:
+        plt.close(fig)
+        raise
+    return fig, ax, shown, texts
+
+
 def plot_accuracy_speed(
     aucs: Mapping[str, float],
     fps: Mapping[str, float],
     path: str | os.PathLike[str],
     *,
     title: str = "Accuracy and speed",
-    dpi: int = 80,
+    dpi: int = DPI,
 ) -> list[str]:
     """Write the accuracy-speed plot: one labelled point per tracker at (update frames per
     second, mean AUC), the speed axis logarithmic (trackers differ by orders of magnitude).
+    Labels never overlap each other or leave the axes (:func:`place_labels`).
 
     Parameters
     ----------
@@ -249,30 +413,107 @@ def plot_accuracy_speed(
     ValueError
         If no tracker has both figures.
     """
-    shown = [t for t in ranked(aucs)
-             if t in fps and np.isfinite(float(aucs[t])) and np.isfinite(float(fps[t]))
-             and float(fps[t]) > 0]
-    if not shown:
-        raise ValueError("no tracker has both an AUC and a speed to plot")
     plt = require_matplotlib()
-    fig, ax = plt.subplots(figsize=(5.6, 3.9))
+    fig, _, shown, _ = accuracy_speed_figure(aucs, fps, title=title, dpi=dpi)
     try:
-        xs = np.array([float(fps[t]) for t in shown])
-        ys = np.array([float(aucs[t]) for t in shown])
-        markers = ["o", "s", "^", "D", "v", "P", "X", "*"]
-        for i, (name, x, y) in enumerate(zip(shown, xs, ys)):
-            ax.scatter([x], [y], marker=markers[i % len(markers)], s=36, zorder=3)
-            ax.annotate(name, (x, y), xytext=(4, 3), textcoords="offset points", fontsize=7)
-        ax.set_xscale("log")
-        lo, hi = float(xs.min()), float(xs.max())
-        ax.set_xlim(lo / 2.0, hi * 3.0)  # room for the labels right of the fastest point
-        ax.set_ylim(max(0.0, float(ys.min()) - 0.05), min(1.0, float(ys.max()) + 0.05))
-        ax.set_xlabel("Update frames per second (log scale, same run)")
-        ax.set_ylabel("Mean success AUC")
-        ax.set_title(title, fontsize=10)
-        ax.grid(True, which="both", linewidth=0.4, alpha=0.6)
-        fig.tight_layout()
         fig.savefig(os.fspath(path), dpi=dpi)
     finally:
         plt.close(fig)
     return shown
+
+
+def plot_precision_recall(
+    curves: Mapping[str, tuple[Sequence[float], Sequence[float]]],
+    fscores: Mapping[str, float],
+    path: str | os.PathLike[str],
+    *,
+    title: str = "Tracking precision-recall",
+    dpi: int = DPI,
+) -> None:
+    """Write the long-term precision-recall plot: each tracker's tracking recall (x) and
+    precision (y) over its confidence thresholds, its best F-score marked, the legend ranked by
+    that F-score.
+
+    Parameters
+    ----------
+    curves:
+        ``{tracker: (precision, recall)}``, one value per threshold
+        (:mod:`wmiltrack.eval.longterm`).
+    fscores:
+        ``{tracker: F-score}``: legend values and order (best first).
+    path:
+        Output file (``.png``).
+    """
+    plt = require_matplotlib()
+    outside = len(fscores) > _LEGEND_INSIDE_MAX
+    fig, ax = plt.subplots(figsize=(7.4 if outside else 5.0, 4.2))
+    styles = ["-", "--", "-.", ":"]
+    try:
+        for i, name in enumerate(ranked(fscores)):
+            pr = np.asarray(curves[name][0], dtype=np.float64)
+            re = np.asarray(curves[name][1], dtype=np.float64)
+            line = ax.plot(re, pr, linestyle=styles[(i // 10) % len(styles)],
+                           linewidth=2.0 if i == 0 else 1.5,
+                           label=f"{name} [{float(fscores[name]):.3f}]")[0]
+            f = np.where(pr + re > 0, 2 * pr * re / np.where(pr + re > 0, pr + re, 1.0), 0.0)
+            best = int(np.argmax(f))
+            ax.plot([re[best]], [pr[best]], marker="o", color=line.get_color(), markersize=5)
+        ax.set_xlim(0.0, 1.0)
+        ax.set_ylim(0.0, 1.0)
+        ax.set_xlabel("Tracking recall")
+        ax.set_ylabel("Tracking precision")
+        ax.set_title(title, fontsize=10)
+        ax.grid(True, linewidth=0.4, alpha=0.6)
+        if outside:
+            ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+                      fontsize=8, frameon=False)
+        else:
+            ax.legend(loc="lower left", fontsize=8, framealpha=0.85)
+        fig.tight_layout()
+        fig.savefig(os.fspath(path), dpi=dpi)
+    finally:
+        plt.close(fig)
+
+
+def plot_fscore_bars(
+    fscores: Mapping[str, float],
+    ok_fscores: Mapping[str, float],
+    path: str | os.PathLike[str],
+    *,
+    title: str = "Tracking F-score",
+    dpi: int = DPI,
+) -> None:
+    """Write the F-score bars: per tracker, ranked, its F-score at the best confidence
+    threshold and at its own lost flag, side by side, each bar with its value.
+
+    Parameters
+    ----------
+    fscores:
+        ``{tracker: maximum F-score over thresholds}``.
+    ok_fscores:
+        ``{tracker: F-score at its lost flag}``.
+    path:
+        Output file (``.png``).
+    """
+    plt = require_matplotlib()
+    names = ranked(fscores)
+    fig, ax = plt.subplots(figsize=(max(5.0, 1.0 + 0.55 * len(names)), 4.2))
+    try:
+        x = np.arange(len(names), dtype=np.float64)
+        best = [float(fscores[n]) for n in names]
+        at_ok = [float(ok_fscores.get(n, float("nan"))) for n in names]
+        for offset, values, label in ((-0.2, best, "best threshold"), (0.2, at_ok, "own lost flag")):
+            bars = ax.bar(x + offset, np.nan_to_num(values), width=0.38, label=label)
+            ax.bar_label(bars, labels=[f"{v:.2f}" if np.isfinite(v) else "n/a" for v in values],
+                         fontsize=7, padding=1)
+        ax.set_xticks(x)
+        ax.set_xticklabels(names, rotation=30, ha="right", fontsize=8)
+        ax.set_ylim(0.0, 1.08)
+        ax.set_ylabel("Tracking F-score")
+        ax.set_title(title, fontsize=10)
+        ax.legend(loc="upper right", fontsize=8, framealpha=0.85)
+        ax.grid(True, axis="y", linewidth=0.4, alpha=0.6)
+        fig.tight_layout()
+        fig.savefig(os.fspath(path), dpi=dpi)
+    finally:
+        plt.close(fig)

@@ -233,6 +233,88 @@ def write_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, s
     return files
 
 
+def write_longterm_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, str]:
+    """Write ``precision_recall_longterm.png`` and ``fscore_longterm.png`` of
+    :func:`wmiltrack.eval.longterm.longterm_scores`'s summary.
+
+    Returns
+    -------
+    dict
+        ``{"precision_recall_plot": path, "fscore_plot": path}``.
+    """
+    from .plots import plot_fscore_bars, plot_precision_recall
+
+    summ = scored["summary"]
+    pr_path = out / "precision_recall_longterm.png"
+    f_path = out / "fscore_longterm.png"
+    plot_precision_recall(
+        {t: (s["curve"]["precision"], s["curve"]["recall"]) for t, s in summ.items()},
+        {t: s["f_score"] for t, s in summ.items()},
+        pr_path,
+        title=f"Tracking precision-recall ({n_seq} sequences)",
+    )
+    plot_fscore_bars(
+        {t: s["f_score"] for t, s in summ.items()},
+        {t: s["ok_f_score"] for t, s in summ.items()},
+        f_path,
+        title=f"Tracking F-score ({n_seq} sequences)",
+    )
+    return {"precision_recall_plot": str(pr_path), "fscore_plot": str(f_path)}
+
+
+def format_longterm_table(scored: Mapping[str, Any], *, title: str) -> str:
+    """The long-term protocol's markdown table: per tracker the F-score, precision and recall at
+    its best confidence threshold and at its own lost flag, then each sequence's F-scores.
+
+    Parameters
+    ----------
+    scored:
+        :func:`wmiltrack.eval.longterm.longterm_scores`.
+    title:
+        The caption (:func:`caption`).
+    """
+    from .plots import ranked
+
+    summ = scored["summary"]
+    order = ranked({t: s["f_score"] for t, s in summ.items()})
+    lines = [
+        "Long-term tracking (VOT-LT measures): tracking precision Pr, recall Re and F-score "
+        "F = 2 Pr Re / (Pr + Re); per sequence, then averaged over sequences at each confidence "
+        "threshold, F at the threshold that maximises it (as the VOT toolkit); 'lost flag': "
+        "the frames the tracker says it has the target. Frames where the target is absent "
+        "count against precision.",
+        "",
+        title,
+        "",
+    ]
+    rows = []
+    for t in order:
+        s = summ[t]
+        rows.append([t, _f(s["f_score"], ".3f"), _f(s["precision"], ".3f"),
+                     _f(s["recall"], ".3f"), _f(s["threshold"], ".3g"), _f(s["ok_f_score"], ".3f"),
+                     _f(s["ok_precision"], ".3f"), _f(s["ok_recall"], ".3f"), s["confidence"],
+                     str(s.get("errors", 0))])
+    lines += _markdown(["Tracker", "F", "Pr", "Re", "threshold", "F (lost flag)", "Pr (lost flag)",
+                        "Re (lost flag)", "confidence", "failed runs"], rows, [])
+    seqs = sorted({q for t in order for q in scored["results"][t]})
+    lines += ["", "Per sequence: F at the tracker's best threshold / F at its lost flag "
+              "(absent frames in brackets).", ""]
+    seq_rows = []
+    for q in seqs:
+        cells = []
+        absent = 0
+        for t in order:
+            r = scored["results"][t].get(q)
+            if r is None:
+                cells.append("-")
+                continue
+            absent = r["absent_frames"]
+            cells.append(f"{_f(r['f_score'], '.3f')} / {_f(r['ok_f_score'], '.3f')}")
+        seq_rows.append([f"{q} ({absent})", *cells])
+    lines += _markdown(["Sequence", *order], seq_rows, [])
+    return "\n".join(lines) + "\n"
+
+
 def _f(v: Any, spec: str) -> str:
     if v is None:
         return "-"

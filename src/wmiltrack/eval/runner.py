@@ -165,7 +165,7 @@ def _factory(
 
 def run_sequence(
     spec: TrackerSpec,
-    frames: Sequence[Frame],
+    frames: Sequence[Frame | None],
     init_box: Sequence[float] | npt.NDArray[Any],
     *,
     seed: int = 0,
@@ -180,7 +180,9 @@ def run_sequence(
         A tracker name for :func:`wmiltrack.trackers.make_tracker` (``"rcwmil"``,
         ``"opencv:MIL"``...) or a callable returning a new tracker.
     frames:
-        The decoded frames (decode before calling: decoding is not timed).
+        The decoded frames (decode before calling: decoding is not timed). ``None`` marks a
+        frame that could not be decoded: the tracker is not updated there and the frame gets
+        the last box, with ``ok`` False and no score (as ``wmiltrack track`` skips it).
     init_box:
         ``(x, y, w, h)`` of the target in ``frames[0]``.
     seed:
@@ -197,7 +199,7 @@ def run_sequence(
     Raises
     ------
     ValueError
-        If ``frames`` is empty or ``init_box`` is not 4 numbers.
+        If ``frames`` is empty, its first frame is ``None``, or ``init_box`` is not 4 numbers.
     Exception
         Whatever creating the tracker raises (unknown name, :class:`TrackerUnavailable`...),
         and, with ``raise_errors``, whatever ``init``/``update`` raise.
@@ -205,6 +207,9 @@ def run_sequence(
     n = len(frames)
     if n == 0:
         raise ValueError("no frames to track")
+    first = frames[0]
+    if first is None:
+        raise ValueError("the first frame could not be decoded, and the first box belongs to it")
     box0 = np.asarray(init_box, dtype=np.float64).reshape(-1)
     if box0.shape != (4,):
         raise ValueError(f"init_box must be 4 numbers x, y, w, h; got {init_box!r}")
@@ -216,11 +221,15 @@ def run_sequence(
     with gc_paused():
         try:
             box_tuple = (float(box0[0]), float(box0[1]), float(box0[2]), float(box0[3]))
-            _, run.init_time = timed(tracker.init, frame_list[0], box_tuple)
+            _, run.init_time = timed(tracker.init, first, box_tuple)
             run.boxes[0] = box0
             run.oks[0] = True
             for i in range(1, n):
-                r, run.times[i] = timed(tracker.update, frame_list[i])
+                frame = frame_list[i]
+                if frame is None:  # not decodable: skipped, the last box held
+                    run.boxes[i] = run.boxes[i - 1]
+                    continue
+                r, run.times[i] = timed(tracker.update, frame)
                 run.boxes[i] = r.box
                 run.scores[i] = r.score
                 run.oks[i] = r.ok
@@ -349,6 +358,13 @@ class RunOutcome:
         Frame where it failed (the first frame not tracked), else ``None``.
     vot:
         :meth:`wmiltrack.eval.vot_style.SupervisedResult.to_dict` for the VOT protocol.
+    scores:
+        ``(n,)`` the tracker's confidence per frame (``TrackResult.score``); NaN where it gave
+        none (frame 0 of a run, frames not tracked). Empty when not known (box files read
+        back).
+    skipped_frames:
+        One line per frame of the sequence that could not be decoded (``frame 120:
+        0120.jpg: truncated JPEG ...``): not given to the tracker, which kept its last box.
     """
 
     tracker: str
@@ -365,6 +381,8 @@ class RunOutcome:
     error: str | None = None
     error_frame: int | None = None
     vot: dict[str, Any] | None = field(default=None, repr=False)
+    scores: FloatArray = field(default_factory=lambda: np.zeros(0), repr=False)
+    skipped_frames: tuple[str, ...] = ()
 
     @property
     def frames_run(self) -> int:
@@ -373,10 +391,21 @@ class RunOutcome:
 
 
 # one decoded sequence per process: tasks come sequence by sequence, so each is decoded once
-_decoded: dict[tuple[str, str | None, str], tuple[str, FloatArray, list[Frame]]] = {}
+_decoded: dict[tuple[str, str | None, str], _Decoded] = {}
 
 
-def _load(task: Task) -> tuple[str, FloatArray, list[Frame]]:
+@dataclass(frozen=True)
+class _Decoded:
+    """A sequence decoded for its tasks: frames (``None`` where one could not be decoded) and
+    one line per such frame."""
+
+    name: str
+    gt: FloatArray
+    frames: list[Frame | None]
+    problems: tuple[str, ...]
+
+
+def _load(task: Task) -> _Decoded:
     key = (task.layout, task.dataset, task.sequence)
     if key not in _decoded:
         _decoded.clear()
@@ -393,8 +422,30 @@ def _load(task: Task) -> tuple[str, FloatArray, list[Frame]]:
         if seq.groundtruth is None:  # pragma: no cover - every loader reads it
             raise ValueError(f"{task.sequence}: no ground truth")
         gt = np.asarray(seq.groundtruth, dtype=np.float64)
-        _decoded[key] = (seq.name, gt, seq.load())  # decoded before any clock starts
+        frames, problems = _decode_all(seq)  # decoded before any clock starts
+        if len(frames) != len(gt):
+            raise ValueError(f"{seq.name}: decoded {len(frames)} frames but have {len(gt)} "
+                             "ground-truth boxes")
+        _decoded[key] = _Decoded(seq.name, gt, frames, problems)
     return _decoded[key]
+
+
+def _decode_all(seq: Any) -> tuple[list[Frame | None], tuple[str, ...]]:
+    """Every frame of ``seq`` as :class:`wmiltrack.data.sequences.TolerantFrames` reads them
+    (the reader of ``wmiltrack track``): one frame that cannot be decoded (a truncated JPEG)
+    is ``None`` with a line saying why, instead of failing the whole sequence."""
+    from ..data.sequences import TolerantFrames
+
+    frames: list[Frame | None] = []
+    problems: list[str] = []
+    try:
+        for i, frame, problem in TolerantFrames(seq):
+            frames.append(frame)
+            if frame is None:
+                problems.append(f"frame {i + 1}: {problem}")
+    finally:
+        seq.close()
+    return frames, tuple(problems)
 
 
 class _TimedTracker:
@@ -416,7 +467,8 @@ class _TimedTracker:
         return r
 
 
-def _run_ope(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> RunOutcome:
+def _run_ope(task: Task, data: _Decoded) -> RunOutcome:
+    name, frames, gt = data.name, data.frames, data.gt
     n = len(frames)
     idx = np.flatnonzero(valid_mask(gt))
     if idx.size == 0:
@@ -427,8 +479,10 @@ def _run_ope(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> 
         run = run_sequence(task.tracker, frames[start:], gt[start], seed=task.seed)
     boxes = np.full((n, 4), np.nan)
     oks = np.zeros(n, dtype=bool)
+    scores = np.full(n, np.nan)
     boxes[start:] = run.boxes
     oks[start:] = run.oks
+    scores[start:] = run.scores
     error_frame = None if run.error_frame is None else start + run.error_frame
     end = n if error_frame is None else error_frame
     return RunOutcome(
@@ -446,11 +500,18 @@ def _run_ope(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> 
         error=None if run.error is None else (
             run.error if error_frame is None else f"{run.error} (frame {error_frame + 1})"),
         error_frame=error_frame,
+        scores=scores,
+        skipped_frames=data.problems,
     )
 
 
-def _run_vot(task: Task, name: str, frames: Sequence[Frame], gt: FloatArray) -> RunOutcome:
+def _run_vot(task: Task, data: _Decoded) -> RunOutcome:
     from .vot_style import run_supervised
+
+    name, gt = data.name, data.gt
+    if data.problems:  # the supervised protocol re-initialises on frames: it needs them all
+        raise ValueError(f"the VOT protocol needs every frame; {'; '.join(data.problems)}")
+    frames = [f for f in data.frames if f is not None]
 
     init_times: list[float] = []
     update_times: list[float] = []
@@ -495,11 +556,11 @@ def run_task(task: Task) -> RunOutcome:
     name = Path(task.sequence).name
     n = 0
     try:
-        name, gt, frames = _load(task)
-        n = len(frames)
+        data = _load(task)
+        name, n = data.name, len(data.frames)
         if task.protocol == "vot":
-            return _run_vot(task, name, frames, gt)
-        return _run_ope(task, name, frames, gt)
+            return _run_vot(task, data)
+        return _run_ope(task, data)
     except Exception as exc:  # noqa: BLE001 - recorded in the outcome, reported in the table
         return RunOutcome(
             tracker=task.tracker,

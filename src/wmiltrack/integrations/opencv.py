@@ -22,7 +22,7 @@ import numpy as np
 
 from ..engine.params import Params
 from ..engine.result import TrackResult
-from ..engine.tracker import Tracker
+from ..engine.tracker import NotInitializedError, Tracker
 
 __all__ = [
     "COMPAT_CLASSES",
@@ -76,6 +76,7 @@ class TrackerCompat:
             raise TypeError("params must be a wmiltrack.Params, a mapping or None, "
                             f"got {type(params).__name__}")
         self.last_result: TrackResult | None = None
+        self._started = False
 
     @classmethod
     def create(cls, params: Params | Mapping[str, Any] | None = None, seed: int = 0) -> TrackerCompat:
@@ -112,6 +113,7 @@ class TrackerCompat:
         """
         self._tracker.init(image, boundingBox)
         self.last_result = None
+        self._started = True
 
     def update(self, image: np.ndarray) -> tuple[bool, Rect]:
         """Locate the target in the next frame.
@@ -124,9 +126,11 @@ class TrackerCompat:
         Returns
         -------
         tuple of (bool, tuple of 4 int)
-            ``(ok, (x, y, w, h))`` as OpenCV returns them; ``ok`` is False when the
-            confidence fell below the variant's ``lost_threshold`` (the box is still the
-            best guess).
+            ``(ok, (x, y, w, h))`` as OpenCV returns them; ``ok`` is the tracker's lost flag
+            (:attr:`wmiltrack.TrackResult.ok`; False: the target is judged lost or hidden, the
+            box is still the best guess). For the paper presets it is the score against the
+            variant's ``lost_threshold``; presets with a lost judge (``rcwmil-cf``) decide from
+            more than this frame's score, so ``ok`` and ``score >= lost_threshold`` can differ.
         """
         r = self._tracker.update(image)
         self.last_result = r
@@ -134,13 +138,21 @@ class TrackerCompat:
         return bool(r.ok), (x, y, w, h)
 
     def getTrackingScore(self) -> float:  # noqa: N802 (OpenCV's name)
-        """Confidence in [0, 1] of the last update (1.0 right after :meth:`init`).
+        """Confidence in [0, 1] of the last update (1.0 right after :meth:`init`: the box was
+        given).
 
         Returns
         -------
         float
             The ``score`` of :attr:`last_result`, as ``cv2.TrackerNano.getTrackingScore``.
+
+        Raises
+        ------
+        NotInitializedError
+            Before :meth:`init`: there is no target yet, so no confidence to give.
         """
+        if not self._started:
+            raise NotInitializedError("call init(image, boundingBox) before getTrackingScore()")
         return 1.0 if self.last_result is None else float(self.last_result.score)
 
     def __repr__(self) -> str:
