@@ -147,3 +147,18 @@ def _models_folder(tmp_path_factory: pytest.TempPathFactory) -> object:
             os.environ.pop(k, None)
         else:
             os.environ[k] = v
+
+
+@pytest.fixture(autouse=True)
+def _model_variables_restored() -> object:
+    """The model files' environment variables as they were before each test: the command line
+    puts ``--nano-backbone``/``--nano-head`` there for the run (and rcwmil-nano reads them too),
+    so a test that runs ``main()`` in this process must not leave its files to the next one."""
+    keys = ("WMILTRACK_MODELS", "WMILTRACK_NANO_BACKBONE", "WMILTRACK_NANO_HEAD")
+    before = {k: os.environ.get(k) for k in keys}
+    yield
+    for k, v in before.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v

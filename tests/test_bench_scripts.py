@@ -229,7 +229,21 @@ def test_devset_halves_and_lost_flag_shares(tmp_path: Path) -> None:
     assert s["half1"] == pytest.approx((per["Aa"] + per["Cc"]) / 2)
     assert s["half2"] == pytest.approx((per["Bb"] + per["Dd"]) / 2)
     assert 0.0 <= s["well_tracked_flagged_lost"] <= 1.0
-    assert f"rcwmil: half 1 {s['half1']:.3f}, half 2 {s['half2']:.3f}" in r.stdout
+    assert (f"rcwmil: half 1 {s['half1']:.3f} (sd {s['half1_spread']:.3f}), half 2 "
+            f"{s['half2']:.3f} (sd {s['half2_spread']:.3f})") in r.stdout
+    # the init jitter: seeded by seed and sequence only, the same for every tracker, within 1 px
+    sys.path.insert(0, str(BENCH))
+    import devset
+
+    box = (10.0, 20.0, 30.0, 40.0)
+    shifted = [devset.jitter(box, seed, "Aa", 1.0) for seed in (0, 1, 2)]
+    assert len({b[:2] for b in shifted}) == 3 and all(b[2:] == box[2:] for b in shifted)
+    assert all(0.25 - 1e-9 <= np.hypot(b[0] - 10, b[1] - 20) <= 1 + 1e-9 for b in shifted)
+    assert devset.jitter(box, 1, "Aa", 1.0) == shifted[1] != devset.jitter(box, 1, "Bb", 1.0)
+    assert devset.jitter(box, 1, "Aa", 0.0) == box
+    rc = [x for x in got["runs"] if x["spec"] == "rcwmil-cf"]
+    assert {(x["name"], x["seed"]): x["boxes"][0] for x in rc} == {
+        (x["name"], x["seed"]): x["boxes"][0] for x in runs}
     same = _run([str(BENCH / "devset.py"), "--roots", f"{tmp_path / 'one'},{tmp_path / 'one'}"])
     assert same.returncode != 0 and "is in both" in same.stderr
 

@@ -17,7 +17,7 @@ from wmiltrack.data.synthetic import make_sequence
 from wmiltrack.engine.multi import MultiTracker
 
 PRESETS = list(wmiltrack.variants())
-PICKLABLE = [v for v in PRESETS if v not in ("rcwmil-plus", "rcwmil-cf")]
+PICKLABLE = [v for v in PRESETS if v not in ("rcwmil-plus", "rcwmil-cf", "rcwmil-nano")]
 
 
 @pytest.fixture(scope="module")

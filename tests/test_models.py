@@ -8,6 +8,8 @@ without it, failing under ``CI``). No test contacts any host but 127.0.0.1.
 
 from __future__ import annotations
 
+import functools
+
 import dataclasses
 import hashlib
 import http.server
@@ -36,7 +38,7 @@ from wmiltrack.models import (
     models_dir,
     nanotrack_files,
 )
-from wmiltrack.progress import NO_PROGRESS_ENV
+from wmiltrack.progress import NO_PROGRESS_ENV, progress
 
 COMMIT = "248663fde6bf7c40190cf10ee396d5662919ecd3"
 #: The repository's raw-file URL paths of the four files, and where ../shared/models/nanotrack
@@ -420,6 +422,8 @@ def test_cli_fetch_shows_a_progress_bar(server: tuple[str, Served], fake: dict[s
     serve_fake(served, fake)
     monkeypatch.setenv(MODELS_URL_ENV, url)
     monkeypatch.delenv(NO_PROGRESS_ENV)
+    # (a local fetch ends before the bar's usual half-second delay: draw it from the start)
+    monkeypatch.setattr("wmiltrack.models.progress", functools.partial(progress, delay=0.0))
     assert main(["models", "fetch", "nanotrack-v2"]) == 0
     err = capsys.readouterr().err
     assert "nanotrack-v2 nanotrack_head_sim.onnx: 100%" in err and err.count("(SHA-1 checked)") == 2

@@ -585,7 +585,7 @@ def test_colour_relative_in_the_preset_only() -> None:
     colour cue, and ``None`` (the absolute reading) is accepted."""
     assert wmiltrack.Params.for_variant("rcwmil-plus").colour_relative == 0.0
     for name, p in wmiltrack.variants().items():
-        if name not in ("rcwmil-plus", "rcwmil-cf"):
+        if name not in ("rcwmil-plus", "rcwmil-cf", "rcwmil-nano"):
             assert p.colour_relative is None and p.colour_weight == 0.0
     assert wmiltrack.Params.for_variant("rcwmil-plus", colour_relative=None).colour_relative is None
 

@@ -108,7 +108,10 @@ def test_partly_outside_box_is_clipped(demo_sequence) -> None:
 
 def test_variants_lists_the_six_family_members() -> None:
     v = wmiltrack.variants()
-    assert list(v) == ["rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf"]
+    assert list(v) == ["rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf",
+                       "rcwmil-nano"]
+    nano, cf = v["rcwmil-nano"].as_dict(), v["rcwmil-cf"].as_dict()
+    assert {k for k in nano if nano[k] != cf[k]} == {"variant", "description", "network"}
     assert all(isinstance(p, wmiltrack.Params) for p in v.values())
     assert wmiltrack.Tracker().params == v["rcwmil"]
 

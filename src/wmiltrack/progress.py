@@ -18,12 +18,12 @@ NO_PROGRESS_ENV = "WMILTRACK_NO_PROGRESS"
 
 
 def progress(iterable: Iterable[T], total: int | None = None, desc: str = "", *,
-             enabled: bool | None = None) -> tqdm[T]:
+             enabled: bool | None = None, delay: float = 0.5) -> tqdm[T]:
     """``tqdm(iterable)`` with wmiltrack's defaults: off when :data:`NO_PROGRESS_ENV` is set
     (unless ``enabled`` forces it), slow redraws so that logs stay short, and nothing drawn in
-    the first half second, so that a run that stops at once (a bad input) shows its error
+    the first ``delay`` seconds, so that a run that stops at once (a bad input) shows its error
     alone, without a bar before it."""
     if enabled is None:
         enabled = os.environ.get(NO_PROGRESS_ENV, "").strip().lower() in ("", "0", "false", "no", "off")
     return tqdm(iterable, total=total, desc=desc, disable=not enabled, mininterval=0.5,
-                dynamic_ncols=True, leave=True, delay=0.5)
+                dynamic_ncols=True, leave=True, delay=delay)
