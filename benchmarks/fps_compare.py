@@ -157,12 +157,13 @@ def _trackers(ap: argparse.ArgumentParser, chosen: str | None) -> list[str]:
             name, _ = parse_spec(spec)
         except ValueError:
             return False
-        return name in VARIANTS
+        return name in VARIANTS or name in ("nanotrack:v2", "nanotrack:v3")
 
     unknown = [t for t in wanted if not valid(t)]  # unavailable OpenCV ones: noted above
     if unknown:
-        ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)} "
-                 "(a variant may carry settings: variant:name=value:...)")
+        ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)}, "
+                 "nanotrack:v2, nanotrack:v3 (a variant may carry settings: "
+                 "variant:name=value:...)")
     specs = [t for t in wanted if not t.startswith("opencv:")]
     return specs + [t for t in trackers if t.startswith("opencv:") and (t in wanted or t == REFERENCE)]
 

@@ -166,3 +166,15 @@ def test_recentre_moves_the_tracker_and_keeps_what_it_learnt() -> None:
     x, y, w2, h2 = t.box
     assert (w2, h2) == (w, h)
     assert math.isclose(x + w / 2, 55.0, abs_tol=1) and math.isclose(y + h / 2, 45.0, abs_tol=1)
+
+
+def test_nanotrack_specs_are_checked_without_loading_the_network() -> None:
+    """The command line refuses a NanoTrack version or keyword that does not exist (exit
+    status 2), before any model file is looked for."""
+    from wmiltrack.cli.options import UsageError, check_tracker_spec
+
+    with pytest.raises(UsageError, match="unknown NanoTrack version 'v9'"):
+        check_tracker_spec("nanotrack:v9")
+    with pytest.raises(UsageError, match="no parameter 'window'"):
+        check_tracker_spec("nanotrack:v3:window=0.4")
+    check_tracker_spec("nanotrack:v2:runtime=opencv:backbone=/nowhere/b.onnx")

@@ -140,11 +140,29 @@ def check_tracker_spec(spec: str) -> None:
         if name.lower() in preset_names():
             Params.for_variant(name, **overrides)  # an unknown parameter or a bad value
             return
-        from ..trackers import make_tracker
+        from ..trackers import NANOTRACK_PREFIX, make_tracker
+
+        if name.lower().startswith(NANOTRACK_PREFIX):  # checked without loading the network
+            _check_nanotrack_spec(name[len(NANOTRACK_PREFIX):].lower(), overrides)
+            return
 
         make_tracker(spec)  # not a preset: the registry's own answer ("did you mean ...")
     except (ValueError, TypeError) as exc:
         raise UsageError(str(exc)) from None
+
+
+def _check_nanotrack_spec(version: str, overrides: dict[str, Any]) -> None:
+    """``nanotrack:VERSION[:key=value...]``: a known version and only the keywords
+    :class:`~wmiltrack.engine.siamese.NanoTracker` takes."""
+    from ..engine.siamese import NANO_VERSIONS
+
+    if version not in NANO_VERSIONS:
+        raise ValueError(f"unknown NanoTrack version {version!r} in nanotrack:{version}; choose "
+                         f"{' or '.join('nanotrack:' + v for v in NANO_VERSIONS)}")
+    unknown = sorted(set(overrides) - {"backbone", "head", "runtime", "threads"})
+    if unknown:
+        raise ValueError(f"nanotrack:{version} has no parameter {', '.join(map(repr, unknown))}; "
+                         "it takes backbone, head, runtime and threads")
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -155,9 +173,12 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     for kind, attrs in MODEL_ENV.items():
         for attr, env in attrs.items():
             option = _model_option(kind, attr)
+            users = f"opencv:{kind}" + (", rcwmil-nano and nanotrack:VERSION" if kind == "Nano" else "")
             p.add_argument(option, type=Path, default=None, metavar="FILE",
-                           help=f"for opencv:{kind}: {MODEL_FILES[(kind, attr)]} (default: "
-                           f"the environment variable {env})")
+                           help=f"for {users}: {MODEL_FILES[(kind, attr)]} (default: "
+                           f"the environment variable {env}"
+                           + ("; rcwmil-nano and nanotrack:VERSION then look in the models "
+                              "folder, see `wmiltrack models list`)" if kind == "Nano" else ")"))
 
 
 def _model_option(kind: str, attr: str) -> str:

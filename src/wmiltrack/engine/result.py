@@ -27,8 +27,11 @@ class TrackResult:
         frame's histograms (``Params.score_colour``, ``score_luma``). Higher is more
         confident; 0.5 is where tracked and lost frames were equally likely.
     ok:
-        ``False`` when the tracker considers the target lost (score below the variant's
-        ``lost_threshold``, or an OpenCV tracker reporting failure).
+        ``False`` when the tracker judges the target lost or hidden: for the paper presets and
+        rcwmil-plus, the score against ``lost_threshold`` (and the lost state); rcwmil-cf's judge
+        and rcwmil-nano's decide from more than this frame's score (a memory of the target, with
+        hysteresis), so a frame may be ``ok`` with a low score and the reverse; OpenCV's
+        trackers: their failure flag.
     """
 
     box: Box
