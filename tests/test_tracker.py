@@ -111,7 +111,8 @@ def test_variants_lists_the_six_family_members() -> None:
     assert list(v) == ["rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf",
                        "rcwmil-nano"]
     nano, cf = v["rcwmil-nano"].as_dict(), v["rcwmil-cf"].as_dict()
-    assert {k for k in nano if nano[k] != cf[k]} == {"variant", "description", "network"}
+    assert {k for k in nano if nano[k] != cf[k]} == {"variant", "description", "network",
+                                                     "likeness_every"}
     assert all(isinstance(p, wmiltrack.Params) for p in v.values())
     assert wmiltrack.Tracker().params == v["rcwmil"]
 

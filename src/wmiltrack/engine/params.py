@@ -225,18 +225,19 @@ VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
 )
 
 VARIANTS["rcwmil-nano"] = VARIANTS["rcwmil-cf"].replace(
-    variant="rcwmil-nano", network="nanotrack-v3",
+    variant="rcwmil-nano", network="nanotrack-v3", likeness_every=3,
     description="rcwmil-cf and NanoTrack v3's Siamese network (two ONNX files, run by "
     "onnxruntime or OpenCV's dnn; not shipped: `wmiltrack models fetch nanotrack-v3`) as two "
     "experts under one judge. The network leads; where the two boxes agree (IoU >= 0.3) the box "
     "is 0.8 the network's and 0.2 the tracker's, where they do not the tracker is moved to the "
     "network's box keeping what it learnt. ok is judged from how alike the network's choice "
-    "is to the first frame's target (the cosine of the backbone's feature maps): lost after 3 "
-    "frames in a row below 0.45 or below 0.8 of the tracked frames' running mean on which the "
-    "experts do not agree, found after 2 above both 0.6 and that floor; while lost, the network "
-    "also searches "
-    "the tracker's box and 4 windows a frame of a sweep over the whole frame, and takes the "
-    "likeliest.",
+    "is to the first frame's target (the cosine of the backbone's feature maps; measured on "
+    "every third frame the experts vouch for): lost after 3 frames in a row below 0.45 or below "
+    "0.8 of the tracked frames' running mean on which the experts do not agree, found after 2 "
+    "above both 0.6 and 0.9 of that mean; while lost, the network keeps its own search, and "
+    "after 10 lost frames also searches the tracker's box and 4 windows a frame of a sweep over "
+    "the whole frame, moving to one only if it is alike the target and more alike than its "
+    "own choice.",
 )
 
 
