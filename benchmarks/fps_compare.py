@@ -62,7 +62,7 @@ from wmiltrack.trackers import (
     split_specs,
 )
 
-VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf")
+VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf", "rcwmil-nano")
 REFERENCE = "opencv:MIL"
 
 
@@ -125,13 +125,17 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _can_make(spec: str) -> bool:
-    """Whether the tracker can be made here; if not (TrackerNano without its model files), a
-    note with the reason, as for a tracker missing from cv2."""
+    """Whether the tracker can be made here; if not (TrackerNano, NanoTrack or rcwmil-nano
+    without their model files), a note with the reason, as for a tracker missing from cv2."""
+    from wmiltrack.models import nanotrack_files
     from wmiltrack.trackers import TrackerUnavailable, make_tracker
 
     try:
-        make_tracker(spec)
-    except TrackerUnavailable as exc:
+        params = getattr(make_tracker(spec), "params", None)
+        if params is not None and params.network:  # (a preset finds its files at init)
+            nanotrack_files(params.network.rsplit("-", 1)[-1], params.backbone or None,
+                            params.head or None)
+    except (TrackerUnavailable, FileNotFoundError) as exc:
         print(f"note: {spec} skipped ({' '.join(str(exc).split())})", file=sys.stderr)
         return False
     return True
