@@ -68,7 +68,7 @@ class Growing:
         x, y, w, h = box
         s = self.step
         grown = (x - s // 2, y - s // 2, w + s, h + s)
-        self.tried.append(grown)
+        self.tried = [grown]  # (this search's, in place of the last one's)
         self.area = grown[2] * grown[3]
         return grown, raw
 

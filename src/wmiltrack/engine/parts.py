@@ -32,8 +32,8 @@ class ScaleEstimator(Protocol):
     neighbouring sizes), :class:`~wmiltrack.engine.template.DSSTScale` (DSST's 1-D filter).
     """
 
-    #: The boxes tried at other sizes on the last frame (:meth:`Tracker.samples`); the tracker
-    #: empties it before each frame's search.
+    #: The boxes tried at other sizes by the last :meth:`search` (the part replaces it at each
+    #: search; the tracker copies it into the frame's record for :meth:`Tracker.samples`).
     tried: list[IntBox]
     #: The part learns (:meth:`learn`) only from frames whose reported score is at least this.
     learn_above: float
