@@ -11,6 +11,7 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_preset
+from wmiltrack.engine.judge import Evidence
 from wmiltrack.engine.state import FrameState, Verdict, new_frame
 from wmiltrack.engine.tracker import Tracker, update_many
 
@@ -45,29 +46,38 @@ def with_stage(t: Tracker, stage: Any) -> Tracker:
     return t
 
 
-class LosesOnce:
-    """A recovery that calls the target lost on the 3rd tracked frame and finds it at
-    ``found`` on the next."""
+class LosesThird:
+    """A judge that calls the target lost on the 3rd frame and found where the recovery put
+    it (a lost frame whose usual search is never enough)."""
+
+    def start(self, frame: np.ndarray, box: Box) -> None:
+        self.frames = 0
+
+    def back(self, state: FrameState, evidence: Evidence) -> bool:
+        return False
+
+    def verdict(self, state: FrameState, evidence: Evidence) -> FrameState:
+        self.frames += 1
+        if state.lost and state.rescued:
+            return state.evolve(verdict=Verdict.FOUND, ok=True, learns=True)
+        if self.frames == 3 or state.lost:
+            return state.evolve(box=state.previous, score=0.0, verdict=Verdict.LOST, ok=False)
+        return state.evolve(verdict=Verdict.TRACKED, ok=True, learns=True, steady=True)
+
+
+class FindsAt:
+    """A recovery that finds the target at ``found``."""
 
     def __init__(self, found: Box) -> None:
         self.found = found
-        self.lost = False
-        self.frames_lost = 0
-        self.judged = 0
 
     def start(self, frame: np.ndarray, box: Box) -> None:
         pass
 
-    def judge(self, conf: float, frame: np.ndarray, box: Box, witnesses: Any = ()) -> bool:
-        self.judged += 1
-        self.lost = self.judged == 3
-        return self.lost
+    def likeness(self, frame: np.ndarray, box: Box) -> None:
+        return None
 
-    def back(self, conf: float, frame: np.ndarray, box: Box) -> bool:
-        return False
-
-    def find(self, frame: np.ndarray) -> Box | None:
-        self.lost = False
+    def find(self, frame: np.ndarray, frames_lost: int) -> Box:
         return self.found
 
     def learn(self, frame: np.ndarray, box: Box) -> None:
@@ -108,23 +118,25 @@ def test_a_stage_of_ones_own_sees_tracked_and_lost_frames(sequence) -> None:
     frames, gt = sequence
     shift = Shift(0)
     found = (60, 50, int(gt[0][2]), int(gt[0][3]))
-    recovery = LosesOnce(found)
-    t = with_stage(Tracker("rcwmil-plus", seed=0, parts={"recovery": lambda p, f, b: recovery}),
+    t = with_stage(Tracker("rcwmil-plus", seed=0, parts={"judge": lambda s, f, b: LosesThird(),
+                                                         "recovery": lambda s, f, b: FindsAt(found)}),
                    shift)
     t.init(frames[0], gt[0])
     results = [t.update(f) for f in frames[1:7]]
     assert [s.lost for s in shift.seen] == [False, False, False, True, False, False]
+    assert [s.verdict for s in shift.seen] == [Verdict.TRACKED] * 2 + [
+        Verdict.LOST, Verdict.FOUND] + [Verdict.TRACKED] * 2
+    assert [s.rescued for s in shift.seen] == [False] * 3 + [True] + [False] * 2
     assert not any(s.learnt for s in shift.seen)  # (the stage comes before learning)
-    verdicts = [s.verdict for s in shift.seen]
-    assert verdicts[2] is Verdict.LOST and verdicts[3] is Verdict.LOST  # (before recover)
     assert not results[2].ok and results[2].score == 0.0 and results[2].box == results[1].box
-    fine = t.params.fine_radius
-    assert abs(results[3].box[0] - found[0]) <= fine
+    fine = t.params.fine_radius  # found again: the fine search around the found box
+    assert results[3].ok and abs(results[3].box[0] - found[0]) <= fine
 
 
 def test_the_record_is_immutable_and_evolves_by_name() -> None:
     frame = np.zeros((4, 4), np.uint8)
-    state = new_frame(frame, (1, 2, 3, 4), False, None)
+    last = FrameState(frame, (1, 2, 3, 4), box=(1, 2, 3, 4), verdict=Verdict.TRACKED)
+    state = new_frame(frame, last, None)
     assert state.box == state.origin == state.previous == (1, 2, 3, 4)
     with pytest.raises(AttributeError):
         state.box = (0, 0, 1, 1)  # type: ignore[misc]

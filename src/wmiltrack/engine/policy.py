@@ -1,5 +1,5 @@
-"""The update policy: how confident a frame is, what score the tracker reports, when the target
-counts as lost, and whether the models learn from the frame."""
+"""The reported score: how confident a frame is, and what score the tracker reports (what the
+score means for ``ok``, the lost state and learning is the judge's: :mod:`.judge`)."""
 
 from __future__ import annotations
 
@@ -65,9 +65,8 @@ class ContrastScore:
 
 
 class UpdatePolicy:
-    """Learn from every frame at the full rate (the paper); report the classifier's confidence,
-    or a :class:`ContrastScore` of it; ``ok`` while the reported score is at least
-    ``lost_threshold``."""
+    """The score to report: the classifier's confidence (the paper), or a
+    :class:`ContrastScore` of it."""
 
     def __init__(self, settings: ScoreSettings, report: ContrastScore | None = None) -> None:
         self.settings = settings
@@ -81,7 +80,3 @@ class UpdatePolicy:
     def score(self, conf: float, frame: np.ndarray, box: IntBox) -> float:
         """The score to report for a frame of confidence ``conf`` whose box is ``box``."""
         return conf if self.report is None else self.report(conf, frame, box)
-
-    def tracked(self, score: float) -> bool:
-        """Whether a frame with this score counts as tracked (``TrackResult.ok``)."""
-        return score >= self.settings.lost_threshold

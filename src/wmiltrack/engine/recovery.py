@@ -1,17 +1,13 @@
-"""The lost state and re-detection: a part that notices a hidden or departed target, keeps every
-other part from learning it away, and looks for it over the whole frame until it is back.
+"""Re-detection: a part that keeps a grey picture of the target and looks for it over the whole
+frame while the target is lost.
 
 The classifier and the cues learn from whatever the box covers; when an occluder covers the
 target or the target leaves the view, they learn the occluder or the background within a few
 frames and the reported score climbs back, so the tracker never says it lost anything and
-never looks further than its local search. This part reads the classifier's confidence against
-its own recent history instead of a fixed level (confidences differ a lot between videos): a
-target that disappears takes it down by half from one frame to the next, while lighting and
-pose change it over tens of frames. Other witnesses must agree before a frame counts as lost:
-the box's correlation with a grey template of the target, and the own confidence of any cue
-that gives one (the correlation filter's peak, which HOG keeps up under a shadow). While the
-target is lost nothing learns, and every frame is searched whole for the target's last
-confident look.
+never looks further than its local search. The judge (:mod:`.judge`) notices a hidden or
+departed target and holds it for lost (nothing learns then); one of the witnesses it asks is
+the box's correlation with this part's grey template of the target (:meth:`Redetector.likeness`).
+While the target is lost every frame is searched whole for its last confident look.
 
 That search does not use the classifier: Haar sums on raw intensities, frozen while the target
 is away, stop recognising it as soon as the lighting changes (on the generated sequences its
@@ -24,7 +20,6 @@ which runs over a whole frame in a few milliseconds) is indifferent to gain and 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import cv2
 import numpy as np
@@ -55,37 +50,25 @@ def _match(a: np.ndarray, b: np.ndarray) -> float:
 
 
 class Redetector:
-    """The lost state of one tracker (``Params.redetect``; see
+    """The re-detection of one tracker (``Params.redetect``; see
     :class:`~wmiltrack.engine.settings.RecoverySettings`).
 
-    ``lost`` says whether the target counts as lost; ``reference`` is the running mean of the
-    classifier's confidence over tracked frames (None right after the start or a re-detection),
-    ``match`` the running mean of the tracked boxes' correlation with the template; both are
-    frozen while lost. ``last`` is the last re-detection's best correlation; ``size`` the size
-    of the last tracked box that matched the template at least as well as usual (what
-    :meth:`find` looks for).
+    ``template`` is the grey picture of the target, ``match`` the running mean of the tracked
+    boxes' correlation with it (both frozen while the target is lost: nothing learns then).
+    ``last`` is the last re-detection's best correlation; ``size`` the size of the last tracked
+    box that matched the template at least as well as usual (what :meth:`find` looks for).
     """
 
     def __init__(self, settings: RecoverySettings) -> None:
         self.settings = settings
-        self.lost = False
-        self.reference: float | None = None
         self.match: float | None = None
-        self.frames_lost = 0
-        self.witnesses: list[float] = []  # running means of the cues' own confidences
-        self.seen = 0  # tracked frames judged since the start or the last re-detection
         self.last = math.nan
         self.template: np.ndarray | None = None
         self.size: tuple[int, int] | None = None  # of the last box that matched as usual
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
         """Take the first look of the target as the template; no history."""
-        self.lost = False
-        self.reference = None
         self.match = None
-        self.frames_lost = 0
-        self.witnesses = []
-        self.seen = 0
         self.last = math.nan
         self.template = None
         self.size = (box[2], box[3])
@@ -124,81 +107,34 @@ class Redetector:
         self.match = m if self.match is None else a * self.match + (1.0 - a) * m
         cv2.addWeighted(self.template, 1.0 - rate, patch, rate, 0.0, dst=self.template)
 
-    def _dropped(self, conf: float, frame: np.ndarray, box: IntBox,
-                 witnesses: Sequence[float]) -> bool:
-        """Whether the classifier's confidence, the box's correlation with the template and
-        every cue's own confidence (``witnesses``, see :class:`~wmiltrack.engine.cues.Cue`)
-        all fell below ``lost_drop`` times their running means (a target that changes its look
-        keeps one of them; one that is hidden or gone loses all)."""
-        drop, ref = self.settings.lost_drop, self.reference
-        warmup = self.settings.recover_warmup
-        if ref is None or self.seen < warmup or conf >= drop * ref:  # NaN: dropped
-            return False
-        for value, mean in zip(witnesses, self.witnesses):
-            if value >= drop * mean:
-                return False
+    def likeness(self, frame: np.ndarray, box: IntBox) -> tuple[float, float] | None:
+        """The correlation of ``box``'s grey pixels with the template and the tracked boxes'
+        running mean of it (what the judge compares), or None without a template or a mean,
+        or when the box leaves the frame."""
         patch = self._patch(frame, box)
         if patch is None or self.template is None or self.match is None:
-            return True
-        return not _match(patch, self.template) >= drop * self.match
+            return None
+        return _match(patch, self.template), self.match
 
-    def judge(self, conf: float, frame: np.ndarray, box: IntBox,
-              witnesses: Sequence[float] = ()) -> bool:
-        """Whether a tracked frame whose best box ``box`` has the classifier confidence
-        ``conf`` (and the cues' confidences ``witnesses``) means the target is lost (then the
-        lost state starts); otherwise they join their running means."""
-        if self._dropped(conf, frame, box, witnesses):
-            self.lost = True
-            self.frames_lost = 1
-            return True
-        ref, a = self.reference, self.settings.recover_memory
-        self.reference = conf if ref is None else a * ref + (1.0 - a) * conf
-        if len(self.witnesses) != len(witnesses):
-            self.witnesses = list(witnesses)
-        else:
-            self.witnesses = [a * m + (1.0 - a) * v
-                              for m, v in zip(self.witnesses, witnesses)]
-        self.seen += 1
-        return False
-
-    def back(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
-        """Whether a lost frame's usual search found the target again at ``box``: its
-        confidence or its correlation with the template is back above ``lost_drop`` times the
-        running mean (then the lost state ends). The cues' own confidences are not asked: they
-        tell a target whose look changed from one that left, but a cue that learnt the
-        target's surroundings (the correlation filter's padding) answers nearly as well on
-        the empty place it left, so they cannot say that it came back."""
-        if self._dropped(conf, frame, box, ()):
-            return False
-        self.lost = False
-        self.frames_lost = 0
-        return True
-
-    def required(self) -> float:
-        """The correlation with the template a re-detected box needs to end the lost state."""
+    def required(self, frames_lost: int) -> float:
+        """The correlation with the template a re-detected box needs to end the lost state
+        after ``frames_lost`` frames in it."""
         s = self.settings
         match = self.match if self.match is not None else 1.0
-        relative = s.recover_ratio * match * s.recover_decay ** max(self.frames_lost - 1, 0)
+        relative = s.recover_ratio * match * s.recover_decay ** max(frames_lost - 1, 0)
         return max(s.recover_floor, relative)
 
-    def find(self, frame: np.ndarray) -> IntBox | None:
+    def find(self, frame: np.ndarray, frames_lost: int) -> IntBox | None:
         """The box that matches the template best over the whole frame (:meth:`best_place`),
-        if it matches well enough to end the lost state (then the lost state ends); else None
-        and one more frame is lost."""
+        if it matches well enough (:meth:`required`) to end a lost state of ``frames_lost``
+        frames so far; else None."""
         place = self.best_place(frame)
         if place is None:
-            self.frames_lost += 1
             return None
         best, box = place
         self.last = best
-        if not best >= self.required():
-            self.frames_lost += 1
+        if not best >= self.required(frames_lost):
             return None
-        self.lost = False
-        self.frames_lost = 0
-        self.reference = None  # the classifier may have fallen behind the target's look
-        self.witnesses = []
-        self.seen = 0
         return box
 
     def best_place(self, frame: np.ndarray) -> tuple[float, IntBox] | None:

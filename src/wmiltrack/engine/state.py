@@ -48,10 +48,14 @@ class FrameState(NamedTuple):
     frame that the tracker may borrow (``Tracker.update(integral=...)``), ``origin`` where the
     last search was centred, ``box`` the target's box so far, ``raw`` the search's raw score
     (the summed log ratio of the chosen candidate, ``-inf`` when no candidate fitted), ``conf``
-    the classifier's confidence, ``score`` the reported score, ``verdict`` and ``ok`` the
-    judge's, ``searched`` the stages of the last search (what :meth:`Tracker.samples`
-    shows), ``tried`` the boxes the scale estimator tried, ``learnt`` whether the appearance
-    model has already learnt from the frame (a paper preset's one-call step).
+    the classifier's confidence, ``score`` the reported score; the judge's ``verdict``,
+    ``ok``, ``learns`` (whether the parts learn from the frame) and ``steady`` (whether the
+    motion model takes the frame's move as a velocity); ``searched`` the stages of the last
+    search (what :meth:`Tracker.samples` shows), ``tried`` the boxes the scale estimator
+    tried, ``learnt`` whether the appearance model has learnt from the frame (a paper
+    preset's one-call step learns as it locates), ``rescued`` whether the recovery placed the
+    box by looking over the whole frame, ``lost_for`` the frames in the lost state so far
+    (counting this one once it is judged lost).
     """
 
     frame: np.ndarray
@@ -65,9 +69,13 @@ class FrameState(NamedTuple):
     score: float = float("nan")
     verdict: Verdict | None = None
     ok: bool = False
+    learns: bool = False
+    steady: bool = False
     searched: tuple[SearchStage, ...] = ()
     tried: tuple[IntBox, ...] = ()
     learnt: bool = False
+    rescued: bool = False
+    lost_for: int = 0
 
     def evolve(self, **changes: Any) -> FrameState:
         """A copy with the fields named in ``changes`` replaced (``_replace``, at half its
@@ -83,7 +91,9 @@ _new_tuple = tuple.__new__
 _NAN = float("nan")
 
 
-def new_frame(frame: np.ndarray, previous: IntBox, lost: bool, integral: Any) -> FrameState:
-    """The record a frame starts with: its box is the last one, nothing found yet."""
-    return _new_tuple(FrameState, (frame, previous, lost, integral, previous, previous, _NAN,
-                                   _NAN, _NAN, None, False, (), (), False))
+def new_frame(frame: np.ndarray, last: FrameState, integral: Any) -> FrameState:
+    """The record a frame starts with, after the ``last`` frame's: its box is the last one,
+    nothing found yet."""
+    box, lost = last.box, last.verdict is Verdict.LOST
+    return _new_tuple(FrameState, (frame, box, lost, integral, box, box, _NAN, _NAN, _NAN, None,
+                                   False, False, False, (), (), False, False, last.lost_for))

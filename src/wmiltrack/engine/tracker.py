@@ -1,16 +1,16 @@
 """The tracker: an appearance model composed with optional cues, a scale estimator, a motion
-model, an update policy, a recovery part and a judge.
+model, the reported score's policy, a recovery part and a judge.
 
 One frame walks one way, through one list of stages (:attr:`Tracker.stages`), each taking the
 frame's immutable record (:class:`~wmiltrack.engine.state.FrameState`) and returning the next:
 locate (the motion model's origin, the cues' maps, the appearance model's coarse and fine
 candidate scoring in C++) -> rescale (the scale estimator) -> score (the confidence, the policy's
-reported score) -> judge (the verdict: tracked, doubtful, lost or found) -> recover (a lost
-target looked for over the whole frame) -> learn (the appearance model's bags in C++, the cues,
-the scale estimator, the recovery part) -> follow (the motion model). A tracked target's frame,
-a lost target's frame and a paper preset's frame take the same stages; a preset made of the
-appearance model alone locates and learns in one core call. A preset is a composition plus
-values (:func:`compose`).
+reported score) -> recover (a lost target looked for over the whole frame) -> judge (the
+verdict: tracked, doubtful, lost or found, and what learns) -> learn (the appearance model's
+bags in C++, the cues, the scale estimator, the recovery part) -> follow (the motion model).
+A tracked target's frame, a lost target's frame and a paper preset's frame take the same
+stages; a preset made of the appearance model alone locates and learns in one core call. A
+preset is a composition plus values (:func:`compose`).
 """
 
 from __future__ import annotations
@@ -31,10 +31,19 @@ from .colour import ColourModel
 from .cues import ColourCue, Cue, check_cue_weights
 from .features import min_box_size
 from .frames import IntBox, as_frame, clip_box, frame_size
-from .judge import LostJudge
+from .judge import NO_EVIDENCE, Evidence, FrameJudge
 from .motion import VelocityMotion
 from .params import Params
-from .parts import PART_KINDS, Judge, MotionModel, PartFactory, Recovery, ScaleEstimator
+from .parts import (
+    PART_KINDS,
+    PART_SETTINGS,
+    Judge,
+    MotionModel,
+    PartFactory,
+    Recovery,
+    ScaleEstimator,
+    ScorePolicy,
+)
 from .policy import ContrastScore, UpdatePolicy, confidence
 from .recovery import Redetector
 from .requests import Search, Steps, drive, run_batches
@@ -95,28 +104,25 @@ class Parts:
     cues: list[Cue]
     scale: ScaleEstimator | None
     motion: MotionModel | None
-    policy: UpdatePolicy
+    policy: ScorePolicy
+    judge: Judge
     recovery: Recovery | None = None
-    judge: Judge | None = None
-    template: CorrelationTemplate | None = None  # (the judge reads its first-frame filter)
+    template: CorrelationTemplate | None = None  # (its first-frame filter's peak: evidence)
 
     @property
     def appearance_only(self) -> bool:
-        """Whether nothing but the appearance model (and the paper's policy) makes up the
-        tracker, so that a frame can run as one core call."""
+        """Whether nothing but the appearance model (with the paper's score and a judge that
+        lets every frame learn) makes up the tracker, so that a frame can run as one core
+        call."""
         return (not self.cues and self.scale is None and self.motion is None
-                and self.recovery is None and self.policy.plain and self.judge is None)
-
-    @property
-    def lost(self) -> bool:
-        """Whether the recovery part holds the target for lost (never without one)."""
-        return self.recovery is not None and self.recovery.lost
+                and self.recovery is None and self.policy.plain
+                and isinstance(self.judge, FrameJudge) and self.judge.always_learns)
 
     def others(self) -> list[Any]:
         """The parts besides the appearance model and the policy, each once (a correlation
         template may be both a cue and the motion model), in the order they start."""
         out: list[Any] = []
-        for part in (*self.cues, self.motion, self.scale, self.recovery):
+        for part in (*self.cues, self.motion, self.scale, self.recovery, self.judge):
             if part is not None and not any(part is seen for seen in out):
                 out.append(part)
         return out
@@ -125,12 +131,14 @@ class Parts:
 def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
             cues: Sequence[Cue] = (), parts: Mapping[str, PartFactory] | None = None) -> Parts:
     """The parts that ``params`` asks for, for a tracker started on ``frame`` at ``box``, with
-    ``cues`` added after the preset's own and each kind of part in ``parts`` (``"scale"``,
-    ``"motion"``, ``"recovery"``: a factory, see :data:`~wmiltrack.engine.parts.PartFactory`)
-    made by its factory instead of from ``params``. The appearance model is created but not
-    started."""
-    appearance = HaarAppearance(own(AppearanceSettings, params), seed, variant=params.variant)
-    learning = FilterLearning.of(own(TemplateSettings, params))  # the filters' one rule
+    ``cues`` added after the preset's own and each kind of part in ``parts`` (a factory, see
+    :data:`~wmiltrack.engine.parts.PartFactory`) made by its factory, from its own settings,
+    instead of from ``params``. The appearance model is created but not started."""
+    parts = parts or {}
+    if "appearance" in parts:
+        appearance = _made(parts, "appearance", params, frame, box, None, seed=seed)
+    else:
+        appearance = HaarAppearance(own(AppearanceSettings, params), seed, variant=params.variant)
     all_cues: list[Cue] = []
     colour: ColourCue | None = None
     if ColourCue.wanted(own(ColourSettings, params), frame):
@@ -143,16 +151,6 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
         if params.template_weight > 0:
             all_cues.append(template)
     all_cues.extend(cues)
-    fw, fh = frame_size(frame)
-    scale: ScaleEstimator | None = None
-    if params.scale_steps > 0:
-        if params.scale_model == "dsst":
-            scale = DSSTScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
-                              min_side=dsst_min_side(params.min_box_size), learning=learning)
-        else:
-            scale = HaarScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
-                              min_box=min_box_size(own(FeatureSettings, params)),
-                              num_features=params.num_features, learning=learning)
     motion: MotionModel | None = None
     if params.template_motion:
         motion = template
@@ -164,28 +162,48 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
                                colour.model if colour is not None else None, None)
     recovery: Recovery | None = (Redetector(own(RecoverySettings, params)) if params.redetect
                                  else None)
-    judge = (LostJudge(own(JudgeSettings, params), threshold=params.lost_threshold)
-             if params.judge_memory > 0 else None)
-    if parts:
-        scale = _made(parts, "scale", params, frame, box, scale)
-        motion = _made(parts, "motion", params, frame, box, motion)
-        recovery = _made(parts, "recovery", params, frame, box, recovery)
-    return Parts(appearance, all_cues, scale, motion,
-                 UpdatePolicy(own(ScoreSettings, params), report), recovery, judge, template)
+    return Parts(appearance, all_cues,
+                 _made(parts, "scale", params, frame, box, _scale_part(params, frame, box)),
+                 _made(parts, "motion", params, frame, box, motion),
+                 _made(parts, "policy", params, frame, box,
+                       UpdatePolicy(own(ScoreSettings, params), report)),
+                 _made(parts, "judge", params, frame, box, FrameJudge(own(JudgeSettings, params))),
+                 _made(parts, "recovery", params, frame, box, recovery), template)
+
+
+def _scale_part(params: Params, frame: np.ndarray, box: IntBox) -> ScaleEstimator | None:
+    """The scale estimator ``params`` asks for (None without scale search)."""
+    if params.scale_steps <= 0:
+        return None
+    fw, fh = frame_size(frame)
+    learning = FilterLearning.of(own(TemplateSettings, params))  # the filters' one rule
+    if params.scale_model == "dsst":
+        return DSSTScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
+                         min_side=dsst_min_side(params.min_box_size), learning=learning)
+    return HaarScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
+                     min_box=min_box_size(own(FeatureSettings, params)),
+                     num_features=params.num_features, learning=learning)
 
 
 def _made(parts: Mapping[str, PartFactory], kind: str, params: Params, frame: np.ndarray,
-          box: IntBox, default: Any) -> Any:
-    """The part of ``kind`` made by the user's factory in ``parts`` (checked against the kind's
-    interface), else ``default``, the one ``params`` asks for."""
+          box: IntBox, default: Any, **more: Any) -> Any:
+    """The part of ``kind`` made by the user's factory in ``parts`` from the kind's own
+    settings (checked against the kind's interface), else ``default``, the one ``params``
+    asks for."""
     if kind not in parts:
         return default
-    part = parts[kind](params, frame, box)
+    part = parts[kind](own(PART_SETTINGS[kind], params), frame, box, **more)
+    if part is None and kind in _REQUIRED:
+        raise TypeError(f"the {kind} part's factory returned None: a tracker needs one")
     if part is not None and not isinstance(part, PART_KINDS[kind]):
         missing = [m for m in _members(PART_KINDS[kind]) if not hasattr(part, m)]
-        raise TypeError(f"the {kind} part {part!r} lacks {', '.join(missing)} (see "
-                        f"wmiltrack.engine.parts.{PART_KINDS[kind].__name__})")
+        raise TypeError(f"the {kind} part {part!r} lacks {', '.join(missing) or 'the class'} "
+                        f"(see wmiltrack.engine.parts.PART_KINDS[{kind!r}])")
     return part
+
+
+#: The kinds of part every tracker has (a factory may not leave them out).
+_REQUIRED = ("appearance", "policy", "judge")
 
 
 def _members(protocol: type[Any]) -> list[str]:
@@ -346,7 +364,7 @@ class Tracker:
         model.start(img, b)
         for part in parts.others():
             part.start(img, b)
-        if parts.policy.report is not None:
+        if isinstance(parts.policy, UpdatePolicy) and parts.policy.report is not None:
             _start_report(parts.policy.report, self._params, img, b)
         self._parts = parts
         self._frame_wh = (fw, fh)
@@ -354,7 +372,7 @@ class Tracker:
         drive(self._learn_steps(model.first, b))
         # the first frame's record: the given box, tracked with score 1
         self._last = FrameState(_NO_FRAME, b, False, None, b, b, score=1.0,
-                                verdict=Verdict.TRACKED, ok=True)
+                                verdict=Verdict.TRACKED, ok=True, learns=True)
         self._fused = parts.appearance_only and model.can_fuse
         self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
@@ -368,6 +386,13 @@ class Tracker:
         self._require_init()
         box = self._last.box
         return roi_around(self._origin(None, box), self._margin(box))
+
+    @property
+    def lost(self) -> bool:
+        """Whether the judge holds the target for lost after the last frame (the next
+        :meth:`update` looks for it again)."""
+        self._require_init()
+        return self._last.verdict is Verdict.LOST
 
     @property
     def uses_channels(self) -> bool:
@@ -454,7 +479,7 @@ class Tracker:
         same stages; each stage reads from the record which of them it is on."""
         self._check_frame(img)
         last = self._last
-        state = new_frame(img, last.box, last.verdict is Verdict.LOST, integral)
+        state = new_frame(img, last, integral)
         model = self._parts.appearance
         own_table = model.ii
         try:
@@ -508,65 +533,55 @@ class Tracker:
         return state.evolve(conf=conf,
                               score=self._parts.policy.score(conf, state.frame, state.box))
 
-    def _judge(self, state: FrameState) -> FrameState:
-        """Judge: the frame's verdict. A tracked target's frame: lost when the recovery part
-        says so (the box goes back to the last one) or when the judge of ``ok`` turns to lost
-        with ``judge_holds`` (the box stays); else tracked or doubtful by :meth:`_rule`. A lost
-        target's frame: found when the recovery part sees it back at the located box, else
-        lost (the recover stage looks over the whole frame)."""
-        parts, img = self._parts, state.frame
-        recovery = parts.recovery
-        if state.lost:
-            assert recovery is not None
-            if recovery.back(state.conf, img, state.box):
-                return state.evolve(verdict=Verdict.FOUND, ok=self._rule(state.score, img))
-            return state.evolve(verdict=Verdict.LOST)
-        if recovery is not None and recovery.judge(state.conf, img, state.box,
-                                                   self._witnesses()):
-            self._rule(0.0, img)  # (the judge's memory counts the frame)
-            return state.evolve(box=state.previous, score=0.0, verdict=Verdict.LOST, ok=False)
-        tracked = self._rule(state.score, img)
-        judge = parts.judge
-        if (judge is not None and judge.lost and judge.turned and self._params.judge_holds
-                and recovery is not None):
-            recovery.lost, recovery.frames_lost = True, 1  # look for it again
-            return state.evolve(score=0.0, verdict=Verdict.LOST, ok=False)
-        return state.evolve(verdict=Verdict.TRACKED if tracked else Verdict.DOUBTFUL,
-                              ok=tracked)
-
     def _recover(self, state: FrameState) -> FrameState | Steps:
-        """Recover: on a lost target's frame that the located box did not end, the recovery
-        part looks for the target over the whole frame; where it matches well enough the fine
-        search places the box (found), else the last confident box is held (still lost)."""
-        if not (state.lost and state.verdict is Verdict.LOST):
+        """Recover: on a lost target's frame where the judge does not see the target back at
+        the located box, the recovery part looks for it over the whole frame; where it
+        matches well enough the fine search places the box (``rescued``)."""
+        recovery = self._parts.recovery
+        if (not state.lost or recovery is None
+                or self._parts.judge.back(state, self._evidence(state))):
             return state
-        assert self._parts.recovery is not None
-        found = self._parts.recovery.find(state.frame)
+        found = recovery.find(state.frame, state.lost_for)
         if found is None:
-            self._rule(0.0, state.frame)
-            return state.evolve(box=state.previous, score=0.0, ok=False)
+            return state
         return self._found_steps(state, found)
 
     def _found_steps(self, state: FrameState, found: IntBox) -> Steps:
         """The recover stage's search from the box the recovery part ``found``, then the
-        found frame's score and ``ok``."""
+        frame's score there."""
         p = self._params
         grids = [(p.fine_radius, p.fine_step)] if p.fine_radius > 0 else self._grids
         state = yield from self._search_at(state, found, grids)
-        state = self._score(state)
-        return state.evolve(verdict=Verdict.FOUND, ok=self._rule(state.score, state.frame))
+        return self._score(state).evolve(rescued=True)
+
+    def _judge(self, state: FrameState) -> FrameState:
+        """Judge: the judge's verdict on the frame (:class:`~wmiltrack.engine.parts.Judge`),
+        from the record and the other parts' evidence; the count of frames lost."""
+        state = self._parts.judge.verdict(state, self._evidence(state))
+        if state.verdict is Verdict.LOST:
+            return state.evolve(lost_for=state.lost_for + 1)
+        return state.evolve(lost_for=0) if state.lost_for else state
+
+    def _evidence(self, state: FrameState) -> Evidence:
+        """What the judge weighs besides the record: the cues' own confidences, the
+        recovery's likeness of the box to the target, the first-frame filter's peak."""
+        parts = self._parts
+        if not parts.cues and parts.recovery is None and parts.template is None:
+            return NO_EVIDENCE
+        recovery, template = parts.recovery, parts.template
+        return Evidence(
+            self._witnesses(),
+            None if recovery is None else functools.partial(recovery.likeness, state.frame,
+                                                            state.box),
+            math.nan if template is None else template.first_peak_on(state.frame))
 
     def _learn(self, state: FrameState) -> FrameState | Steps:
-        """Learn: every part learns from the frame at its box, unless the frame is lost or
-        the judge of ``ok`` (with ``judge_gates``) holds the target for lost (the appearance
-        model of a one-call frame has learnt already)."""
+        """Learn: every part learns from the frame at its box, if the judge lets it (the
+        appearance model of a one-call frame has learnt already)."""
         if state.learnt:
             return state
-        parts = self._parts
-        judge = parts.judge
-        if (state.verdict is Verdict.LOST
-                or (judge is not None and judge.lost and self._params.judge_gates)):
-            parts.appearance.skip_learning()
+        if not state.learns:
+            self._parts.appearance.skip_learning()
             return state
         return self._learn_all(state)
 
@@ -586,32 +601,23 @@ class Tracker:
 
     def _follow(self, state: FrameState) -> FrameState:
         """Follow: the motion model sees the frame's move (a lost, found or held frame is no
-        move: the target stands at its box, not confidently tracked)."""
+        move: the target stands at its box, not steady)."""
         motion = self._parts.motion
         if motion is not None:
             if state.lost or state.verdict is Verdict.LOST:
                 motion.follow(state.box, state.box, False)
             else:
-                motion.follow(state.previous, state.box,
-                              self._parts.policy.tracked(state.conf))
+                motion.follow(state.previous, state.box, state.steady)
         return state
-
-    def _rule(self, score: float, img: np.ndarray) -> bool:
-        """Whether the frame ``img`` of this score counts as tracked: the policy's threshold,
-        or the judge of ``ok``'s verdict (which keeps its own history: once per frame)."""
-        parts = self._parts
-        if parts.judge is not None and parts.template is not None:
-            return parts.judge.verdict(score, parts.template.first_peak_on(img))
-        return parts.policy.tracked(score)
 
     #: The stages every frame walks through, in order: each takes the tracker and the frame's
     #: record and returns the next record, or a generator of core requests that returns it
     #: (:meth:`_update_steps`). A stage of one's own goes into an instance's or a subclass's
     #: copy of this tuple.
     stages: tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...] = (
-        _locate, _rescale, _score, _judge, _recover, _learn, _follow)
+        _locate, _rescale, _score, _recover, _judge, _learn, _follow)
 
-    def _witnesses(self) -> list[float]:
+    def _witnesses(self) -> tuple[float, ...]:
         """The cues' own confidences of this frame (those that give one; see
         :class:`~wmiltrack.engine.cues.Cue`)."""
         out = []
@@ -619,7 +625,7 @@ class Tracker:
             value = getattr(cue, "confidence", math.nan)
             if math.isfinite(value):
                 out.append(float(value))
-        return out
+        return tuple(out)
 
     def _search_at(self, state: FrameState, origin: IntBox, grids: list[tuple[int, int]]
                    ) -> Steps:
