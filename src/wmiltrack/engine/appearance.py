@@ -23,6 +23,7 @@ from .features import (
     available_channels,
     check_box_size,
     make_bank,
+    min_box_size,
     rect_planes,
     scale_bank,
 )
@@ -146,6 +147,16 @@ class HaarAppearance:
         features only, and negatives the core can draw exactly as numpy would
         (:meth:`~wmiltrack.engine.sampling.BagSampler.drawn_in_core`)."""
         return self.chan_names is None and self.track.drawn_in_core()
+
+    @property
+    def num_features(self) -> int:
+        """How many features the bank holds (M)."""
+        return self.params.num_features
+
+    @property
+    def min_box(self) -> tuple[int, int]:
+        """The smallest ``(w, h)`` box the features allow."""
+        return min_box_size(self.params)
 
     @property
     def reach(self) -> int:

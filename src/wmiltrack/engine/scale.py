@@ -14,7 +14,7 @@ from .classifier import GaussianPool
 from .correlation import ScaleEstimator, ScaleFilterSettings, SparseUpdates
 from .features import box_area_ok
 from .frames import IntBox
-from .settings import NO_GATE, FilterLearning, ScaleSettings
+from .settings import FilterLearning, ScaleSettings
 
 if TYPE_CHECKING:
     from .appearance import HaarAppearance
@@ -46,24 +46,23 @@ class HaarScale:
     colour cue, also by the box's colour contrast. Boxes at wrong scales can be learnt as
     negatives.
 
-    Besides its own settings it is given, by :func:`~wmiltrack.engine.tracker.compose`: the
-    smallest box the appearance model's features allow (``min_box``,
-    :func:`~wmiltrack.engine.features.min_box_size`), their number (``num_features``, the size
-    of its target model) and the correlation filters' learning rule (``learning``, for DSST's
-    vote).
+    What it needs of the appearance model (the smallest box its features allow, how many
+    features its target model holds) it reads from the model it is handed at each search and
+    learning step.
     """
 
     def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
-                 frame_wh: tuple[int, int], *, min_box: tuple[int, int], num_features: int,
-                 learning: FilterLearning = NO_GATE) -> None:
+                 frame_wh: tuple[int, int]) -> None:
         self.settings = settings
         self.base_wh = base_wh
         self.frame_wh = frame_wh
-        self.min_box = min_box
         self.index = 0
         self.tried: list[IntBox] = []  # the boxes tried at other scales in the last frame
-        self.pool = GaussianPool(num_features) if settings.scale_model != "ratio" else None
-        # DSST's vote on the size (scale_dsst), learnt as the translation filter (``learning``)
+        # its target model (not for "ratio"), made at the first learning step (its size is the
+        # appearance model's feature count)
+        self.pool: GaussianPool | None = None
+        # DSST's vote on the size (scale_dsst), learnt as the translation filter
+        learning = FilterLearning.of(settings)
         self.dsst_updates, dsst = dsst_filter(settings.scale_samples, learning)
         self.learn_above = learning.above
         self.dsst = dsst if settings.scale_dsst > 0 else None
@@ -84,13 +83,15 @@ class HaarScale:
         w, h = self.box_size(self.index + max(p.scale_steps, p.scale_negatives) + p.scale_steps)
         return (max(w - box[2], h - box[3]) + 1) // 2 + 1
 
-    def allowed(self, index: int) -> bool:
+    def allowed(self, index: int, model: HaarAppearance) -> bool:
+        """Whether the scale ``index`` is within the limits, the frame and ``model``'s
+        smallest box."""
         p = self.settings
         s = p.scale_factor ** index
         if not (p.scale_min - 1e-9 <= s <= p.scale_max + 1e-9):
             return False
         w, h = self.box_size(index)
-        mw, mh = self.min_box
+        mw, mh = model.min_box
         return mw <= w <= self.frame_wh[0] and mh <= h <= self.frame_wh[1] and box_area_ok(w, h)
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
@@ -162,7 +163,7 @@ class HaarScale:
         best_index, best_box = self.index, box
         for j in range(-p.scale_steps, p.scale_steps + 1):
             index = self.index + j
-            if j == 0 or not self.allowed(index):
+            if j == 0 or not self.allowed(index, model):
                 continue
             w, h = self.box_size(index)
             candidate = centred(box, w, h)
@@ -195,7 +196,7 @@ class HaarScale:
         best_index, best_box = self.index, box
         for j in range(-p.scale_steps, p.scale_steps + 1):
             index = self.index + j
-            if j != 0 and not self.allowed(index):
+            if j != 0 and not self.allowed(index, model):
                 continue
             w, h = self.box_size(index)
             candidate = box if j == 0 else centred(box, w, h)
@@ -219,6 +220,8 @@ class HaarScale:
         p = self.settings
         wrong = self._wrong_scale_values(model, box) if p.scale_negatives > 0 else []
         extra = np.concatenate(wrong, axis=1) if wrong else None
+        if self.pool is None and p.scale_model != "ratio":
+            self.pool = GaussianPool(model.num_features)
         pool = self.pool
         second = None if pool is None else (pool.mu1, pool.sigma1, p.scale_learning_rate,
                                             pool.first(1))
@@ -237,7 +240,7 @@ class HaarScale:
         out = []
         for j in (-p.scale_negatives, p.scale_negatives):
             index = self.index + j
-            if not self.allowed(index):
+            if not self.allowed(index, model):
                 continue
             w, h = self.box_size(index)
             x, y, _, _ = centred(box, w, h)

@@ -408,6 +408,11 @@ class ScaleSettings:
         else the size is kept. DSST's fHOG scale samples cannot tell a low-textured or
         deforming target from its surroundings and let the box grow into them (a bag on a
         street: 0.70 -> 0.24 AUC); the colour contrast falls as soon as background enters.
+    template_gate, template_every, template_reuse
+        Shared with :class:`TemplateSettings`: the DSST scale filters (``scale_model="dsst"``
+        and ``scale_dsst``'s vote) learn on the translation filter's schedule.
+    min_box_size
+        Shared with :class:`FeatureSettings`: DSST gives no box side below it (nor below 4).
     """
 
     scale_steps: int = 0
@@ -424,6 +429,10 @@ class ScaleSettings:
     scale_dsst: float = 0.0
     scale_samples: int = 33
     scale_veto: bool = False
+    template_gate: float = 0.0
+    template_every: int = 1
+    template_reuse: bool = False
+    min_box_size: int = 4
 
     def __post_init__(self) -> None:
         ScaleSettings.check(self)
@@ -898,8 +907,9 @@ class FilterLearning:
     reuse: bool = False
 
     @classmethod
-    def of(cls, template: TemplateSettings) -> FilterLearning:
-        """The rule that ``template``'s settings give."""
+    def of(cls, template: TemplateSettings | ScaleSettings) -> FilterLearning:
+        """The rule that the ``template_*`` settings give (the template's, or those the
+        scale settings share)."""
         return cls(every=template.template_every, above=template.template_gate,
                    reuse=template.template_reuse)
 

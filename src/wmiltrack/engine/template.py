@@ -17,7 +17,7 @@ import numpy as np
 from .correlation import CorrelationFilter, CorrelationSettings, Location, SparseUpdates
 from .frames import IntBox
 from .scale import centred, dsst_filter
-from .settings import NO_GATE, FilterLearning, ScaleSettings, TemplateSettings
+from .settings import FilterLearning, ScaleSettings, TemplateSettings
 
 if TYPE_CHECKING:
     from .appearance import HaarAppearance
@@ -40,15 +40,14 @@ class CorrelationTemplate:
     response peak: HOG's normalised gradients keep it up under a shadow or a change of light,
     where the classifier's confidence and a grey template's correlation both fall.
 
-    ``remembers``: whether to keep the first frame's filter for the judge of ``ok``
-    (``judge_memory > 0``; :meth:`first_peak_on`), given by
-    :func:`~wmiltrack.engine.tracker.compose`.
+    It keeps the first frame's filter, never trained again: the judge's memory of the target
+    (``judge_memory``) reads its response on each frame (:meth:`first_peak_on`).
     """
 
     #: The core reads this cue's map at each candidate's centre, not its mean over the box.
     at_centre = True
 
-    def __init__(self, settings: TemplateSettings, *, remembers: bool = False) -> None:
+    def __init__(self, settings: TemplateSettings) -> None:
         self.weight = settings.template_weight
         self.moves = settings.template_motion
         learning = FilterLearning.of(settings)
@@ -62,16 +61,13 @@ class CorrelationTemplate:
             compressed=settings.template_channels, cell=settings.template_cell))
         self._searched: Location | None = None  # this frame's search, for table()
         self.confidence = math.nan
-        # The first frame's filter, never trained again, when the judge of ``ok`` reads it.
-        self.remembers = remembers
+        # The first frame's filter, never trained again, and the frame the filter last searched.
         self._first: CorrelationFilter | None = None
-        # (frame, its peak on that frame's search)
-        self._first_peak: tuple[np.ndarray | None, float] = (None, math.nan)
+        self._searched_frame: np.ndarray | None = None
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
         self.filter.init(frame, box)
-        if self.remembers:
-            self._first = self.filter.copy()
+        self._first = self.filter.copy()
 
     # -- motion model ---------------------------------------------------------------------
     def origin(self, box: IntBox, frame: np.ndarray | None = None) -> IntBox:
@@ -82,19 +78,18 @@ class CorrelationTemplate:
             return box
         loc = self.filter.locate(frame, _centre(box), (box[2], box[3]))
         self._searched = loc
+        self._searched_frame = frame
         self.confidence = loc.peak
-        if self._first is not None:
-            self._first_peak = (frame, self._first.recall(self.filter)[0])
         if not self.moves:
             return box
         return centred(box, box[2], box[3], loc.dx, loc.dy)
 
     def first_peak_on(self, frame: np.ndarray) -> float:
         """The first frame's filter's response peak on ``frame``'s search sample, what the
-        judge of ``ok`` reads; NaN when the filter did not search ``frame`` (or keeps no first
-        filter)."""
-        searched, peak = self._first_peak
-        return peak if searched is frame else math.nan
+        judge's memory reads; NaN when the filter did not search ``frame``."""
+        if self._first is None or self._searched_frame is not frame:
+            return math.nan
+        return self._first.recall(self.filter)[0]
 
     def follow(self, previous: IntBox, box: IntBox, tracked: bool) -> None:
         """(Nothing to keep: the filter searches around the last box every frame.)"""
@@ -132,17 +127,17 @@ def dsst_min_side(min_box_size: int) -> int:
 class DSSTScale:
     """DSST's scale filter as the scale estimator (``scale_model="dsst"``): after the translation
     search, the best of 33 sizes 1.02 apart by a 1-D correlation filter on fHOG, within
-    ``scale_min``..``scale_max`` of the first box and the frame, no side below ``min_side``
-    (given by :func:`~wmiltrack.engine.tracker.compose`: :func:`dsst_min_side`). It learns as
-    the translation filter does (``learning``, :class:`~wmiltrack.engine.settings.FilterLearning`)."""
+    ``scale_min``..``scale_max`` of the first box and the frame, no side below
+    :func:`dsst_min_side`. It learns as the translation filter does (the ``template_*``
+    learning settings it shares: :class:`~wmiltrack.engine.settings.FilterLearning`)."""
 
     def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
-                 frame_wh: tuple[int, int], *, min_side: int = 4,
-                 learning: FilterLearning = NO_GATE) -> None:
+                 frame_wh: tuple[int, int]) -> None:
         self.settings = settings
         self.base_wh = base_wh
         self.frame_wh = frame_wh
-        self.min_side = min_side
+        self.min_side = dsst_min_side(settings.min_box_size)
+        learning = FilterLearning.of(settings)
         self.reuse = learning.reuse
         self.updates, self.estimator = dsst_filter(settings.scale_samples, learning)
         self.learn_above = learning.above

@@ -29,7 +29,6 @@ from . import copying as _copying  # noqa: F401 (installs deepcopy for the core'
 from .appearance import HaarAppearance, roi_around
 from .colour import ColourModel
 from .cues import ColourCue, Cue, check_cue_weights
-from .features import min_box_size
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .judge import NO_EVIDENCE, Evidence, FrameJudge
 from .motion import VelocityMotion
@@ -52,8 +51,6 @@ from .scale import HaarScale
 from .settings import (
     AppearanceSettings,
     ColourSettings,
-    FeatureSettings,
-    FilterLearning,
     JudgeSettings,
     MotionSettings,
     RecoverySettings,
@@ -63,7 +60,7 @@ from .settings import (
     own,
 )
 from .state import FrameState, SearchStage, Verdict, new_frame
-from .template import CorrelationTemplate, DSSTScale, dsst_min_side
+from .template import CorrelationTemplate, DSSTScale
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "compose", "confidence",
            "update_many"]
@@ -146,8 +143,7 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
         all_cues.append(colour)
     template = None
     if params.template_weight > 0 or params.template_motion:
-        template = CorrelationTemplate(own(TemplateSettings, params),
-                                       remembers=params.judge_memory > 0)
+        template = CorrelationTemplate(own(TemplateSettings, params))
         if params.template_weight > 0:
             all_cues.append(template)
     all_cues.extend(cues)
@@ -175,14 +171,8 @@ def _scale_part(params: Params, frame: np.ndarray, box: IntBox) -> ScaleEstimato
     """The scale estimator ``params`` asks for (None without scale search)."""
     if params.scale_steps <= 0:
         return None
-    fw, fh = frame_size(frame)
-    learning = FilterLearning.of(own(TemplateSettings, params))  # the filters' one rule
-    if params.scale_model == "dsst":
-        return DSSTScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
-                         min_side=dsst_min_side(params.min_box_size), learning=learning)
-    return HaarScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
-                     min_box=min_box_size(own(FeatureSettings, params)),
-                     num_features=params.num_features, learning=learning)
+    kind = DSSTScale if params.scale_model == "dsst" else HaarScale
+    return kind(own(ScaleSettings, params), (box[2], box[3]), frame_size(frame))
 
 
 def _made(parts: Mapping[str, PartFactory], kind: str, params: Params, frame: np.ndarray,
