@@ -28,10 +28,10 @@ from wmiltrack.engine.cues import ColourCue
 from wmiltrack.engine.judge import FrameJudge
 from wmiltrack.engine.motion import VelocityMotion
 from wmiltrack.engine.params import PARTS, Params
-from wmiltrack.engine.policy import ContrastScore, UpdatePolicy
+from wmiltrack.engine.policy import ContrastScore, ReportedScore
 from wmiltrack.engine.recovery import Redetector
 from wmiltrack.engine.sampling import BagSampler
-from wmiltrack.engine.scale import HaarScale
+from wmiltrack.engine.scale import DSSTScale, HaarScale
 from wmiltrack.engine.settings import (
     AppearanceSettings,
     ColourSettings,
@@ -42,14 +42,14 @@ from wmiltrack.engine.settings import (
     ScoreSettings,
     TemplateSettings,
 )
-from wmiltrack.engine.template import CorrelationTemplate, DSSTScale
+from wmiltrack.engine.template import CorrelationTemplate
 
 #: Each part class, with the settings class it may read.
 OWNER = {
     HaarAppearance: AppearanceSettings, BagSampler: AppearanceSettings,
     GaussianPool: AppearanceSettings, HaarScale: ScaleSettings, DSSTScale: ScaleSettings,
     VelocityMotion: MotionSettings, ColourCue: ColourSettings, ColourModel: ColourSettings,
-    CorrelationTemplate: TemplateSettings, UpdatePolicy: ScoreSettings,
+    CorrelationTemplate: TemplateSettings, ReportedScore: ScoreSettings,
     ContrastScore: ScoreSettings, Redetector: RecoverySettings, FrameJudge: JudgeSettings,
 }
 

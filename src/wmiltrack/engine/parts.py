@@ -40,7 +40,7 @@ class ScaleEstimator(Protocol):
     """Tries other box sizes after the translation search, and learns the target's size.
 
     Built-in: :class:`~wmiltrack.engine.scale.HaarScale` (the appearance model's features at
-    neighbouring sizes), :class:`~wmiltrack.engine.template.DSSTScale` (DSST's 1-D filter).
+    neighbouring sizes), :class:`~wmiltrack.engine.scale.DSSTScale` (DSST's 1-D filter).
     """
 
     #: The boxes tried at other sizes by the last :meth:`search` (the part replaces it at each
@@ -157,7 +157,7 @@ class Judge(Protocol):
 class ScorePolicy(Protocol):
     """The score the tracker reports for a frame (``TrackResult.score``).
 
-    Built-in: :class:`~wmiltrack.engine.policy.UpdatePolicy` (the classifier's confidence, or
+    Built-in: :class:`~wmiltrack.engine.policy.ReportedScore` (the classifier's confidence, or
     its blend with the box's colour and intensity contrast).
     """
 

@@ -11,7 +11,7 @@ from .colour import ColourModel
 from .frames import IntBox
 from .settings import CONFIDENCE_OFFSET, ScoreSettings
 
-__all__ = ["ContrastScore", "UpdatePolicy", "confidence", "logistic"]
+__all__ = ["ContrastScore", "ReportedScore", "confidence", "logistic"]
 
 
 def logistic(z: float) -> float:
@@ -64,7 +64,7 @@ class ContrastScore:
         return (1.0 - w - v) * conf + w * min(max(0.5 + contrast, 0.0), 1.0) + v * luma
 
 
-class UpdatePolicy:
+class ReportedScore:
     """The score to report: the classifier's confidence (the paper), or a
     :class:`ContrastScore` of it."""
 

@@ -362,7 +362,7 @@ class ScaleSettings:
         Ratio between neighbouring scales (> 1).
     scale_model : {"ratio", "likelihood", "both", "dsst"}
         ``dsst``: a separate 1-D correlation filter along 33 scales 1.02 apart on fHOG
-        (DSST; :class:`wmiltrack.engine.template.DSSTScale`), run after the translation
+        (DSST; :class:`wmiltrack.engine.scale.DSSTScale`), run after the translation
         search; ``scale_steps`` must be > 0 to switch it on, and the other ``scale_*``
         settings but ``scale_min``/``scale_max`` do not apply. Otherwise scales are compared
         by Haar features: ``ratio``, the strong classifier's mean log ratio (best of a
@@ -897,7 +897,7 @@ class AppearanceSettings(SearchSettings, ClassifierSettings, BagSettings, Featur
 class FilterLearning:
     """When the correlation filters learn, the one rule the translation template
     (:class:`~wmiltrack.engine.template.CorrelationTemplate`) and the DSST scale filters
-    (:class:`~wmiltrack.engine.template.DSSTScale`, the Haar scale search's vote) share: every
+    (:class:`~wmiltrack.engine.scale.DSSTScale`, the Haar scale search's vote) share: every
     ``every``-th frame, among frames whose reported score is at least ``above``; with
     ``reuse``, from the sample the frame's search already took. Made from the template's
     settings by :meth:`of` (``template_every``, ``template_gate``, ``template_reuse``)."""

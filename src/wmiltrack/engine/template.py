@@ -1,5 +1,6 @@
-"""The correlation-filter template as tracker parts: a cue (and optionally the motion model) from
-a translation filter on fHOG, and DSST's 1-D scale filter as the scale estimator.
+"""The correlation-filter template as a tracker part: a cue (and optionally the motion model) from
+a translation filter on fHOG (DSST's 1-D scale filter, the other correlation filter, is a scale
+estimator: :class:`~wmiltrack.engine.scale.DSSTScale`).
 
 Haar features on luma and colour histograms say little about a target whose lighting changes
 (a shadow, a tunnel); HOG's block-normalised gradients do (Staple, CSR-DCF, ECO). The filter
@@ -10,19 +11,19 @@ these classes fit it into the engine of parts.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .correlation import CorrelationFilter, CorrelationSettings, Location, SparseUpdates
 from .frames import IntBox
-from .scale import centred, dsst_filter
-from .settings import FilterLearning, ScaleSettings, TemplateSettings
+from .geometry import centred
+from .settings import FilterLearning, TemplateSettings
 
 if TYPE_CHECKING:
-    from .appearance import HaarAppearance
+    pass
 
-__all__ = ["CorrelationTemplate", "DSSTScale", "dsst_min_side"]
+__all__ = ["CorrelationTemplate"]
 
 
 def _centre(box: IntBox) -> tuple[float, float]:
@@ -116,88 +117,3 @@ class CorrelationTemplate:
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
         if self.updates.due():
             self.filter.learn(frame, box, from_search=self.reuse)
-
-
-def dsst_min_side(min_box_size: int) -> int:
-    """The smallest side of a box DSST's scale filter gives, for the features' ``min_box_size``
-    (:class:`~wmiltrack.engine.settings.FeatureSettings`)."""
-    return max(min_box_size, 4)
-
-
-class DSSTScale:
-    """DSST's scale filter as the scale estimator (``scale_model="dsst"``): after the translation
-    search, the best of 33 sizes 1.02 apart by a 1-D correlation filter on fHOG, within
-    ``scale_min``..``scale_max`` of the first box and the frame, no side below
-    :func:`dsst_min_side`. It learns as the translation filter does (the ``template_*``
-    learning settings it shares: :class:`~wmiltrack.engine.settings.FilterLearning`)."""
-
-    def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
-                 frame_wh: tuple[int, int]) -> None:
-        self.settings = settings
-        self.base_wh = base_wh
-        self.frame_wh = frame_wh
-        self.min_side = dsst_min_side(settings.min_box_size)
-        learning = FilterLearning.of(settings)
-        self.reuse = learning.reuse
-        self.updates, self.estimator = dsst_filter(settings.scale_samples, learning)
-        self.learn_above = learning.above
-        self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
-        self.given = base_wh  # the size of the box this part last gave
-        self.tried: list[IntBox] = []
-
-    @property
-    def scale(self) -> float:
-        """The box size relative to the first box."""
-        return math.sqrt(self.size[0] * self.size[1] / (self.base_wh[0] * self.base_wh[1]))
-
-    def start(self, frame: np.ndarray, box: IntBox) -> None:
-        self.estimator.init(frame, box)
-
-    def margin(self, box: IntBox) -> int:
-        """Extra integral-image margin for the largest box the filter may choose around
-        ``box`` (the appearance model learns at it)."""
-        s = self.estimator.settings
-        largest = s.step ** ((s.num_scales - 1) // 2)
-        return math.ceil((largest - 1.0) * max(box[2], box[3]) / 2.0) + 1
-
-    def search(self, model: HaarAppearance, frame: np.ndarray, box: IntBox, raw: float,
-               contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
-        """The box at the size the filter prefers, centred where the search put it. With
-        ``scale_veto`` and a colour cue (``contrast``), a new size whose box has less colour
-        contrast than the current one is refused."""
-        p = self.settings
-        if (box[2], box[3]) != self.given:  # another part sized the box (a re-detection)
-            self.size = (float(box[2]), float(box[3]))
-        factor = self.estimator.estimate(frame, _centre(box), self.size).factor
-        w, h = self.size[0] * factor, self.size[1] * factor
-        s = math.sqrt(w * h / (self.base_wh[0] * self.base_wh[1]))
-        s_ok = min(max(s, p.scale_min), p.scale_max)
-        w, h = w * s_ok / s, h * s_ok / s
-        min_side = self.min_side
-        fw, fh = self.frame_wh
-        shrink = min(1.0, fw / w, fh / h)
-        grow = max(1.0, min_side / (w * shrink), min_side / (h * shrink))
-        size = (w * shrink * grow, h * shrink * grow)
-        iw, ih = max(min_side, round(size[0])), max(min_side, round(size[1]))
-        out = centred(box, min(iw, fw), min(ih, fh))
-        if (p.scale_veto and contrast is not None and (out[2], out[3]) != (box[2], box[3])
-                and contrast(out) < contrast(box)):
-            out = box
-        else:
-            self.size = size
-        self.given = (out[2], out[3])
-        return out, raw
-
-    def learning_extras(self, model: HaarAppearance, box: IntBox) -> tuple[None, int, None]:
-        """(Nothing for the appearance model's learning step.)"""
-        return None, 0, None
-
-    def take_learnt(self, learnt: tuple[Any, Any], n_pos: int) -> None:
-        """(No model in the appearance model's learning step.)"""
-
-    def learn(self, frame: np.ndarray, box: IntBox) -> None:
-        """Fold in the scale samples around the frame's final box (every ``template_every``-th
-        frame)."""
-        if self.updates.due():
-            self.estimator.learn(frame, _centre(box), self.size,
-                                 from_estimate=self.reuse)

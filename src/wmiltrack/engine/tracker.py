@@ -26,10 +26,11 @@ import numpy as np
 
 from .. import _core
 from . import copying as _copying  # noqa: F401 (installs deepcopy for the core's objects)
-from .appearance import HaarAppearance, roi_around
+from .appearance import HaarAppearance
 from .colour import ColourModel
 from .cues import ColourCue, Cue, check_cue_weights
 from .frames import IntBox, as_frame, clip_box, frame_size
+from .geometry import roi_around
 from .judge import NO_EVIDENCE, Evidence, FrameJudge
 from .motion import VelocityMotion
 from .params import Params
@@ -43,11 +44,11 @@ from .parts import (
     ScaleEstimator,
     ScorePolicy,
 )
-from .policy import ContrastScore, UpdatePolicy, confidence
+from .policy import ContrastScore, ReportedScore, confidence
 from .recovery import Redetector
 from .requests import Search, Steps, drive, run_batches
 from .result import TrackResult
-from .scale import HaarScale
+from .scale import DSSTScale, HaarScale
 from .settings import (
     AppearanceSettings,
     ColourSettings,
@@ -60,7 +61,7 @@ from .settings import (
     own,
 )
 from .state import FrameState, SearchStage, Verdict, new_frame
-from .template import CorrelationTemplate, DSSTScale
+from .template import CorrelationTemplate
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "compose", "confidence",
            "update_many"]
@@ -162,7 +163,7 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
                  _made(parts, "scale", params, frame, box, _scale_part(params, frame, box)),
                  _made(parts, "motion", params, frame, box, motion),
                  _made(parts, "policy", params, frame, box,
-                       UpdatePolicy(own(ScoreSettings, params), report)),
+                       ReportedScore(own(ScoreSettings, params), report)),
                  _made(parts, "judge", params, frame, box, FrameJudge(own(JudgeSettings, params))),
                  _made(parts, "recovery", params, frame, box, recovery), template)
 
@@ -248,12 +249,14 @@ class Tracker:
         preset's own; their weights, ``colour_weight`` and ``template_weight`` add up to at
         most 1 (:func:`~wmiltrack.engine.cues.check_cue_weights`).
     parts : mapping, optional
-        Parts of your own instead of the preset's: ``{"scale": factory, "motion": factory,
-        "recovery": factory}`` (any of the three), each factory called at :meth:`init` as
-        ``factory(params, frame, box)`` and returning an object with the kind's interface
-        (:mod:`wmiltrack.engine.parts`: ``ScaleEstimator``, ``MotionModel``, ``Recovery``), or
-        None for no part of that kind. A class whose ``__init__`` takes ``(params, frame,
-        box)`` is such a factory.
+        Parts of your own instead of the preset's, by kind: ``"appearance"``, ``"policy"``,
+        ``"judge"``, ``"scale"``, ``"motion"``, ``"recovery"``; each a factory called at
+        :meth:`init` as ``factory(settings, frame, box)`` with the kind's own settings
+        (:data:`~wmiltrack.engine.parts.PART_SETTINGS`; an appearance model's factory also
+        gets ``seed=``), returning an object with the kind's interface
+        (:data:`~wmiltrack.engine.parts.PART_KINDS`), or None for no scale estimator, motion
+        model or re-detection. A class whose ``__init__`` takes ``(settings, frame, box)`` is
+        such a factory.
     **overrides
         Any :class:`~wmiltrack.Params` field, e.g. ``num_selected=30``.
 
@@ -354,12 +357,12 @@ class Tracker:
         model.start(img, b)
         for part in parts.others():
             part.start(img, b)
-        if isinstance(parts.policy, UpdatePolicy) and parts.policy.report is not None:
+        if isinstance(parts.policy, ReportedScore) and parts.policy.report is not None:
             _start_report(parts.policy.report, self._params, img, b)
         self._parts = parts
         self._frame_wh = (fw, fh)
-        model.compute_integral(img, b, model.first.reach)
-        drive(self._learn_steps(model.first, b))
+        model.compute_integral(img, b, model.first_sampler.reach)
+        drive(self._learn_steps(model.first_sampler, b))
         # the first frame's record: the given box, tracked with score 1
         self._last = FrameState(_NO_FRAME, b, False, None, b, b, score=1.0,
                                 verdict=Verdict.TRACKED, ok=True, learns=True)
@@ -579,7 +582,7 @@ class Tracker:
         """The learn stage's work: the appearance model (one core request), the cues and the
         scale estimator (from frames of a high enough score) and the recovery part."""
         parts, img, box = self._parts, state.frame, state.box
-        yield from self._learn_steps(parts.appearance.track, box)
+        yield from self._learn_steps(parts.appearance.sampler, box)
         for cue in parts.cues:
             if state.score >= getattr(cue, "learn_above", 0.0):
                 cue.learn(img, box)
