@@ -59,16 +59,7 @@ PENDING = {
     "cpp/tests/test_core.cpp:test_vmath",
     "cpp/tests/test_core.cpp:test_grid_exact",
     "cpp/tests/test_cf.cpp:test_batch_fft",
-    "cpp/bindings/bind_colour.cpp:wmiltrack::bindings::bind_colour",
-    "cpp/bindings/bind_integral.cpp:wmiltrack::bindings::bind_integral",
-    "cpp/bindings/bind_scoring.cpp:wmiltrack::bindings::bind_scoring",
     "cpp/bindings/bind_learn.cpp:wmiltrack::bindings::make_learn",
-    "cpp/bindings/bind_learn.cpp:wmiltrack::bindings::bind_learn",
-    "cpp/bindings/bind_batch.cpp:wmiltrack::bindings::bind_batch",
-    "cpp/bindings/bind_cf.cpp:wmiltrack::bindings::bind_cf_features",
-    "cpp/bindings/bind_cf.cpp:wmiltrack::bindings::bind_translation_filter",
-    "cpp/bindings/bind_cf.cpp:wmiltrack::bindings::bind_scale_filter",
-    "cpp/bindings/bind_search.cpp:wmiltrack::bindings::bind_search",
 }
 
 assert len(KERNELS) <= 4, "at most four kernels are kept whole"

@@ -156,17 +156,8 @@ py::tuple learn_result(LearnJob& job) {
                         mu2, sigma2);
 }
 
-void bind_learn(py::module_& m) {
-  py::class_<LearnRequest>(
-      m, "LearnRequest",
-      "A learning step's inputs, by name: the integral image `ii` and FeatureBank `bank`;\n"
-      "the boxes' top-left corners (xs[i], ys[i]): n_pos positives, then negatives; the\n"
-      "model in (mu1, sigma1, mu0, sigma0); the update rule (lam, first_pos, first_neg,\n"
-      "direct_first, mil, sigma_floor) and the log guard; select = 'none', 'wmil' (with the\n"
-      "positives' weights w_pos, k features, code_gradient) or 'ratios' (the log ratios\n"
-      "returned); extra_neg (M x e feature values) adds e negatives after the boxes; second =\n"
-      "(mu, sigma, lam, first) is a second target model updated from the positives alone with\n"
-      "its own lambda. Checked when it runs.")
+static void bind_learn_request(py::class_<LearnRequest>& cls) {
+  cls
       .def(py::init([](py::object ii, py::object bank, py::object xs, py::object ys, int n_pos,
                        const py::object& mu1, const py::object& sigma1, const py::object& mu0,
                        const py::object& sigma0, double lam, bool first_pos, bool first_neg,
@@ -208,7 +199,20 @@ void bind_learn(py::module_& m) {
       .def_readonly("code_gradient", &LearnRequest::code_gradient)
       .def_readonly("extra_neg", &LearnRequest::extra_neg)
       .def_readonly("second", &LearnRequest::second);
+}
 
+void bind_learn(py::module_& m) {
+  py::class_<LearnRequest> cls(
+      m, "LearnRequest",
+      "A learning step's inputs, by name: the integral image `ii` and FeatureBank `bank`;\n"
+      "the boxes' top-left corners (xs[i], ys[i]): n_pos positives, then negatives; the\n"
+      "model in (mu1, sigma1, mu0, sigma0); the update rule (lam, first_pos, first_neg,\n"
+      "direct_first, mil, sigma_floor) and the log guard; select = 'none', 'wmil' (with the\n"
+      "positives' weights w_pos, k features, code_gradient) or 'ratios' (the log ratios\n"
+      "returned); extra_neg (M x e feature values) adds e negatives after the boxes; second =\n"
+      "(mu, sigma, lam, first) is a second target model updated from the positives alone with\n"
+      "its own lambda. Checked when it runs.");
+  bind_learn_request(cls);
   m.def(
       "learn",
       [](const py::object& request) {
