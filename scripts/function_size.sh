@@ -53,12 +53,6 @@ PENDING = {
     "cpp/src/fhog.cpp:wmiltrack::cf::fhog",
     "cpp/src/correlation.cpp:wmiltrack::cf::TranslationFilter::respond",
     "cpp/src/sampling.cpp:wmiltrack::sample_bags",
-    "cpp/tests/test_core.cpp:test_channels",
-    "cpp/tests/test_core.cpp:test_hardening",
-    "cpp/tests/test_core.cpp:test_learning",
-    "cpp/tests/test_core.cpp:test_vmath",
-    "cpp/tests/test_core.cpp:test_grid_exact",
-    "cpp/tests/test_cf.cpp:test_batch_fft",
     "cpp/bindings/bind_learn.cpp:wmiltrack::bindings::make_learn",
 }
 
