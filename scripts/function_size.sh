@@ -4,11 +4,11 @@
 # docstrings are not counted, so a function is not split for being well documented).
 #
 # Two named lists, and nothing else, may pass over the limit:
-#   KERNELS   hot C++ kernels kept whole (at most four): splitting their loop nests would move
-#             loop-invariant state out of registers or out of the compiler's sight (each reason
-#             beside it);
-#   PENDING   functions still to split, by their file's owner: a temporary list that only
-#             shrinks. An entry that is no longer over the limit fails the check too, so the
+#   KERNELS   hot C++ kernels kept whole (at most four), each with the reason it is one loop
+#             nest (the cost of splitting them has not been measured yet: a split that keeps
+#             the same instruction count under callgrind takes its entry off);
+#   PENDING   functions still to split (cli/ and eval/, after the current merges): a
+#             temporary list that only shrinks. An entry that is no longer over the limit fails the check too, so the
 #             list is emptied as they are split.
 # Needs lizard (pip install lizard). Usage: scripts/function_size.sh [LIMIT]
 set -euo pipefail
@@ -48,12 +48,6 @@ PENDING = {
     "src/wmiltrack/eval/report.py:format_vot_table",
     "src/wmiltrack/eval/pipeline.py:run_eval",
     "src/wmiltrack/eval/vot_style.py:run_supervised",
-    # the C++ core: not yet split
-    "cpp/src/fhog.cpp:wmiltrack::cf::resample",
-    "cpp/src/fhog.cpp:wmiltrack::cf::fhog",
-    "cpp/src/correlation.cpp:wmiltrack::cf::TranslationFilter::respond",
-    "cpp/src/sampling.cpp:wmiltrack::sample_bags",
-    "cpp/bindings/bind_learn.cpp:wmiltrack::bindings::make_learn",
 }
 
 assert len(KERNELS) <= 4, "at most four kernels are kept whole"
