@@ -39,7 +39,7 @@ from wmiltrack.data.sequences import default_otb_root, load_dataset
 from wmiltrack.engine.correlation import (
     CorrelationFilter,
     CorrelationSettings,
-    ScaleEstimator,
+    ScaleFilter,
     ScaleFilterSettings,
 )
 from wmiltrack.eval.metrics import iou, ope_metrics
@@ -76,7 +76,7 @@ def track(frames: list[np.ndarray], box: np.ndarray, settings: CorrelationSettin
     x, y, w, h = (float(v) for v in box)
     cf = CorrelationFilter(settings)
     cf.init(frames[0], (x, y, w, h))
-    se = ScaleEstimator(scale_settings)
+    se = ScaleFilter(scale_settings)
     if use_scale:
         se.init(frames[0], (x, y, w, h))
     cx, cy = x + w / 2, y + h / 2

@@ -129,7 +129,7 @@ def _patch_optional_parts(patch: Callable[[Any, str, str], None]) -> None:
             patch(correlation.CorrelationFilter, name, "template")
         patch(correlation.Location, "map", "template")
         for name in ("estimate", "learn"):
-            patch(correlation.ScaleEstimator, name, "DSST")
+            patch(correlation.ScaleFilter, name, "DSST")
         for name in ("judge", "learn"):
             patch(recovery.Redetector, name, "lost state")
     except (ImportError, AttributeError):  # versions without them

@@ -108,11 +108,13 @@ class Probe(wmiltrack.Tracker):
         g = grid[np.isfinite(grid)]
         self.grid_mean = float(g.mean()) if g.size else math.nan
 
-    def _move(self, origin: tuple[int, int, int, int], stages: list[tuple[int, int]],
-              results: Any) -> float:
-        self._coarse_grid_mean(origin, stages[0])
-        self.raw_best = super()._move(origin, stages, results)
-        return self.raw_best
+    def _probe(self, state: Any) -> Any:
+        """A stage after locate: the coarse grid's mean and the search's raw score."""
+        self._coarse_grid_mean(state.origin, self._grids[0])
+        self.raw_best = state.raw
+        return state
+
+    stages = (wmiltrack.Tracker.stages[0], _probe, *wmiltrack.Tracker.stages[1:])
 
 
 def run(frames: list[np.ndarray], gt: np.ndarray, visible: np.ndarray, variant: str,

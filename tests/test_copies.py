@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import copy
 import pickle
-import threading
 
 import numpy as np
 import pytest
@@ -83,7 +82,14 @@ def test_a_copy_has_its_own_thread_guard(clip) -> None:  # type: ignore[no-untyp
         c.update(frames[5])  # the copy is not
     finally:
         t._busy.release()  # noqa: SLF001
-    assert isinstance(c._busy, type(threading.Lock()))  # noqa: SLF001
+    # and the copy's guard guards the copy: busy, it refuses, while the original runs
+    c._busy.acquire()  # noqa: SLF001
+    try:
+        with pytest.raises(RuntimeError, match="in use by another thread"):
+            c.update(frames[6])
+        t.update(frames[6])
+    finally:
+        c._busy.release()  # noqa: SLF001
 
 
 @pytest.mark.parametrize("variant", ["rcwmil", "rcwmil-cf"])

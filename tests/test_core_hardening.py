@@ -341,14 +341,13 @@ def test_tracker_refuses_concurrent_use() -> None:
     t = wmiltrack.Tracker("ct", seed=0)
     t.init(frames[0], tuple(gt[0]))
     inside, release = threading.Event(), threading.Event()
-    orig = t._move  # every search moves the box here
 
-    def slow_search(*args: object) -> float:
+    def slow_stage(tracker: object, state: Any) -> Any:  # a first stage that waits
         inside.set()
         release.wait(10)
-        return orig(*args)  # type: ignore[arg-type]
+        return state
 
-    t._move = slow_search  # type: ignore[method-assign]
+    t.stages = (slow_stage, *wmiltrack.Tracker.stages)
     errors: list[BaseException] = []
     th = threading.Thread(target=lambda: t.update(frames[1]))
     th.start()
@@ -364,7 +363,7 @@ def test_tracker_refuses_concurrent_use() -> None:
         release.set()
         th.join()
     assert not errors, errors
-    t._move = orig  # type: ignore[method-assign]
+    del t.stages  # (the class's stages again)
     t.update(frames[2])  # usable again once the other call returned
 
 

@@ -237,8 +237,8 @@ def test_one_call_learning_step_equals_the_separate_calls(variant: str) -> None:
     model = t.parts.appearance
     box = tuple(int(v) for v in t.box)
     p, pool, bank, ii = t.params, model.pool, model.bank(box[2], box[3]), model.ii
-    pos, dist = model.track.positives(box, 160, 120)
-    neg = model.track.negatives(box, 160, 120, np.random.default_rng(0))
+    pos, dist = model.sampler.positives(box, 160, 120)
+    neg = model.sampler.negatives(box, 160, 120, np.random.default_rng(0))
     corners = np.concatenate((pos, neg))
     n = pos.shape[0]
     w = instance_weights(dist, p.instance_weights)

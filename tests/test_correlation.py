@@ -14,7 +14,7 @@ from wmiltrack import _core
 from wmiltrack.engine.correlation import (
     CorrelationFilter,
     CorrelationSettings,
-    ScaleEstimator,
+    ScaleFilter,
     ScaleFilterSettings,
     smooth_size,
 )
@@ -240,7 +240,7 @@ def test_scale_estimator_recovers_a_known_scale_change(factor: float) -> None:
     frame = texture(240, 320, 8, blur=1.5)
     box = (120.0, 90.0, 80.0, 60.0)
     centre = (160.0, 120.0)  # the box's centre; pixel i covers [i, i + 1)
-    se = ScaleEstimator()
+    se = ScaleFilter()
     se.init(frame, box)
     assert se.estimate(frame, centre, (80.0, 60.0)).factor == pytest.approx(1.0, abs=0.005)
     # warpAffine's pixel centres are at integers: the box's centre is (159.5, 119.5) there.
@@ -266,7 +266,7 @@ def test_learning_follows_the_rate() -> None:
 def test_copies_are_independent() -> None:
     frame, other = texture(200, 200, 13), texture(200, 200, 14)
     box = (70.0, 70.0, 60.0, 60.0)
-    cf, se = CorrelationFilter(), ScaleEstimator()
+    cf, se = CorrelationFilter(), ScaleFilter()
     cf.init(frame, box)
     se.init(frame, box)
     cf2, se2 = cf.copy(), se.copy()
@@ -327,7 +327,7 @@ def test_bad_calls_raise() -> None:
         cf.learn(frame, (30.0, 30.0, 40.0, 40.0), 0.0)
     with pytest.raises(ValueError, match="rate"):
         cf.learn(frame, (30.0, 30.0, 40.0, 40.0), True)
-    se = ScaleEstimator()
+    se = ScaleFilter()
     with pytest.raises(RuntimeError, match="init"):
         se.estimate(frame, (50.0, 50.0), (20.0, 20.0))
     se.init(frame, (30.0, 30.0, 40.0, 40.0))
@@ -486,7 +486,7 @@ def test_scale_filter_learnt_with_a_shift_prefers_that_size() -> None:
     """The scale filter's learn_spectrum moves the label: answering the same samples then
     peaks ``shift`` samples off the middle; respond and respond_spectrum agree."""
     frame = texture(240, 320, 16, blur=1.5)
-    factors = list(ScaleEstimator().factors)
+    factors = list(ScaleFilter().factors)
     args = (frame, (160.0, 120.0), (80.0, 60.0), factors, (20, 16), 4)
     samples = _core.scale_samples(*args)
     f = _core.ScaleFilter(33, samples.shape[1], math.sqrt(33) / 4, 1e-3)

@@ -42,8 +42,22 @@ def seq(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root / "Seq"
 
 
-def test_the_table() -> None:
-    assert list(EXIT_CODES) == [0, 1, 2, 130, 141]
+def test_the_table_says_what_the_status_of_each_outcome_means(seq: Path, tmp_path: Path) -> None:
+    """Each outcome's status, as the commands return it, is in the table under its meaning,
+    and the epilog every ``--help`` shows lists the whole table."""
+    outcomes = [
+        (run_main("variants", "rcwmil"), "done"),
+        (run_main("track", str(seq), "-q", "-o", str(tmp_path / "b.txt")), "done"),
+        (run_main("track", str(seq), "--box", "1,2,3"), "bad command line"),
+        (run_main("variants", "nope"), "bad command line"),
+        (closed_pipe("variants")[0], "standard output closed by its reader"),
+    ]
+    if Path("/dev/full").exists():
+        outcomes.append((run_main("track", str(seq), "-o", "/dev/full"), "the run failed"))
+    for status, meaning in outcomes:
+        assert EXIT_CODES.get(status, "").startswith(meaning), (status, meaning)
+    for status, meaning in EXIT_CODES.items():
+        assert f"{status} {meaning}" in EXIT_CODES_EPILOG
 
 
 @pytest.mark.parametrize("cmd", (None, *SUBCOMMANDS))

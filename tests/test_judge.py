@@ -10,12 +10,27 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.engine.judge import LostJudge
-from wmiltrack.engine.settings import JudgeSettings, ScoreSettings
+from wmiltrack.engine.judge import Evidence, FrameJudge
+from wmiltrack.engine.settings import JudgeSettings
+from wmiltrack.engine.state import FrameState, Verdict, new_frame
+
+_FRAME = np.zeros((4, 4), np.uint8)
+_START = FrameState(_FRAME, (0, 0, 2, 2), box=(0, 0, 2, 2), verdict=Verdict.TRACKED, ok=True)
 
 
-def _judge(**kw: float) -> LostJudge:
-    return LostJudge(JudgeSettings(judge_memory=3.0, **kw), threshold=ScoreSettings().lost_threshold)  # type: ignore[arg-type]
+class _Judge(FrameJudge):
+    """The judge with its memory, fed one (score, first-frame peak) at a time."""
+
+    def __init__(self, **kw: float) -> None:
+        super().__init__(JudgeSettings(judge_memory=3.0, **kw))  # type: ignore[arg-type]
+
+    def verdict_of(self, score: float, first_peak: float) -> bool:
+        state = new_frame(_FRAME, _START, None).evolve(conf=score, score=score)
+        return self.verdict(state, Evidence(first_peak=first_peak)).ok
+
+
+def _judge(**kw: float) -> _Judge:
+    return _Judge(**kw)
 
 
 def test_judged_confidence_is_the_documented_logistic() -> None:
@@ -29,15 +44,15 @@ def test_judged_confidence_is_the_documented_logistic() -> None:
 def test_lost_after_three_low_frames_in_a_row_and_back_after_two_high() -> None:
     j = _judge()
     low, high, middling = (0.1, 0.01), (0.9, 0.5), (0.55, 0.09)
-    assert j.verdict(*low) and j.verdict(*low)
-    assert j.verdict(*middling)  # breaks the run: not lost yet
-    assert j.verdict(*low) and j.verdict(*low)
-    assert not j.verdict(*low)  # the third low frame in a row
-    assert not j.verdict(*middling) and not j.verdict(*high)
-    assert not j.verdict(*low)  # a low frame breaks the run of high ones
-    assert not j.verdict(*high)
-    assert j.verdict(*high)  # the second high frame in a row
-    assert j.verdict(0.9, math.nan)  # a frame without the filter's search changes nothing
+    assert j.verdict_of(*low) and j.verdict_of(*low)
+    assert j.verdict_of(*middling)  # breaks the run: not lost yet
+    assert j.verdict_of(*low) and j.verdict_of(*low)
+    assert not j.verdict_of(*low)  # the third low frame in a row
+    assert not j.verdict_of(*middling) and not j.verdict_of(*high)
+    assert not j.verdict_of(*low)  # a low frame breaks the run of high ones
+    assert not j.verdict_of(*high)
+    assert j.verdict_of(*high)  # the second high frame in a row
+    assert j.verdict_of(0.9, math.nan)  # a frame without the filter's search changes nothing
 
 
 def test_settings_are_checked() -> None:
@@ -112,6 +127,6 @@ def test_when_the_judge_turns_to_lost_the_tracker_enters_the_lost_state() -> Non
         judge = t.parts.judge
         assert judge is not None
         if judge.turned and judge.lost:
-            assert t.parts.lost  # the recovery looks for the target from the next frame
+            assert t.lost  # the recovery looks for the target from the next frame
             entered += 1
     assert entered >= 1

@@ -1,13 +1,19 @@
 """Each part reads only its own settings: :func:`~wmiltrack.engine.tracker.compose` hands every
-part the settings class that owns it (``engine/settings.py``), never the whole ``Params``.
+part the settings class that owns it (``engine/settings.py``), never the whole ``Params``, and
+the user's part factories get their own settings only.
 
-The test hands each part a recording stand-in for the *whole* ``Params`` instead (so a read of
-another part's field would succeed and be seen), runs every preset, and checks that every field
-read belongs to the class the part was built with."""
+The test records *every* read of a setting while every preset runs (any attribute read of
+any settings object, ``Params`` included, by whatever code), finds which part made it (the
+innermost calling method whose ``self`` is a part), and checks that each part read only fields
+of its own kind's settings class, and never from a whole ``Params``. Reads by the tracker
+itself (the composer) are checked against the fixed list of what it decides: which parts to
+build and the search it runs."""
 
 from __future__ import annotations
 
 import dataclasses
+import os
+import sys
 from typing import Any
 
 import numpy as np
@@ -15,24 +21,68 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.engine import tracker as tracker_module
-from wmiltrack.engine.params import Params
+from wmiltrack.engine.appearance import HaarAppearance
+from wmiltrack.engine.classifier import GaussianPool
+from wmiltrack.engine.colour import ColourModel
+from wmiltrack.engine.cues import ColourCue
+from wmiltrack.engine.judge import FrameJudge
+from wmiltrack.engine.motion import VelocityMotion
+from wmiltrack.engine.params import PARTS, Params
+from wmiltrack.engine.policy import ContrastScore, ReportedScore
+from wmiltrack.engine.recovery import Redetector
+from wmiltrack.engine.sampling import BagSampler
+from wmiltrack.engine.scale import DSSTScale, HaarScale
+from wmiltrack.engine.settings import (
+    AppearanceSettings,
+    ColourSettings,
+    JudgeSettings,
+    MotionSettings,
+    RecoverySettings,
+    ScaleSettings,
+    ScoreSettings,
+    TemplateSettings,
+)
+from wmiltrack.engine.template import CorrelationTemplate
+
+#: Each part class, with the settings class it may read.
+OWNER = {
+    HaarAppearance: AppearanceSettings, BagSampler: AppearanceSettings,
+    GaussianPool: AppearanceSettings, HaarScale: ScaleSettings, DSSTScale: ScaleSettings,
+    VelocityMotion: MotionSettings, ColourCue: ColourSettings, ColourModel: ColourSettings,
+    CorrelationTemplate: TemplateSettings, ReportedScore: ScoreSettings,
+    ContrastScore: ScoreSettings, Redetector: RecoverySettings, FrameJudge: JudgeSettings,
+}
+
+#: What the tracker itself reads: which parts to build, the search's grids and reach, the
+#: confidence's offset, how the cues' maps merge, and the reported score's first-frame models.
+COMPOSER_READS = {
+    "variant", "coarse_radius", "coarse_step", "fine_radius", "fine_step", "colour_weight",
+    "template_weight", "template_motion", "motion", "scale_steps", "scale_model", "redetect",
+    "score_colour", "score_luma", "score_colour_model", "colour_sample", "confidence_offset",
+    "colour_relative", "stage_reach", "judge_memory",
+}
+
+SETTINGS = {*PARTS, AppearanceSettings, Params}
+_TRACKER_FILE = os.path.join("engine", "tracker.py")
+_SETTINGS_FILE = os.path.join("engine", "settings.py")
 
 
-class Recording:
-    """Reads ``params`` as a ``cls`` would be read, recording every attribute asked for."""
-
-    __slots__ = ("_params", "_cls", "_reads")
-
-    def __init__(self, params: Params, cls: type[Any], reads: list[tuple[type[Any], str]]
-                 ) -> None:
-        self._params = params
-        self._cls = cls
-        self._reads = reads
-
-    def __getattr__(self, name: str) -> Any:
-        self._reads.append((self._cls, name))
-        return getattr(self._params, name)
+def _reader(frame: Any) -> Any:
+    """Who reads, from the frame that read: the innermost part (its class), the settings
+    object itself (its own checks and properties), ``own`` (which copies exactly its class's
+    fields), the tracker ("composer") or "other"."""
+    while frame is not None:
+        me = frame.f_locals.get("self")
+        if type(me) in SETTINGS:
+            return "settings"
+        if frame.f_code.co_name == "own" and frame.f_code.co_filename.endswith(_SETTINGS_FILE):
+            return "own"
+        if type(me) in OWNER:
+            return type(me)
+        if frame.f_code.co_filename.endswith(_TRACKER_FILE):
+            return "composer"
+        frame = frame.f_back
+    return "other"
 
 
 #: Every preset, plus the part choices no preset makes (DSST as the scale model, the template as
@@ -57,34 +107,70 @@ def sequence() -> tuple[list[np.ndarray], tuple[int, int, int, int]]:
 def test_each_part_reads_only_its_own_settings(
         monkeypatch: pytest.MonkeyPatch, sequence: tuple[list[np.ndarray], Any],
         preset: str, overrides: dict[str, Any]) -> None:
-    reads: list[tuple[type[Any], str]] = []
-    monkeypatch.setattr(tracker_module, "own",
-                        lambda cls, params: Recording(params, cls, reads))
+    reads: list[tuple[type[Any], str, Any]] = []
+    fields = {cls: {f.name for f in dataclasses.fields(cls)} for cls in SETTINGS}
+
+    def recorded(self: Any, name: str) -> Any:
+        value = object.__getattribute__(self, name)
+        if name in fields.get(type(self), ()):
+            reads.append((type(self), name, _reader(sys._getframe(1))))
+        return value
+
+    for cls in SETTINGS:
+        monkeypatch.setattr(cls, "__getattribute__", recorded)
     frames, box = sequence
     t = wmiltrack.Tracker(preset, seed=0, **overrides)
     t.init(frames[0], box)
     for frame in frames[1:]:
         t.update(frame)
-    assert reads
-    strays = sorted({(cls.__name__, name) for cls, name in reads
-                     if name not in {f.name for f in dataclasses.fields(cls)}})
-    assert not strays, f"parts read settings they do not own: {strays}"
+    monkeypatch.undo()
+    by_parts = [(cls, name, who) for cls, name, who in reads if isinstance(who, type)]
+    assert by_parts, "no part read a setting: the recording sees nothing"
+    strays = sorted({(who.__name__, cls.__name__, name) for cls, name, who in by_parts
+                     if cls is not OWNER[who]})
+    assert not strays, f"parts read settings they do not own (part, class, field): {strays}"
+    unknown = sorted({(cls.__name__, name) for cls, name, who in reads if who == "other"})
+    assert not unknown, f"settings read by code outside the parts and the tracker: {unknown}"
+    composer = {name for cls, name, who in reads if who == "composer" and cls is Params}
+    assert composer <= COMPOSER_READS, f"the tracker reads more: {composer - COMPOSER_READS}"
     # and no part keeps the whole Params
-    parts = t._parts
-    assert parts is not None
-    for part in (*parts.others(), parts.policy, parts.judge, parts.appearance,
-                 parts.appearance.pool):
-        if part is None:
-            continue
+    parts = t.parts
+    for part in (*parts.others(), parts.policy, parts.appearance, parts.appearance.pool):
         held = [k for k, v in vars(part).items() if isinstance(v, Params)]
         assert not held, f"{type(part).__name__} holds the whole Params in {held}"
     # no part can call back into the tracker: none holds it or one of its bound methods
-    for part in (*parts.others(), parts.policy, parts.judge, parts.appearance):
-        if part is None:
-            continue
+    for part in (*parts.others(), parts.policy, parts.appearance):
         back = [k for k, v in vars(part).items()
                 if v is t or getattr(v, "__self__", None) is t]
         assert not back, f"{type(part).__name__} holds the tracker in {back}"
+
+
+def test_the_recording_sees_a_part_that_reads_another_parts_settings(
+        monkeypatch: pytest.MonkeyPatch, sequence: tuple[list[np.ndarray], Any]) -> None:
+    """A motion model that peeks at a whole Params (as a part given the tracker's parameters
+    could) is caught: the check above would fail on it."""
+    params = wmiltrack.Params.for_variant("rcwmil", motion="velocity")
+    reads: list[tuple[type[Any], str, Any]] = []
+
+    def recorded(self: Any, name: str) -> Any:
+        value = object.__getattribute__(self, name)
+        if not name.startswith("_"):
+            reads.append((type(self), name, _reader(sys._getframe(1))))
+        return value
+
+    class Peeking(VelocityMotion):
+        def follow(self, previous: Any, box: Any, tracked: bool) -> None:
+            super().follow(previous, box, tracked and params.num_features > 0)
+
+    monkeypatch.setitem(OWNER, Peeking, MotionSettings)
+    for cls in SETTINGS:
+        monkeypatch.setattr(cls, "__getattribute__", recorded)
+    frames, box = sequence
+    t = wmiltrack.Tracker(params=params, parts={"motion": lambda s, f, b: Peeking(s)})
+    t.track(frames[:3], box)
+    monkeypatch.undo()
+    assert (Params, "num_features", Peeking) in reads
+    assert (MotionSettings, "motion_smoothing", Peeking) in reads
 
 
 def test_recovery_constants_are_settings() -> None:

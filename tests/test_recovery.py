@@ -3,6 +3,7 @@ held, not learnt, and found again over the whole frame when it comes back."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -11,7 +12,10 @@ import pytest
 import wmiltrack
 from wmiltrack import Params, Tracker
 from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine.judge import Evidence, FrameJudge
 from wmiltrack.engine.recovery import Redetector
+from wmiltrack.engine.settings import JudgeSettings, RecoverySettings, own
+from wmiltrack.engine.state import FrameState, Verdict, new_frame
 from wmiltrack.eval.metrics import iou
 
 OCCLUDED = (60, 20)  # frames 60..79 behind a block
@@ -67,7 +71,7 @@ def test_a_lost_tracker_holds_its_last_confident_box_and_learns_nothing() -> Non
     t.init(frames[0], tuple(gt[0]))
     for f in frames[1:62]:
         t.update(f)
-    assert t.parts.lost
+    assert t.lost
     held = t.box
     mu = t.parts.appearance.pool.mu1.copy()
     for f in frames[62:90]:
@@ -104,8 +108,8 @@ def test_a_target_larger_than_the_frame_is_not_searched_for() -> None:
     rng = np.random.default_rng(0)
     frame = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
     part.start(frame, (10, 10, 30, 20))
-    assert part.find(frame[:15, :20]) is None
-    assert part.find(frame) == (10, 10, 30, 20)  # the template's own place
+    assert part.find(frame[:15, :20], 1) is None
+    assert part.find(frame, 1) == (10, 10, 30, 20)  # the template's own place
 
 
 @pytest.mark.parametrize("bad", [
@@ -150,7 +154,7 @@ def test_a_cue_that_still_sees_the_target_keeps_the_lost_state_off() -> None:
         n = 0
         for f in frames[1:]:
             t.update(f)
-            n += t.parts.lost
+            n += t.lost
         return n
 
     assert lost_frames(_Witness(math.nan)) >= 25
@@ -161,19 +165,32 @@ def test_a_cues_confidence_does_not_end_the_lost_state() -> None:
     """A cue whose confidence never falls keeps the target from counting as lost, but once it
     is lost (the cue had no opinion then) the cue's confidence cannot end the lost state: only
     the classifier's confidence or the grey template's correlation can."""
-    r = Redetector(Params.for_variant("rcwmil-plus"))
+    p = Params.for_variant("rcwmil-plus")
+    r, judge = Redetector(own(RecoverySettings, p)), FrameJudge(own(JudgeSettings, p))
     frame = np.zeros((60, 80), np.uint8)
     frame[20:40, 30:50] = np.arange(400, dtype=np.uint8).reshape(20, 20)
     box = (30, 20, 20, 20)
     r.start(frame, box)
+    judge.start(frame, box)
+    last = FrameState(frame, box, box=box, verdict=Verdict.TRACKED, ok=True)
+
+    def record(conf: float, img: np.ndarray) -> FrameState:
+        return new_frame(img, last, None).evolve(conf=conf, score=conf)
+
+    def evidence(img: np.ndarray, cue: float | None) -> Evidence:
+        return Evidence(() if cue is None else (cue,), functools.partial(r.likeness, img, box))
+
     for _ in range(12):
         r.learn(frame, box)
-        assert not r.judge(1.0, frame, box, [1.0])
+        last = judge.verdict(record(1.0, frame), evidence(frame, 1.0))
+        assert last.verdict is Verdict.TRACKED
     empty = np.zeros_like(frame)
-    assert r.judge(0.0, empty, box, [0.0])  # everything fell: lost
-    assert not r.back(0.0, empty, box)  # the classifier and the template still say no
-    assert r.lost
-    assert r.back(1.0, frame, box) and not r.lost
+    last = judge.verdict(record(0.0, empty), evidence(empty, 0.0))
+    assert last.verdict is Verdict.LOST and last.lost_for == 0  # everything fell: lost
+    assert not judge.back(record(0.0, empty), evidence(empty, None))  # nothing says it is back
+    assert not judge.back(record(0.0, empty), evidence(empty, 1.0))  # (the cue is not asked)
+    assert judge.back(record(1.0, frame), evidence(frame, None))  # the classifier says so
+    assert judge.verdict(record(1.0, frame), evidence(frame, None)).verdict is Verdict.FOUND
 
 
 @pytest.mark.parametrize("kind", ["gray", "gray3d", "bgra"])
@@ -194,6 +211,6 @@ def test_gray_and_bgra_frames_are_found_again(kind: str) -> None:
     boxes, lost = [gt[0]], 0
     for f in frames[1:]:
         boxes.append(np.asarray(t.update(f).box))
-        lost += t.parts.lost
+        lost += t.lost
     assert lost >= 24  # most of the 30 frames out of view
     assert _back_within(np.array(boxes), gt, 90, 10)

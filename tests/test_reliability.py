@@ -136,9 +136,10 @@ def track_checked(tracker: wmiltrack.Tracker, frames: Sequence[Frame], box: Any)
             return boxes, f"frame {i}: score {r.score} not in [0, 1]"
         # ok is the score against the threshold (or, with a judge, its verdict), except in
         # the lost state (score 0, ok False); with two experts, their judge's verdict alone
-        lost = tracker.parts.lost
+        lost = tracker.lost
         judge = tracker.parts.judge
-        tracked = r.score >= tracker.params.lost_threshold if judge is None else not judge.lost
+        memory = tracker.params.judge_memory > 0  # (the judge's memory of the target)
+        tracked = not judge.lost if memory else r.score >= tracker.params.lost_threshold
         if tracker.parts.experts is not None:
             lost, tracked = False, not tracker.parts.experts.judge.lost
         if r.ok != (tracked and not lost) or (lost and r.score):

@@ -12,8 +12,9 @@ import pytest
 import wmiltrack
 from wmiltrack import _core
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.engine.correlation import ScaleEstimator
-from wmiltrack.engine.template import CorrelationTemplate, DSSTScale
+from wmiltrack.engine.correlation import ScaleFilter
+from wmiltrack.engine.scale import DSSTScale
+from wmiltrack.engine.template import CorrelationTemplate
 
 
 def _textured(seed: int = 0, size: tuple[int, int] = (160, 200)) -> np.ndarray:
@@ -165,15 +166,15 @@ def test_the_scale_filter_learns_only_above_the_gate(monkeypatch: pytest.MonkeyP
     seq = make_sequence(10, size=(160, 200), target_size=(36, 30), seed=5, occlusion=False)
     frames, box = seq.load(), tuple(seq.groundtruth[0])
     calls: list[int] = []
-    real = ScaleEstimator.learn
+    real = ScaleFilter.learn
 
-    def counted(self: ScaleEstimator, frame: object, centre: object, size: object,
+    def counted(self: ScaleFilter, frame: object, centre: object, size: object,
                 rate: float | None = None, **kw: bool) -> None:
         if rate is None:  # not init's first sample
             calls.append(1)
         real(self, frame, centre, size, rate, **kw)
 
-    monkeypatch.setattr(ScaleEstimator, "learn", counted)
+    monkeypatch.setattr(ScaleFilter, "learn", counted)
     for gate, expect in ((0.0, len(frames) - 1), (1.0, 0)):
         calls.clear()
         wmiltrack.Tracker("rcwmil-plus", seed=0, template_weight=0.2, colour_weight=0.6,
@@ -218,13 +219,13 @@ def test_only_rcwmil_cf_has_the_correlation_filters() -> None:
 def test_dsst_votes_inside_the_haar_scale_search(monkeypatch: pytest.MonkeyPatch) -> None:
     """``scale_dsst``: the Haar scale search adds DSST's response at each tried size to its
     value (a vote that prefers a larger box makes the box grow); 0 leaves DSST out."""
-    from wmiltrack.engine.correlation import ScaleEstimate, ScaleEstimator
+    from wmiltrack.engine.correlation import ScaleEstimate, ScaleFilter
 
     seq = make_sequence(8, size=(160, 200), target_size=(36, 30), seed=6, occlusion=False)
     frames, box = seq.load(), tuple(seq.groundtruth[0])
-    factors = ScaleEstimator().factors
+    factors = ScaleFilter().factors
     bigger = np.array(factors, dtype=np.float32)  # rising with the size
-    monkeypatch.setattr(ScaleEstimator, "estimate",
+    monkeypatch.setattr(ScaleFilter, "estimate",
                         lambda self, frame, centre, size: ScaleEstimate(1.0, bigger))
     grown = wmiltrack.Tracker("rcwmil-plus", seed=0, scale_dsst=50.0)
     grown.track(frames, box)
@@ -276,12 +277,12 @@ def test_scale_veto_keeps_the_size_where_the_colour_contrast_falls(monkeypatch: 
     """``scale_veto``: DSST's new size is taken only if the colour cue's contrast of the new
     box is at least the current box's; without a colour cue, or without the veto, it is
     taken."""
-    from wmiltrack.engine.correlation import ScaleEstimate, ScaleEstimator
-    from wmiltrack.engine.template import DSSTScale
+    from wmiltrack.engine.correlation import ScaleEstimate, ScaleFilter
+    from wmiltrack.engine.scale import DSSTScale
 
     seq = make_sequence(2, size=(160, 200), target_size=(36, 30), seed=6, occlusion=False)
     frames, box = seq.load(), tuple(int(v) for v in seq.groundtruth[0])
-    monkeypatch.setattr(ScaleEstimator, "estimate",
+    monkeypatch.setattr(ScaleFilter, "estimate",
                         lambda self, frame, centre, size: ScaleEstimate(1.2, np.zeros(17, np.float32)))
 
     def scaled(veto: bool, contrast: object) -> tuple[int, int, int, int]:
@@ -307,7 +308,7 @@ def test_scale_veto_keeps_the_size_where_the_colour_contrast_falls(monkeypatch: 
 def test_dssts_vote_learns_from_its_own_samples_with_the_same_result(monkeypatch: pytest.MonkeyPatch) -> None:
     """When the Haar scale search keeps the box DSST voted around, DSST learns from the
     samples of its vote instead of taking them again: the same samples, so the same boxes."""
-    from wmiltrack.engine.correlation import ScaleEstimator
+    from wmiltrack.engine.correlation import ScaleFilter
 
     seq = make_sequence(40, size=(160, 200), target_size=(36, 30), seed=4)
     frames, box = seq.load(), tuple(seq.groundtruth[0])
@@ -318,14 +319,14 @@ def test_dssts_vote_learns_from_its_own_samples_with_the_same_result(monkeypatch
         return [t.update(f).box for f in frames[1:]]
 
     reused = run()
-    fresh_learn = ScaleEstimator.learn
+    fresh_learn = ScaleFilter.learn
     calls = {"reuse asked": 0}
 
-    def always_fresh(self: ScaleEstimator, frame: np.ndarray, centre: object, size: object,
+    def always_fresh(self: ScaleFilter, frame: np.ndarray, centre: object, size: object,
                      rate: float | None = None, *, from_estimate: bool = False) -> None:
         calls["reuse asked"] += from_estimate
         fresh_learn(self, frame, centre, size, rate)
 
-    monkeypatch.setattr(ScaleEstimator, "learn", always_fresh)
+    monkeypatch.setattr(ScaleFilter, "learn", always_fresh)
     assert run() == reused
     assert calls["reuse asked"] > 20  # most frames keep the voted box

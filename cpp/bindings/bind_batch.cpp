@@ -169,7 +169,7 @@ py::list run_learn_at(const std::vector<LearnAt>& steps, int threads) {
 
 }  // namespace
 
-void bind_batch(py::module_& m) {
+static void bind_batched_search_and_learn(py::module_& m) {
   m.def(
       "search_many",
       [](const std::vector<py::object>& requests, int threads) {
@@ -207,6 +207,9 @@ void bind_batch(py::module_& m) {
       "learn() for several LearnRequests in one call, on up to `threads` threads with the GIL\n"
       "released once. Returns the results in order; the first error is raised after all ran.");
 
+}
+
+static void bind_frame_steps(py::module_& m) {
   m.def(
       "frame_step",
       [](const py::object& search, const py::object& learn, const py::object& bags) {
@@ -247,6 +250,9 @@ void bind_batch(py::module_& m) {
       "select='none' when no positive fits in the frame; its extra negatives kept). Returns\n"
       "(learn's result, (xs, ys, n_pos) of the bags).");
 
+}
+
+static void bind_batched_learn_at(py::module_& m) {
   m.def(
       "learn_at_many",
       [](const std::vector<LearnAt>& steps, int threads) { return run_learn_at(steps, threads); },
@@ -255,6 +261,12 @@ void bind_batch(py::module_& m) {
       "released once: each step is a (LearnRequest, BagRequest, box, frame_size). Steps must not\n"
       "share a generator (ValueError). Returns the results in order; the first error is raised\n"
       "after all ran.");
+}
+
+void bind_batch(py::module_& m) {
+  bind_batched_search_and_learn(m);
+  bind_frame_steps(m);
+  bind_batched_learn_at(m);
 }
 
 }  // namespace wmiltrack::bindings

@@ -139,7 +139,7 @@ cf::TranslationResponse respond_locked(LockedTranslation& t, const Sample& z, in
 }  // namespace
 
 // The free functions: gray patches, fHOG and scale samples of a frame region.
-void bind_cf_features(py::module_& m) {
+static void bind_fhog(py::module_& m) {
   m.attr("FHOG_CHANNELS") = cf::kFhogChannels;
   m.def(
       "cf_gray_patch",
@@ -181,6 +181,9 @@ void bind_cf_features(py::module_& m) {
       py::arg("patch"), py::arg("cell") = 4,
       "fHOG (Felzenszwalb's 31 features per cell: 18 signed and 9 unsigned orientation bins,\n"
       "4 block energies) of a gray patch: float32 (31, rows // cell, cols // cell).");
+}
+
+static void bind_fhog_samples(py::module_& m) {
   m.def(
       "fhog_region",
       [](const py::array& frame, Pair centre, Pair size, Size out_size, int cell) {
@@ -219,6 +222,11 @@ void bind_cf_features(py::module_& m) {
       py::arg("model_size"), py::arg("cell") = 4,
       "For each factor f: fHOG (cell) of the region of size (w f, h f) around centre,\n"
       "resampled to model_size = (w, h); float32 (len(factors), dims), one sample a row.");
+}
+
+void bind_cf_features(py::module_& m) {
+  bind_fhog(m);
+  bind_fhog_samples(m);
 }
 
 void bind_translation_response(py::module_& m) {
@@ -274,13 +282,8 @@ void bind_spectrum(py::module_& m) {
       .def_readonly("cols", &cf::Spectrum::cols);
 }
 
-void bind_translation_filter(py::module_& m) {
-  py::class_<LockedTranslation>(
-      m, "TranslationFilter",
-      "A multi-channel linear correlation filter over rows x cols cells, trained and applied\n"
-      "in the Fourier domain: a Hann window on every plane, a Gaussian label (sigma cells)\n"
-      "peaked at shift (0, 0), numerator conj(Y) X_k / N and denominator sum |X_k|^2 / N kept\n"
-      "as running averages, response real(ifft2(sum conj(A_k) Z_k / (B + lam)))).")
+static void def_translation_model(py::class_<LockedTranslation>& cls) {
+  cls
       .def(py::init([](int rows, int cols, int channels, double sigma, double lam,
                        int compressed) {
              require(rows >= 1 && cols >= 1 && channels >= 1,
@@ -317,7 +320,11 @@ void bind_translation_filter(py::module_& m) {
             const py::ssize_t k = p.empty() ? 0 : t.filter.filter_channels();
             return to_array(p, {k, t.filter.channels()});
           },
-          "The projection (filter_channels x channels; 0 rows without one or before learn).")
+          "The projection (filter_channels x channels; 0 rows without one or before learn).");
+}
+
+static void def_translation_sampling(py::class_<LockedTranslation>& cls) {
+  cls
       .def(
           "sample",
           [](LockedTranslation& t, const py::array& frame, Pair centre, Pair size, Size out_size,
@@ -359,7 +366,11 @@ void bind_translation_filter(py::module_& m) {
           py::arg("spectrum"), py::arg("rate"), py::arg("shift") = Pair{0.0, 0.0},
           "Fold in a transformed sample whose target sits shift = (rows, cols) cells from its\n"
           "centre (moved circularly so that the target is centred, as ECO trains on its search\n"
-          "sample).")
+          "sample).");
+}
+
+static void def_translation_learning(py::class_<LockedTranslation>& cls) {
+  cls
       .def(
           "respond_spectrum",
           [](LockedTranslation& t, const cf::Spectrum& s, int exclusion) {
@@ -406,6 +417,18 @@ void bind_translation_filter(py::module_& m) {
           "(2 exclusion + 1)^2 cells around the peak).");
 }
 
+void bind_translation_filter(py::module_& m) {
+  py::class_<LockedTranslation> cls(
+      m, "TranslationFilter",
+      "A multi-channel linear correlation filter over rows x cols cells, trained and applied\n"
+      "in the Fourier domain: a Hann window on every plane, a Gaussian label (sigma cells)\n"
+      "peaked at shift (0, 0), numerator conj(Y) X_k / N and denominator sum |X_k|^2 / N kept\n"
+      "as running averages, response real(ifft2(sum conj(A_k) Z_k / (B + lam)))).");
+  def_translation_model(cls);
+  def_translation_sampling(cls);
+  def_translation_learning(cls);
+}
+
 void bind_scale_response(py::module_& m) {
   py::class_<cf::ScaleResponse>(m, "ScaleResponse", "A scale filter's response.")
       .def_property_readonly(
@@ -419,12 +442,8 @@ void bind_scale_response(py::module_& m) {
                     "Sub-sample refinement of best, in [-0.5, 0.5] (0 at the ends).");
 }
 
-void bind_scale_filter(py::module_& m) {
-  py::class_<LockedScale>(
-      m, "ScaleFilter",
-      "A 1-D correlation filter over num_scales samples of dims features (DSST): a Hann\n"
-      "window over the scales, a Gaussian label (sigma samples) peaked on the middle sample,\n"
-      "numerator conj(Y) X_d and denominator sum |X_d|^2 kept as running averages.")
+static void def_scale_model(py::class_<LockedScale>& cls) {
+  cls
       .def(py::init([](int num_scales, int dims, double sigma, double lam) {
              require(num_scales >= 3, "num_scales must be at least 3");
              require(dims >= 1, "dims must be at least 1");
@@ -468,7 +487,11 @@ void bind_scale_filter(py::module_& m) {
             if (!s.filter.trained()) throw py::value_error("call learn() before respond()");
             return s.filter.respond(v);
           },
-          py::arg("samples"), "The response to num_scales x dims samples.")
+          py::arg("samples"), "The response to num_scales x dims samples.");
+}
+
+static void def_scale_spectra(py::class_<LockedScale>& cls) {
+  cls
       .def(
           "sample",
           [](LockedScale& s, const py::array& frame, Pair centre, Pair size,
@@ -513,6 +536,16 @@ void bind_scale_filter(py::module_& m) {
             return s.filter.respond(sp);
           },
           py::arg("spectrum"), "respond() to transformed samples.");
+}
+
+void bind_scale_filter(py::module_& m) {
+  py::class_<LockedScale> cls(
+      m, "ScaleFilter",
+      "A 1-D correlation filter over num_scales samples of dims features (DSST): a Hann\n"
+      "window over the scales, a Gaussian label (sigma samples) peaked on the middle sample,\n"
+      "numerator conj(Y) X_d and denominator sum |X_d|^2 kept as running averages.");
+  def_scale_model(cls);
+  def_scale_spectra(cls);
 }
 
 }  // namespace wmiltrack::bindings

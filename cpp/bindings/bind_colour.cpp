@@ -59,14 +59,8 @@ Span span_of(std::tuple<int, int, int, int> t) {
 
 }  // namespace
 
-void bind_colour(py::module_& m) {
-  py::class_<LockedHistograms>(
-      m, "ColourHistograms",
-      "Foreground and background colour histograms (2**(3 * bits) bins each, blended over\n"
-      "frames at `rate`) and the per-bin likelihood fg / (fg + bg), 0.5 where both are 0.\n"
-      "bin = (b >> s) << 2 bits | (g >> s) << bits | (r >> s), s = 8 - bits; with intensity,\n"
-      "the bin of the pixel's luma in all three (gray frames accepted). With step > 1, learn\n"
-      "and likelihood_sums read the pixels whose frame row and column are multiples of step.")
+static void def_colour_model(py::class_<LockedHistograms>& cls) {
+  cls
       .def(py::init([](int bits, double rate, bool intensity) {
              require(bits >= 1 && bits <= 8, [&] { return "bits must be in 1..8, got " + std::to_string(bits); });
              require(rate > 0.0 && rate <= 1.0, "rate must be in (0, 1]");
@@ -107,7 +101,11 @@ void bind_colour(py::module_& m) {
           "(x, y, w, h) outside inside for the background (inside, core: (row0, row1, col0,\n"
           "col1) relative to the region, half-open); each count histogram is normalised to sum\n"
           "1 and blended in ((1 - rate) model + rate counts; the counts on the first frame).\n"
-          "step > 1: only the pixels whose frame row and column are multiples of step count.")
+          "step > 1: only the pixels whose frame row and column are multiples of step count.");
+}
+
+static void def_colour_sums(py::class_<LockedHistograms>& cls) {
+  cls
       .def(
           "likelihood_integral",
           [](LockedHistograms& h, const py::array& frame, std::tuple<int, int, int, int> region_in) {
@@ -151,11 +149,28 @@ void bind_colour(py::module_& m) {
       .def_property_readonly("background", [](LockedHistograms& h) {
         std::lock_guard<std::mutex> guard(h.lock);
         return copy_of(h.hist.background());
-      }, "A copy of the background histogram.")
+      }, "A copy of the background histogram.");
+}
+
+static void def_colour_likelihood(py::class_<LockedHistograms>& cls) {
+  cls
       .def_property_readonly("likelihood", [](LockedHistograms& h) {
         std::lock_guard<std::mutex> guard(h.lock);
         return copy_of(h.hist.likelihood());
       }, "A copy of P(target | bin).");
+}
+
+void bind_colour(py::module_& m) {
+  py::class_<LockedHistograms> cls(
+      m, "ColourHistograms",
+      "Foreground and background colour histograms (2**(3 * bits) bins each, blended over\n"
+      "frames at `rate`) and the per-bin likelihood fg / (fg + bg), 0.5 where both are 0.\n"
+      "bin = (b >> s) << 2 bits | (g >> s) << bits | (r >> s), s = 8 - bits; with intensity,\n"
+      "the bin of the pixel's luma in all three (gray frames accepted). With step > 1, learn\n"
+      "and likelihood_sums read the pixels whose frame row and column are multiples of step.");
+  def_colour_model(cls);
+  def_colour_sums(cls);
+  def_colour_likelihood(cls);
 }
 
 }  // namespace wmiltrack::bindings

@@ -116,22 +116,8 @@ void require_plane(const IntegralImage& self, int plane) {
 
 }  // namespace
 
-void bind_integral(py::module_& m) {
-  m.attr("MAX_RECT_AREA") = kMaxExactRectArea;
-  m.attr("CH_LUMA") = static_cast<int>(kLuma);
-  m.attr("CH_GRAD") = static_cast<int>(kGrad);
-  m.attr("CH_OPP_RG") = static_cast<int>(kOppRG);
-  m.attr("CH_OPP_YB") = static_cast<int>(kOppYB);
-  m.attr("NUM_CHANNEL_KINDS") = kNumChannelKinds;
-
-  py::class_<SharedIntegralImage>(
-      m, "IntegralImage",
-      "Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY.\n\n"
-      "Every method and property but `computed` raises ValueError until compute() or\n"
-      "compute_channels() succeeded. Threads may share one object: readers (project,\n"
-      "score_grid, rect_sum, table, the properties) each see one complete table, the one\n"
-      "current when they started, while another thread recomputes it; a failed compute leaves\n"
-      "the object unchanged.")
+static void def_integral_compute(py::class_<SharedIntegralImage>& cls) {
+  cls
       .def(py::init<>())
       .def(
           "compute",
@@ -176,7 +162,11 @@ void bind_integral(py::module_& m) {
       .def_property_readonly(
           "y0", [](const SharedIntegralImage& self) { return computed_table(self)->y0(); })
       .def_property_readonly(
-          "width", [](const SharedIntegralImage& self) { return computed_table(self)->width(); })
+          "width", [](const SharedIntegralImage& self) { return computed_table(self)->width(); });
+}
+
+static void def_integral_reads(py::class_<SharedIntegralImage>& cls) {
+  cls
       .def_property_readonly(
           "height", [](const SharedIntegralImage& self) { return computed_table(self)->height(); })
       .def(
@@ -201,6 +191,26 @@ void bind_integral(py::module_& m) {
           },
           py::arg("x"), py::arg("y"), py::arg("w"), py::arg("h"), py::arg("plane") = 0,
           "Exact sum over columns [x, x+w) and rows [y, y+h), in frame coordinates, on a plane.");
+}
+
+void bind_integral(py::module_& m) {
+  m.attr("MAX_RECT_AREA") = kMaxExactRectArea;
+  m.attr("CH_LUMA") = static_cast<int>(kLuma);
+  m.attr("CH_GRAD") = static_cast<int>(kGrad);
+  m.attr("CH_OPP_RG") = static_cast<int>(kOppRG);
+  m.attr("CH_OPP_YB") = static_cast<int>(kOppYB);
+  m.attr("NUM_CHANNEL_KINDS") = kNumChannelKinds;
+
+  py::class_<SharedIntegralImage> cls(
+      m, "IntegralImage",
+      "Integral image of a frame region, luma from BGR(A) as OpenCV's BGR2GRAY.\n\n"
+      "Every method and property but `computed` raises ValueError until compute() or\n"
+      "compute_channels() succeeded. Threads may share one object: readers (project,\n"
+      "score_grid, rect_sum, table, the properties) each see one complete table, the one\n"
+      "current when they started, while another thread recomputes it; a failed compute leaves\n"
+      "the object unchanged.");
+  def_integral_compute(cls);
+  def_integral_reads(cls);
 }
 
 }  // namespace wmiltrack::bindings

@@ -43,6 +43,79 @@ void LearnJob::run() {
              model[2].mutable_data(), model[3].mutable_data(), sel_ptr, h_ptr);
 }
 
+// The request's feature selection (none, WMIL's with its positives' weights, or MILBoost's log
+// ratios) into the job's step.
+static void take_selection(const LearnRequest& r, LearnJob& job, bool bags_later, py::ssize_t M) {
+  LearnStep& step = job.step;
+  const int n_pos = r.n_pos;
+  const int k = r.k;
+  if (r.select == "none") {
+    step.select = LearnSelect::kNone;
+  } else if (r.select == "wmil") {
+    step.select = LearnSelect::kWmil;
+    if (!bags_later) {
+      job.w_pos = CArray<double>::ensure(r.w_pos);
+      require(job.w_pos && job.w_pos.ndim() == 1 && job.w_pos.shape(0) == n_pos && n_pos > 0,
+              "w_pos must hold one weight per positive");
+      step.w_pos = job.w_pos.data();
+    }
+    require(k >= 1 && k <= M, [&] { return "k must be in 1.." + std::to_string(M); });
+    step.k = k;
+    step.code_gradient = r.code_gradient;
+  } else if (r.select == "ratios") {
+    step.select = LearnSelect::kRatios;
+  } else {
+    throw py::value_error("select must be 'none', 'wmil' or 'ratios', got '" + r.select + "'");
+  }
+}
+
+// The request's extra negatives and second target model into the job.
+static void take_extras(const LearnRequest& r, LearnJob& job, py::ssize_t M) {
+  LearnStep& step = job.step;
+  if (!r.extra_neg.is_none()) {
+    job.extra_neg = CArray<double>::ensure(r.extra_neg);
+    require(job.extra_neg && job.extra_neg.ndim() == 2 && job.extra_neg.shape(0) == M,
+            "extra_neg must be a 2-D array of feature values, one row per feature of the bank");
+    step.n_extra = static_cast<int>(job.extra_neg.shape(1));
+  }
+  if (!r.second.is_none()) {
+    const auto [mu, sigma, lam2, first2] =
+        r.second.cast<std::tuple<CArray<double>, CArray<double>, double, bool>>();
+    require(mu.ndim() == 1 && mu.shape(0) == M && sigma.ndim() == 1 && sigma.shape(0) == M,
+            "second: mu and sigma must hold one entry per feature of the bank");
+    job.has_second = true;
+    job.second[0] = CArray<double>(M);
+    job.second[1] = CArray<double>(M);
+    std::copy(mu.data(), mu.data() + M, job.second[0].mutable_data());
+    std::copy(sigma.data(), sigma.data() + M, job.second[1].mutable_data());
+    step.second_rule = step.rule;
+    step.second_rule.lam = lam2;
+    step.second_rule.first = first2;
+  }
+}
+
+// The job's outputs: the model's copies that the core updates in place, and the selection's
+// or the log ratios' arrays.
+static void make_outputs(const LearnRequest& r, LearnJob& job, bool bags_later, py::ssize_t M, int B) {
+  const LearnStep& step = job.step;
+  const int k = r.k;
+  // The model out: copies of the model in, updated in place by the core.
+  const CArray<double>* in[4] = {&r.mu1, &r.sigma1, &r.mu0, &r.sigma0};
+  for (int a = 0; a < 4; ++a) {
+    job.model[a] = CArray<double>(M);
+    std::copy(in[a]->data(), in[a]->data() + M, job.model[a].mutable_data());
+  }
+  if (step.select == LearnSelect::kWmil) {
+    py::array_t<std::int32_t> s(k);
+    job.sel_ptr = s.mutable_data();
+    job.selected = s;
+  } else if (step.select == LearnSelect::kRatios && !bags_later) {
+    CArray<double> hh({M, static_cast<py::ssize_t>(B + step.n_extra)});
+    job.h_ptr = hh.mutable_data();
+    job.h = hh;
+  }
+}
+
 LearnJob make_learn(const LearnRequest& r, py::object keep, bool bags_later) {
   require(!r.ii.is_none() && !r.bank.is_none(),
           "a learning step needs an IntegralImage and a FeatureBank");
@@ -76,65 +149,14 @@ LearnJob make_learn(const LearnRequest& r, py::object keep, bool bags_later) {
   step.first_pos = r.first_pos;
   step.first_neg = r.first_neg;
   step.guard = r.guard;
-  const int k = r.k;
-  if (r.select == "none") {
-    step.select = LearnSelect::kNone;
-  } else if (r.select == "wmil") {
-    step.select = LearnSelect::kWmil;
-    if (!bags_later) {
-      job.w_pos = CArray<double>::ensure(r.w_pos);
-      require(job.w_pos && job.w_pos.ndim() == 1 && job.w_pos.shape(0) == n_pos && n_pos > 0,
-              "w_pos must hold one weight per positive");
-      step.w_pos = job.w_pos.data();
-    }
-    require(k >= 1 && k <= M, [&] { return "k must be in 1.." + std::to_string(M); });
-    step.k = k;
-    step.code_gradient = r.code_gradient;
-  } else if (r.select == "ratios") {
-    step.select = LearnSelect::kRatios;
-  } else {
-    throw py::value_error("select must be 'none', 'wmil' or 'ratios', got '" + r.select + "'");
-  }
-  if (!r.extra_neg.is_none()) {
-    job.extra_neg = CArray<double>::ensure(r.extra_neg);
-    require(job.extra_neg && job.extra_neg.ndim() == 2 && job.extra_neg.shape(0) == M,
-            "extra_neg must be a 2-D array of feature values, one row per feature of the bank");
-    step.n_extra = static_cast<int>(job.extra_neg.shape(1));
-  }
-  if (!r.second.is_none()) {
-    const auto [mu, sigma, lam2, first2] =
-        r.second.cast<std::tuple<CArray<double>, CArray<double>, double, bool>>();
-    require(mu.ndim() == 1 && mu.shape(0) == M && sigma.ndim() == 1 && sigma.shape(0) == M,
-            "second: mu and sigma must hold one entry per feature of the bank");
-    job.has_second = true;
-    job.second[0] = CArray<double>(M);
-    job.second[1] = CArray<double>(M);
-    std::copy(mu.data(), mu.data() + M, job.second[0].mutable_data());
-    std::copy(sigma.data(), sigma.data() + M, job.second[1].mutable_data());
-    step.second_rule = step.rule;
-    step.second_rule.lam = lam2;
-    step.second_rule.first = first2;
-  }
+  take_selection(r, job, bags_later, M);
+  take_extras(r, job, M);
   if (!bags_later) {  // else take_bags reads it once the search has computed it
     job.table = computed_table(shared);
     require_planes(*job.table, bank);
   }
   job.bank = &bank;
-  // The model out: copies of the model in, updated in place by the core.
-  const CArray<double>* in[4] = {&r.mu1, &r.sigma1, &r.mu0, &r.sigma0};
-  for (int a = 0; a < 4; ++a) {
-    job.model[a] = CArray<double>(M);
-    std::copy(in[a]->data(), in[a]->data() + M, job.model[a].mutable_data());
-  }
-  if (step.select == LearnSelect::kWmil) {
-    py::array_t<std::int32_t> s(k);
-    job.sel_ptr = s.mutable_data();
-    job.selected = s;
-  } else if (step.select == LearnSelect::kRatios && !bags_later) {
-    CArray<double> hh({M, static_cast<py::ssize_t>(B + step.n_extra)});
-    job.h_ptr = hh.mutable_data();
-    job.h = hh;
-  }
+  make_outputs(r, job, bags_later, M, B);
   return job;
 }
 
@@ -156,17 +178,8 @@ py::tuple learn_result(LearnJob& job) {
                         mu2, sigma2);
 }
 
-void bind_learn(py::module_& m) {
-  py::class_<LearnRequest>(
-      m, "LearnRequest",
-      "A learning step's inputs, by name: the integral image `ii` and FeatureBank `bank`;\n"
-      "the boxes' top-left corners (xs[i], ys[i]): n_pos positives, then negatives; the\n"
-      "model in (mu1, sigma1, mu0, sigma0); the update rule (lam, first_pos, first_neg,\n"
-      "direct_first, mil, sigma_floor) and the log guard; select = 'none', 'wmil' (with the\n"
-      "positives' weights w_pos, k features, code_gradient) or 'ratios' (the log ratios\n"
-      "returned); extra_neg (M x e feature values) adds e negatives after the boxes; second =\n"
-      "(mu, sigma, lam, first) is a second target model updated from the positives alone with\n"
-      "its own lambda. Checked when it runs.")
+static void bind_learn_request(py::class_<LearnRequest>& cls) {
+  cls
       .def(py::init([](py::object ii, py::object bank, py::object xs, py::object ys, int n_pos,
                        const py::object& mu1, const py::object& sigma1, const py::object& mu0,
                        const py::object& sigma0, double lam, bool first_pos, bool first_neg,
@@ -208,7 +221,20 @@ void bind_learn(py::module_& m) {
       .def_readonly("code_gradient", &LearnRequest::code_gradient)
       .def_readonly("extra_neg", &LearnRequest::extra_neg)
       .def_readonly("second", &LearnRequest::second);
+}
 
+void bind_learn(py::module_& m) {
+  py::class_<LearnRequest> cls(
+      m, "LearnRequest",
+      "A learning step's inputs, by name: the integral image `ii` and FeatureBank `bank`;\n"
+      "the boxes' top-left corners (xs[i], ys[i]): n_pos positives, then negatives; the\n"
+      "model in (mu1, sigma1, mu0, sigma0); the update rule (lam, first_pos, first_neg,\n"
+      "direct_first, mil, sigma_floor) and the log guard; select = 'none', 'wmil' (with the\n"
+      "positives' weights w_pos, k features, code_gradient) or 'ratios' (the log ratios\n"
+      "returned); extra_neg (M x e feature values) adds e negatives after the boxes; second =\n"
+      "(mu, sigma, lam, first) is a second target model updated from the positives alone with\n"
+      "its own lambda. Checked when it runs.");
+  bind_learn_request(cls);
   m.def(
       "learn",
       [](const py::object& request) {

@@ -22,7 +22,7 @@ WeakGaussians make_weak(const Gaussians& g, py::ssize_t n, double guard) {
 
 }  // namespace
 
-void bind_scoring(py::module_& m) {
+static void bind_weak_scores(py::module_& m) {
   m.def(
       "log_ratio",
       [](const CArray<double>& values, CArray<double> mu1, CArray<double> sigma1,
@@ -62,6 +62,9 @@ void bind_scoring(py::module_& m) {
       "How well the box with top-left corner (x, y) fits the target model (mu, sigma) over all\n"
       "features of the bank: -mean(log1p(z**2)), z = (value - mu) / sigma.");
 
+}
+
+static void bind_score_grid(py::module_& m) {
   m.def(
       "score_grid",
       [](const SharedIntegralImage& shared, const FeatureBank& bank, const py::object& selected_obj,
@@ -106,6 +109,11 @@ void bind_scoring(py::module_& m) {
       "row-major order; n_candidates == 0 means no candidate box fits in the frame.\n"
       "radius must be in 1 .. 4096 and step >= 1 (checked before anything is allocated).");
 
+}
+
+void bind_scoring(py::module_& m) {
+  bind_weak_scores(m);
+  bind_score_grid(m);
 }
 
 }  // namespace wmiltrack::bindings

@@ -119,23 +119,8 @@ py::tuple search_result(const SearchJob& job) {
   return out;
 }
 
-void bind_search(py::module_& m) {
-  py::class_<SearchRequest>(
-      m, "SearchRequest",
-      "A coarse-to-fine search's inputs, by name: the integral image `ii` and FeatureBank\n"
-      "`bank`; `selected` (the strong classifier's features) and the whole pool's Gaussians\n"
-      "mu1, sigma1, mu0, sigma0; the log guard; the starting `box` (x, y, w, h); `stages`, a\n"
-      "list of (radius, step); `frame_size` (w, h). With `frame` and `roi`, `ii` is first\n"
-      "recomputed over roi (luma) in the same call. `cues` = (tables, offset, relative) merges\n"
-      "cues into every stage's choice: `tables` is a list of (table, x0, y0, weight[, centre[,\n"
-      "pooled]]),\n"
-      "each `table` an integral image of a cue's map whose region starts at frame pixel (x0,\n"
-      "y0) (or, with centre=True, the map itself), the weights adding up to W <= 1; the\n"
-      "candidate with the largest (1 - W) logistic(score / len(selected) - offset) + the sum of\n"
-      "weight * (mean of the map over the box, or the map at the box's centre pixel; with\n"
-      "pooled=True, its best within half a step of it) wins, and\n"
-      "with `relative` each score is measured from the stage's best finite score. Checked when\n"
-      "it runs.")
+static void bind_search_request(py::class_<SearchRequest>& cls) {
+  cls
       .def(py::init([](py::object ii, py::object bank, py::object selected,
                        const py::object& mu1, const py::object& sigma1, const py::object& mu0,
                        const py::object& sigma0, double guard, Box box,
@@ -165,7 +150,26 @@ void bind_search(py::module_& m) {
       .def_readonly("frame", &SearchRequest::frame)
       .def_readonly("roi", &SearchRequest::roi)
       .def_readonly("cues", &SearchRequest::cues);
+}
 
+void bind_search(py::module_& m) {
+  py::class_<SearchRequest> cls(
+      m, "SearchRequest",
+      "A coarse-to-fine search's inputs, by name: the integral image `ii` and FeatureBank\n"
+      "`bank`; `selected` (the strong classifier's features) and the whole pool's Gaussians\n"
+      "mu1, sigma1, mu0, sigma0; the log guard; the starting `box` (x, y, w, h); `stages`, a\n"
+      "list of (radius, step); `frame_size` (w, h). With `frame` and `roi`, `ii` is first\n"
+      "recomputed over roi (luma) in the same call. `cues` = (tables, offset, relative) merges\n"
+      "cues into every stage's choice: `tables` is a list of (table, x0, y0, weight[, centre[,\n"
+      "pooled]]),\n"
+      "each `table` an integral image of a cue's map whose region starts at frame pixel (x0,\n"
+      "y0) (or, with centre=True, the map itself), the weights adding up to W <= 1; the\n"
+      "candidate with the largest (1 - W) logistic(score / len(selected) - offset) + the sum of\n"
+      "weight * (mean of the map over the box, or the map at the box's centre pixel; with\n"
+      "pooled=True, its best within half a step of it) wins, and\n"
+      "with `relative` each score is measured from the stage's best finite score. Checked when\n"
+      "it runs.");
+  bind_search_request(cls);
   m.def(
       "search",
       [](const py::object& request) {

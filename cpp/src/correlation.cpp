@@ -243,6 +243,43 @@ void TranslationFilter::learn(const Spectrum& s, double rate, double row_shift,
   trained_ = true;
 }
 
+// A response's confidences around its peak at (pr, pc): the PSR over the values outside the
+// peak's (2 exclusion + 1)^2 circular window, and the APCE (peak over mean energy above the
+// minimum).
+static void set_confidences(const std::vector<float>& v, int rows, int cols, int pr, int pc,
+                            int exclusion, TranslationResponse& out) {
+  const std::size_t plane = static_cast<std::size_t>(rows) * cols;
+  double sum = 0.0, sum2 = 0.0;
+  std::size_t count = 0;
+  const float lo = *std::min_element(v.begin(), v.end());
+  double energy = 0.0;
+  // The circular distance from the peak, min((i - p) mod n, (p - i) mod n), without a division
+  // per cell (i and p in [0, n): one of the differences is >= 0, the other is its n-complement).
+  const auto circular = [](int i, int p, int n) {
+    const int d = i >= p ? i - p : p - i;
+    return std::min(d, n - d);
+  };
+  for (int r = 0; r < rows; ++r) {
+    const int drr = circular(r, pr, rows);
+    for (int c = 0; c < cols; ++c) {
+      const double value = v[static_cast<std::size_t>(r) * cols + c];
+      energy += (value - lo) * (value - lo);
+      const int dcc = circular(c, pc, cols);
+      if (drr <= exclusion && dcc <= exclusion) continue;
+      sum += value;
+      sum2 += value * value;
+      ++count;
+    }
+  }
+  if (count >= 2) {
+    const double mean = sum / static_cast<double>(count);
+    const double var = std::max(0.0, sum2 / static_cast<double>(count) - mean * mean);
+    out.psr = var > 0.0 ? (out.peak - mean) / std::sqrt(var) : 0.0;
+  }
+  energy /= static_cast<double>(plane);
+  out.apce = energy > 0.0 ? (out.peak - lo) * (out.peak - lo) / energy : 0.0;
+}
+
 TranslationResponse TranslationFilter::respond(const FeatureMap& z, int exclusion) const {
   if (!trained_) throw std::logic_error("TranslationFilter: learn() before respond()");
   return respond(transform(z), exclusion);
@@ -283,36 +320,7 @@ TranslationResponse TranslationFilter::respond(const Spectrum& zf_in, int exclus
   out.row_shift = (pr > (rows_ - 1) / 2 ? pr - rows_ : pr) + dr;
   out.col_shift = (pc > (cols_ - 1) / 2 ? pc - cols_ : pc) + dc;
 
-  // PSR over the values outside the peak's (2 exclusion + 1)^2 circular window.
-  double sum = 0.0, sum2 = 0.0;
-  std::size_t count = 0;
-  const float lo = *std::min_element(v.begin(), v.end());
-  double energy = 0.0;
-  // The circular distance from the peak, min((i - p) mod n, (p - i) mod n), without a division
-  // per cell (i and p in [0, n): one of the differences is >= 0, the other is its n-complement).
-  const auto circular = [](int i, int p, int n) {
-    const int d = i >= p ? i - p : p - i;
-    return std::min(d, n - d);
-  };
-  for (int r = 0; r < rows_; ++r) {
-    const int drr = circular(r, pr, rows_);
-    for (int c = 0; c < cols_; ++c) {
-      const double value = v[static_cast<std::size_t>(r) * cols_ + c];
-      energy += (value - lo) * (value - lo);
-      const int dcc = circular(c, pc, cols_);
-      if (drr <= exclusion && dcc <= exclusion) continue;
-      sum += value;
-      sum2 += value * value;
-      ++count;
-    }
-  }
-  if (count >= 2) {
-    const double mean = sum / static_cast<double>(count);
-    const double var = std::max(0.0, sum2 / static_cast<double>(count) - mean * mean);
-    out.psr = var > 0.0 ? (out.peak - mean) / std::sqrt(var) : 0.0;
-  }
-  energy /= static_cast<double>(plane);
-  out.apce = energy > 0.0 ? (out.peak - lo) * (out.peak - lo) / energy : 0.0;
+  set_confidences(v, rows_, cols_, pr, pc, exclusion, out);
   return out;
 }
 

@@ -223,6 +223,22 @@ void mix_rows(const float* const* src, const float* w, int n, int span, float* m
   }
 }
 
+// Four rows of span values (one after the other in mix) interleaved: mix4[4 c + q] is row q's
+// value c.
+inline void interleave4(const float* mix, int span, float* mix4) {
+  const float* m0 = mix;
+  const float* m1 = m0 + span;
+  const float* m2 = m1 + span;
+  const float* m3 = m2 + span;
+  for (int c = 0; c < span; ++c) {
+    float* d = mix4 + static_cast<std::size_t>(4) * c;
+    d[0] = m0[c];
+    d[1] = m1[c];
+    d[2] = m2[c];
+    d[3] = m3[c];
+  }
+}
+
 // The patch from a crop that holds every pixel its taps read: rows first (each output row
 // mixes the crop rows under it over the crop's columns), then columns. Four output rows at a
 // time: their column mixes are interleaved (mix4[4 c + q] for row q of the four), so that the
@@ -263,17 +279,7 @@ GrayPatch resample(const LumaCrop& crop, const PatchTaps& t, Scratch& s) {
         for (int c = 0; c < span; ++c) m[c] += w * row[c];
       }
     }
-    const float* m0 = &s.mix[0];
-    const float* m1 = m0 + span;
-    const float* m2 = m1 + span;
-    const float* m3 = m2 + span;
-    for (int c = 0; c < span; ++c) {
-      float* d = mix4 + static_cast<std::size_t>(kBlock) * c;
-      d[0] = m0[c];
-      d[1] = m1[c];
-      d[2] = m2[c];
-      d[3] = m3[c];
-    }
+    interleave4(s.mix.data(), span, mix4);
     float* rows[kBlock];
     for (int q = 0; q < kBlock; ++q) {
       // Rows past the patch (its last block) are computed into the block's first row, then
@@ -619,7 +625,9 @@ std::vector<GrayPatch> sample_gray_scales(const ImageView& frame, double cx, dou
   return out;
 }
 
-FeatureMap fhog(const GrayPatch& patch, int cell) {
+// fhog's input checked: a cell of at least one pixel, a patch of at least one cell whose
+// pixels match its size.
+static void check_patch(const GrayPatch& patch, int cell) {
   if (cell < 1) throw std::invalid_argument("fhog: cell must be at least 1");
   if (patch.rows < cell || patch.cols < cell) {
     throw std::invalid_argument("fhog: the patch (" + std::to_string(patch.rows) + " x " +
@@ -629,6 +637,36 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
   if (patch.pixels.size() != static_cast<std::size_t>(patch.rows) * patch.cols) {
     throw std::invalid_argument("fhog: the patch's pixels do not match its size");
   }
+}
+
+// Each column's first cell (its offset in a row's bordered histograms) and its weight in the
+// second, from the pixel centre's cell coordinate (cells' centres at integers).
+static void column_cells(int cols, float inv_cell, int* col_cell, float* col_frac) {
+  for (int c = 0; c < cols; ++c) {
+    const float x = (static_cast<float>(c) + 0.5f) * inv_cell - 0.5f;
+    const int x0 = static_cast<int>(std::floor(x));
+    col_cell[c] = (x0 + 1) * kCellStride;
+    col_frac[c] = x - static_cast<float>(x0);
+  }
+}
+
+// The cells' histograms without the border, bin-major (plane o holds bin o of every cell);
+// bin 0 gathers its copy's votes.
+static void gather_cells(const float* bordered, std::size_t hrow, int cr, int cc, float* hist) {
+  const std::size_t plane = static_cast<std::size_t>(cr) * cc;
+  for (int r = 0; r < cr; ++r) {
+    const float* src = bordered + static_cast<std::size_t>(r + 1) * hrow + kCellStride;
+    for (int c = 0; c < cc; ++c) {
+      const std::size_t at = static_cast<std::size_t>(r) * cc + c;
+      const float* cell_hist = src + c * kCellStride;
+      hist[at] = cell_hist[0] + cell_hist[kBins];
+      for (int o = 1; o < kBins; ++o) hist[o * plane + at] = cell_hist[o];
+    }
+  }
+}
+
+FeatureMap fhog(const GrayPatch& patch, int cell) {
+  check_patch(patch, cell);
   Scratch& s = scratch();
   const int rows = patch.rows, cols = patch.cols;
   const int cr = rows / cell, cc = cols / cell;
@@ -651,12 +689,7 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
   float* const col_frac = s.grad.data();
   float* const planes = col_frac + cols;
   float* const vote = planes + 6 * cols;
-  for (int c = 0; c < cols; ++c) {
-    const float x = (static_cast<float>(c) + 0.5f) * inv_cell - 0.5f;
-    const int x0 = static_cast<int>(std::floor(x));
-    col_cell[c] = (x0 + 1) * kCellStride;
-    col_frac[c] = x - static_cast<float>(x0);
-  }
+  column_cells(cols, inv_cell, col_cell, col_frac);
   // Per row: every pixel's gradient, orientation and votes (a branch-free loop the compiler
   // vectorises, twice: AVX2 where the CPU has it), then the votes into the row's cells along x,
   // then the row's votes into the two cell rows around it. The votes go column by column 2
@@ -689,15 +722,7 @@ FeatureMap fhog(const GrayPatch& patch, int cell) {
   // copy's votes.
   s.hist.resize(plane * kBins);
   float* const hist = s.hist.data();
-  for (int r = 0; r < cr; ++r) {
-    const float* src = &s.bordered[static_cast<std::size_t>(r + 1) * hrow + kCellStride];
-    for (int c = 0; c < cc; ++c) {
-      const std::size_t at = static_cast<std::size_t>(r) * cc + c;
-      const float* cell_hist = src + c * kCellStride;
-      hist[at] = cell_hist[0] + cell_hist[kBins];
-      for (int o = 1; o < kBins; ++o) hist[o * plane + at] = cell_hist[o];
-    }
-  }
+  gather_cells(s.bordered.data(), hrow, cr, cc, hist);
   FeatureMap out;
   out.channels = kFhogChannels;
   out.rows = cr;

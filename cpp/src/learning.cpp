@@ -174,6 +174,36 @@ void gaussian_update(const MatrixView& values, const double* mu, const double* s
   }
 }
 
+// The log ratios instance-major, in float: row j holds every feature's h on instance j (the
+// positives, then the negatives), rows wz floats apart.
+static void instance_major(const MatrixView& h_pos, const MatrixView& h_neg, std::size_t wz,
+                           float* hT) {
+  const int M = h_pos.rows, P = h_pos.cols, N = h_neg.cols;
+  for (int j = 0; j < P; ++j) {
+    float* row = hT + static_cast<std::size_t>(j) * wz;
+    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_pos.at(m, j));
+  }
+  for (int j = 0; j < N; ++j) {
+    float* row = hT + static_cast<std::size_t>(P + j) * wz;
+    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_neg.at(m, j));
+  }
+}
+
+// The unused feature of the largest score (the first of equal ones; NaN scores never), or -1.
+static int best_unused(const float* score, const std::vector<unsigned char>& used, int M) {
+  int best = -1;
+  float best_score = -std::numeric_limits<float>::infinity();
+  for (int m = 0; m < M; ++m) {
+    const float sc = score[m];
+    if (used[static_cast<std::size_t>(m)] || std::isnan(sc)) continue;
+    if (best < 0 || sc > best_score) {
+      best = m;
+      best_score = sc;
+    }
+  }
+  return best;
+}
+
 void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double* w_pos, int k,
                  bool code_gradient, std::int32_t* selected) {
   check_selection(h_pos, h_neg, k);
@@ -194,14 +224,7 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
   const std::size_t wz = static_cast<std::size_t>(width);
   std::vector<float> hT(static_cast<std::size_t>(P + N) * wz, 0.0f), gf(static_cast<std::size_t>(P + N));
   std::vector<float> score(wz);
-  for (int j = 0; j < P; ++j) {
-    float* row = hT.data() + static_cast<std::size_t>(j) * wz;
-    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_pos.at(m, j));
-  }
-  for (int j = 0; j < N; ++j) {
-    float* row = hT.data() + static_cast<std::size_t>(P + j) * wz;
-    for (int m = 0; m < M; ++m) row[m] = static_cast<float>(h_neg.at(m, j));
-  }
+  instance_major(h_pos, h_neg, wz, hT.data());
   double* g_pos = g.data();
   double* g_neg = g.data() + P;
   double* sig = tmp.data();
@@ -244,17 +267,7 @@ void wmil_select(const MatrixView& h_pos, const MatrixView& h_neg, const double*
     // score_m = sum_j h_mj g_j over the positives then the negatives.
     for (int j = 0; j < P + N; ++j) gf[static_cast<std::size_t>(j)] = static_cast<float>(g[static_cast<std::size_t>(j)]);
     vmath::weighted_rows_f32(hT.data(), P + N, width, gf.data(), score.data());
-    int best = -1;
-    float best_score = -std::numeric_limits<float>::infinity();
-    for (int m = 0; m < M; ++m) {
-      const float sc = score[static_cast<std::size_t>(m)];
-      if (used[static_cast<std::size_t>(m)] || std::isnan(sc)) continue;
-      if (best < 0 || sc > best_score) {
-        best = m;
-        best_score = sc;
-      }
-    }
-    take(best, step, h_pos, h_neg, H_pos, H_neg, used, selected);
+    take(best_unused(score.data(), used, M), step, h_pos, h_neg, H_pos, H_neg, used, selected);
   }
 }
 

@@ -169,18 +169,8 @@ Rect offsets_extent(const std::int32_t* xy, int n) {
   return Rect{x0, y0, x1 - x0, y1 - y0};
 }
 
-Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h, BitSource& bits) {
-  Bags bags;
-  std::vector<double> terms;
-  for (int i = 0; i < spec.n_pos_offsets; ++i) {
-    const std::int64_t x = static_cast<std::int64_t>(box.x) + spec.pos[2 * i];
-    const std::int64_t y = static_cast<std::int64_t>(box.y) + spec.pos[2 * i + 1];
-    if (!inside(x, y, box, frame_w, frame_h)) continue;
-    bags.xs.push_back(static_cast<std::int32_t>(x));
-    bags.ys.push_back(static_cast<std::int32_t>(y));
-    if (spec.pos_terms != nullptr) terms.push_back(spec.pos_terms[i]);
-  }
-  bags.n_pos = static_cast<int>(bags.xs.size());
+// The positives' instance weights (WMIL's), from their terms, as numpy computes them.
+static void weigh_positives(const BagSpec& spec, const std::vector<double>& terms, Bags& bags) {
   const std::size_t np = static_cast<std::size_t>(bags.n_pos);
   switch (spec.weights) {
     case InstanceWeights::kNone:
@@ -197,6 +187,21 @@ Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h,
       bags.w_pos.assign(np, 1.0 / static_cast<double>(np));
       break;
   }
+}
+
+Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h, BitSource& bits) {
+  Bags bags;
+  std::vector<double> terms;
+  for (int i = 0; i < spec.n_pos_offsets; ++i) {
+    const std::int64_t x = static_cast<std::int64_t>(box.x) + spec.pos[2 * i];
+    const std::int64_t y = static_cast<std::int64_t>(box.y) + spec.pos[2 * i + 1];
+    if (!inside(x, y, box, frame_w, frame_h)) continue;
+    bags.xs.push_back(static_cast<std::int32_t>(x));
+    bags.ys.push_back(static_cast<std::int32_t>(y));
+    if (spec.pos_terms != nullptr) terms.push_back(spec.pos_terms[i]);
+  }
+  bags.n_pos = static_cast<int>(bags.xs.size());
+  weigh_positives(spec, terms, bags);
   // The negatives' candidates: the offsets whose box lies inside the frame, in order. Where
   // the offsets' bounding box lies inside (the usual case, away from the frame's edges), that
   // is all of them, and they are not copied.

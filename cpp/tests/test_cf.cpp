@@ -336,57 +336,53 @@ class EigenFft2 {
   std::vector<Complex> col_in_, col_out_, row_buf_, full_;
 };
 
-void test_batch_fft() {
-  std::mt19937 rng(7);
-  std::normal_distribution<float> g(0.0f, 1.0f);
-  // 1-D, every radix path (4, 2, 3, 5 and the generic one: 7, 11), forward and inverse,
-  // complex and real inputs, several lanes at once.
-  for (int n : {2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 14, 15, 16, 18, 20, 24, 25, 27, 30, 32,
-                36, 40, 45, 48, 49, 50, 60, 64, 75, 77}) {
-    const std::size_t lanes = 5;
-    std::vector<float> re(n * lanes), im(n * lanes);
-    for (auto& v : re) v = g(rng);
-    for (auto& v : im) v = g(rng);
-    for (bool inverse : {false, true}) {
-      const detail::BatchFft plan(n, inverse);
-      std::vector<float> ore(re.size()), oim(re.size()), work(plan.scratch_size(lanes) + 1);
-      plan.run(detail::ConstLanes{re.data(), im.data(), lanes},
-               detail::Lanes{ore.data(), oim.data(), lanes}, lanes, work.data());
-      Eigen::FFT<float> fft;
-      fft.SetFlag(Eigen::FFT<float>::Unscaled);
-      bool same = true;
-      for (std::size_t b = 0; b < lanes; ++b) {
-        std::vector<Complex> x(n), y(n);
-        for (int i = 0; i < n; ++i) x[i] = Complex(re[i * lanes + b], im[i * lanes + b]);
-        if (inverse) {
-          fft.inv(y.data(), x.data(), n);
-        } else {
-          fft.fwd(y.data(), x.data(), n);
-        }
-        for (int i = 0; i < n; ++i) {
-          same = same && y[i].real() == ore[i * lanes + b] && y[i].imag() == oim[i * lanes + b];
-        }
-      }
-      CHECK(same);
-    }
-    const detail::BatchRealFft real(n);
-    const std::size_t h = static_cast<std::size_t>(real.half());
-    std::vector<float> ore(h * lanes), oim(h * lanes), work(real.scratch_size(lanes) + 1);
-    real.run(re.data(), lanes, detail::Lanes{ore.data(), oim.data(), lanes}, lanes, work.data());
-    Eigen::FFT<float> fft;
-    fft.SetFlag(Eigen::FFT<float>::HalfSpectrum);
-    bool same = true;
-    for (std::size_t b = 0; b < lanes; ++b) {
-      std::vector<float> x(n);
-      std::vector<Complex> y(h);
-      for (int i = 0; i < n; ++i) x[i] = re[i * lanes + b];
+// One complex batch transform of n points (lanes at once) against one Eigen call per lane.
+bool complex_batch_matches(int n, const std::vector<float>& re, const std::vector<float>& im,
+                           std::size_t lanes, bool inverse) {
+  const detail::BatchFft plan(n, inverse);
+  std::vector<float> ore(re.size()), oim(re.size()), work(plan.scratch_size(lanes) + 1);
+  plan.run(detail::ConstLanes{re.data(), im.data(), lanes},
+           detail::Lanes{ore.data(), oim.data(), lanes}, lanes, work.data());
+  Eigen::FFT<float> fft;
+  fft.SetFlag(Eigen::FFT<float>::Unscaled);
+  bool same = true;
+  for (std::size_t b = 0; b < lanes; ++b) {
+    std::vector<Complex> x(n), y(n);
+    for (int i = 0; i < n; ++i) x[i] = Complex(re[i * lanes + b], im[i * lanes + b]);
+    if (inverse) {
+      fft.inv(y.data(), x.data(), n);
+    } else {
       fft.fwd(y.data(), x.data(), n);
-      for (std::size_t i = 0; i < h; ++i) {
-        same = same && y[i].real() == ore[i * lanes + b] && y[i].imag() == oim[i * lanes + b];
-      }
     }
-    CHECK(same);
+    for (int i = 0; i < n; ++i) {
+      same = same && y[i].real() == ore[i * lanes + b] && y[i].imag() == oim[i * lanes + b];
+    }
   }
+  return same;
+}
+
+// One real batch transform of n points (its half spectrum) against Eigen's, lane by lane.
+bool real_batch_matches(int n, const std::vector<float>& re, std::size_t lanes) {
+  const detail::BatchRealFft real(n);
+  const std::size_t h = static_cast<std::size_t>(real.half());
+  std::vector<float> ore(h * lanes), oim(h * lanes), work(real.scratch_size(lanes) + 1);
+  real.run(re.data(), lanes, detail::Lanes{ore.data(), oim.data(), lanes}, lanes, work.data());
+  Eigen::FFT<float> fft;
+  fft.SetFlag(Eigen::FFT<float>::HalfSpectrum);
+  bool same = true;
+  for (std::size_t b = 0; b < lanes; ++b) {
+    std::vector<float> x(n);
+    std::vector<Complex> y(h);
+    for (int i = 0; i < n; ++i) x[i] = re[i * lanes + b];
+    fft.fwd(y.data(), x.data(), n);
+    for (std::size_t i = 0; i < h; ++i) {
+      same = same && y[i].real() == ore[i * lanes + b] && y[i].imag() == oim[i * lanes + b];
+    }
+  }
+  return same;
+}
+
+void test_batch_fft_2d(std::mt19937& rng, std::normal_distribution<float>& g) {
   // 2-D, several planes at once, against one Eigen call per row and column.
   for (auto [rows, cols] : {std::pair{36, 45}, std::pair{45, 36}, std::pair{4, 4},
                             std::pair{5, 7}, std::pair{30, 32}, std::pair{24, 50}}) {
@@ -406,6 +402,23 @@ void test_batch_fft() {
     ref.inverse_half_real(got.data(), back_ref.data());
     CHECK(back == back_ref);
   }
+}
+
+void test_batch_fft() {
+  std::mt19937 rng(7);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  // 1-D, every radix path (4, 2, 3, 5 and the generic one: 7, 11), forward and inverse,
+  // complex and real inputs, several lanes at once.
+  for (int n : {2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 14, 15, 16, 18, 20, 24, 25, 27, 30, 32,
+                36, 40, 45, 48, 49, 50, 60, 64, 75, 77}) {
+    const std::size_t lanes = 5;
+    std::vector<float> re(n * lanes), im(n * lanes);
+    for (auto& v : re) v = g(rng);
+    for (auto& v : im) v = g(rng);
+    for (bool inverse : {false, true}) CHECK(complex_batch_matches(n, re, im, lanes, inverse));
+    CHECK(real_batch_matches(n, re, lanes));
+  }
+  test_batch_fft_2d(rng, g);
 }
 
 }  // namespace

@@ -278,7 +278,8 @@ long naive_channel_sum(const Frame& f, int ch, int x, int y, int w, int h) {
   return s;
 }
 
-void test_channels(std::mt19937& rng) {
+// Every channel's table against naive sums, for every layout and region.
+void test_channel_tables(std::mt19937& rng) {
   const std::vector<int> all{kLuma, kGrad, kOppRG, kOppYB};
   const std::vector<int> gray_ok{kGrad, kLuma};
   const Rect rois[] = {{0, 0, 53, 37}, {7, 5, 30, 20}, {-3, -2, 10, 9}, {45, 30, 20, 20},
@@ -322,6 +323,10 @@ void test_channels(std::mt19937& rng) {
     CHECK(std::equal(b.data(), b.data() + b.plane_size(),
                      [&] { IntegralImage c; c.compute(f.view(), Rect{10, 10, 5, 4}); return c; }().data()));
   }
+}
+
+// Channels a frame cannot give, or none, are refused.
+void test_channel_refusals(std::mt19937& rng) {
   const auto throws_invalid = [&](const Frame& f, std::vector<int> chans) {
     try {
       IntegralImage t;
@@ -338,9 +343,10 @@ void test_channels(std::mt19937& rng) {
   CHECK(throws_invalid(bgr, {}));
   CHECK(throws_invalid(bgr, {kNumChannelKinds}));
   CHECK(throws_invalid(bgr, {-1}));
+}
 
+void test_features_on_planes(const Frame& f) {
   // Features on planes: project against naive sums of each plane's channel.
-  const Frame f = random_frame(60, 70, 3, rng);
   const std::vector<int> chans{kOppYB, kLuma, kGrad};
   IntegralImage ii;
   ii.compute_channels(f.view(), Rect{0, 0, 70, 60}, chans);
@@ -393,6 +399,12 @@ void test_channels(std::mt19937& rng) {
   }
   CHECK(threw);
 
+}
+
+void test_planeless_banks(const Frame& f) {
+  std::vector<std::int32_t> xs{0, 10, 60}, ys{0, 20, 54};
+  const double mu1[] = {10.0}, s1[] = {5.0}, mu0[] = {0.0}, s0[] = {5.0};
+  const WeakGaussians weak(mu1, s1, mu0, s0, 1, 1e-30);
   // A bank without planes and one with all zeros give bit-identical results on plane 0 of
   // a stacked table and on a luma-only table.
   FeatureBank plain({0, 1, 3}, {Rect{1, 2, 5, 4}, Rect{0, 0, 3, 3}, Rect{4, 4, 6, 2}}, {1.0, 0.5, -2.0});
@@ -411,9 +423,18 @@ void test_channels(std::mt19937& rng) {
   CHECK(g1.dx == g2.dx && g1.dy == g2.dy && g1.score == g2.score && g1.candidates == g2.candidates);
 }
 
+void test_channels(std::mt19937& rng) {
+  test_channel_tables(rng);
+  test_channel_refusals(rng);
+  const Frame f = random_frame(60, 70, 3, rng);
+  test_features_on_planes(f);
+  test_planeless_banks(f);
+}
+
 // Issue 12: an uncomputed image refuses every read; a failed compute leaves the object as it
 // was; a log ratio depends on its own value only.
-void test_hardening(std::mt19937& rng) {
+// An uncomputed integral image is refused by project and score_grid.
+void test_uncomputed_refused() {
   FeatureBank bank({0, 1}, {Rect{0, 0, 2, 2}}, {1.0});
   IntegralImage empty;
   CHECK(!empty.computed());
@@ -436,13 +457,15 @@ void test_hardening(std::mt19937& rng) {
     threw = true;
   }
   CHECK(threw);
+}
 
+void test_strong_guarantee(std::mt19937& rng) {
   // Strong guarantee: a bad ROI and a failed allocation leave the table untouched.
   const Frame f = random_frame(30, 40, 3, rng);
   IntegralImage ii;
   ii.compute(f.view(), Rect{2, 3, 20, 10});
   const std::vector<IntegralImage::Entry> before(ii.data(), ii.data() + ii.plane_size());
-  threw = false;
+  bool threw = false;
   try {
     ii.compute_channels(f.view(), Rect{100, 100, 5, 5}, {kLuma});
   } catch (const std::invalid_argument&) {
@@ -467,7 +490,9 @@ void test_hardening(std::mt19937& rng) {
   CHECK(ii.computed() && ii.x0() == 2 && ii.y0() == 3 && ii.width() == 20 && ii.height() == 10);
   CHECK(ii.num_channels() == 1);
   CHECK(std::equal(before.begin(), before.end(), ii.data()));
+}
 
+void test_log_ratio_alone(std::mt19937& rng) {
   // log_ratio: value i gives the same bits alone, at any position of any batch, and next to
   // values that take the guarded formula.
   const double m1[] = {10.0}, s1[] = {3.0}, m0[] = {-4.0}, s0[] = {5.0};
@@ -487,10 +512,15 @@ void test_hardening(std::mt19937& rng) {
   }
 }
 
+void test_hardening(std::mt19937& rng) {
+  test_uncomputed_refused();
+  test_strong_guarantee(rng);
+  test_log_ratio_alone(rng);
+}
+
 // The learning kernels: numpy's pairwise sums (exact on integers), a Gaussian update against
 // the formulas written out, selections that pick distinct features, and the search.
-void test_learning(std::mt19937& rng) {
-  std::uniform_real_distribution<double> u(-5.0, 5.0);
+void test_pairwise_sums() {
   // Integers below 2^53 sum exactly whatever the order: the pairwise sum must equal them.
   for (int n : {0, 1, 7, 8, 9, 127, 128, 129, 300}) {
     std::vector<double> a(static_cast<std::size_t>(2 * n) + 1);
@@ -501,11 +531,9 @@ void test_learning(std::mt19937& rng) {
     }
     CHECK(pairwise_sum(a.data(), n, 2) == want);
   }
-  const int M = 13, P = 9, N = 11;
-  std::vector<double> hp(static_cast<std::size_t>(M * P)), hn(static_cast<std::size_t>(M * N));
-  for (double& v : hp) v = u(rng);
-  for (double& v : hn) v = u(rng);
-  MatrixView vp{hp.data(), M, P, P, 1}, vn{hn.data(), M, N, N, 1};
+}
+
+void test_gaussian_update(const std::vector<double>& hp, const MatrixView& vp, int M, int P) {
   // Gaussian update, blend rule, against the formula.
   std::vector<double> mu(M, 1.0), sigma(M, 2.0), nm(M), ns(M), scratch(P);
   GaussianRule rule;
@@ -529,6 +557,10 @@ void test_learning(std::mt19937& rng) {
     threw = true;
   }
   CHECK(threw);
+}
+
+void test_selections(const std::vector<double>& hp, const std::vector<double>& hn,
+                     const MatrixView& vp, const MatrixView& vn, int M, int P, int N) {
   // Selections: k distinct features in range.
   std::vector<double> w(P, 1.0 / P);
   std::vector<std::int32_t> sel(M);
@@ -554,13 +586,25 @@ void test_learning(std::mt19937& rng) {
   vmath::force_portable(false);
   CHECK(sel_portable == sel);
   CHECK(sel2_portable == sel2);
-  threw = false;
+  bool threw = false;
   try {
     wmil_select(vp, vn, w.data(), M + 1, false, sel.data());
   } catch (const std::invalid_argument&) {
     threw = true;
   }
   CHECK(threw);
+}
+
+void test_learning(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-5.0, 5.0);
+  test_pairwise_sums();
+  const int M = 13, P = 9, N = 11;
+  std::vector<double> hp(static_cast<std::size_t>(M * P)), hn(static_cast<std::size_t>(M * N));
+  for (double& v : hp) v = u(rng);
+  for (double& v : hn) v = u(rng);
+  MatrixView vp{hp.data(), M, P, P, 1}, vn{hn.data(), M, N, N, 1};
+  test_gaussian_update(hp, vp, M, P);
+  test_selections(hp, hn, vp, vn, M, P, N);
 }
 
 // Distance in units in the last place between two doubles of the same sign (0 for two NaNs).
@@ -579,7 +623,7 @@ std::int64_t ulp_distance(double a, double b) {
 // vmath against the C library: within 1 ulp on random values over each function's range (and
 // the ranges the kernels use), the special values exact, and the same bits on the CPU's best
 // path and on the portable one, for every array length (the tail of an array is padded).
-void test_vmath(std::mt19937& rng) {
+void test_vmath_ulps(std::mt19937& rng) {
   using Fn = void (*)(const double*, double*, int);
   struct Case {
     const char* name;
@@ -617,6 +661,10 @@ void test_vmath(std::mt19937& rng) {
       for (int i = 0; i < len; ++i) CHECK(std::memcmp(&out[static_cast<std::size_t>(i)], &y[static_cast<std::size_t>(i)], sizeof(double)) == 0);
     }
   }
+}
+
+// The special values, within 1 ulp of the C library (or exact).
+void test_vmath_specials() {
   const double inf = std::numeric_limits<double>::infinity();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double specials[] = {0.0, -0.0, 1.0, -1.0, inf, -inf, nan, 5e-324, 1e-310, 2.5e-308,
@@ -630,6 +678,9 @@ void test_vmath(std::mt19937& rng) {
     CHECK(ulp_distance(l, std::log(v)) <= 1);
     CHECK(ulp_distance(l1, std::log1p(v)) <= 1 || (v == 0.0 && l1 == 0.0));
   }
+}
+
+void test_vmath_rows(std::mt19937& rng) {
   // In place, and weighted_rows against a plain loop (the same order of summation: same bits).
   std::vector<double> w = {0.5, -1.0, 2.0}, separate(3);
   vmath::exp(w.data(), separate.data(), 3);
@@ -656,7 +707,43 @@ void test_vmath(std::mt19937& rng) {
   std::printf("test_core: vmath path %s\n", vmath::isa());
 }
 
+void test_vmath(std::mt19937& rng) {
+  test_vmath_ulps(rng);
+  test_vmath_specials();
+  test_vmath_rows(rng);
+}
+
 }  // namespace
+
+// One grid's scores against project() and the weak classifiers summed feature by feature:
+// -inf off the disc or the frame, else within float rounding.
+static bool grid_matches_projection(const IntegralImage& ii, const FeatureBank& bank,
+                                    const std::vector<std::int32_t>& sel, const WeakGaussians& weak,
+                                    Rect box, int step, int n, const std::vector<double>& scores) {
+  const int side = 2 * n + 1;
+  bool exact = true;
+  for (int j = -n; j <= n; ++j) {
+    for (int i = -n; i <= n; ++i) {
+      const double got = scores[static_cast<std::size_t>((j + n) * side + i + n)];
+      const int x = box.x + i * step, y = box.y + j * step;
+      const bool in = (i * step) * (i * step) + (j * step) * (j * step) < 400 && x >= 0 &&
+                      y >= 0 && x + box.w <= 110 && y + box.h <= 90;
+      if (!in) {
+        exact = exact && std::isinf(got);
+        continue;
+      }
+      double values[5], total = 0.0;
+      project(ii, bank, sel.data(), 5, &x, &y, 1, values);
+      for (int k = 0; k < 5; ++k) {
+        double h;
+        weak.log_ratio(k, values + k, 1, &h, false, nullptr);
+        total += h;
+      }
+      exact = exact && std::fabs(got - total) <= 1e-4 + 1e-5 * std::fabs(total);
+    }
+  }
+  return exact;
+}
 
 // score_grid's scores against project() and the weak classifiers summed feature by feature
 // from 0.0, for every step (the vector loops read a phase-split copy for step > 1), on both
@@ -704,26 +791,7 @@ void test_grid_exact(std::mt19937& rng) {
           exact = exact && scores == first_copy[grid_index];
         }
         ++grid_index;
-        for (int j = -n; j <= n; ++j) {
-          for (int i = -n; i <= n; ++i) {
-            const double got = scores[static_cast<std::size_t>((j + n) * side + i + n)];
-            const int x = box.x + i * step, y = box.y + j * step;
-            const bool in = (i * step) * (i * step) + (j * step) * (j * step) < 400 && x >= 0 &&
-                            y >= 0 && x + box.w <= 110 && y + box.h <= 90;
-            if (!in) {
-              exact = exact && std::isinf(got);
-              continue;
-            }
-            double values[5], total = 0.0;
-            project(ii, bank, sel.data(), 5, &x, &y, 1, values);
-            for (int k = 0; k < 5; ++k) {
-              double h;
-              weak.log_ratio(k, values + k, 1, &h, false, nullptr);
-              total += h;
-            }
-            exact = exact && std::fabs(got - total) <= 1e-4 + 1e-5 * std::fabs(total);
-          }
-        }
+        exact = exact && grid_matches_projection(ii, bank, sel, weak, box, step, n, scores);
       }
     }
   }

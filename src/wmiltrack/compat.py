@@ -1,9 +1,9 @@
 """OpenCV-shaped trackers (``TrackerRCWMIL.create()``, ``init``, ``update -> (ok, rect)``).
 
-The stable public path of :mod:`wmiltrack.integrations.opencv`, where they are defined.
+The stable public path of :mod:`wmiltrack.integrations.opencv_shaped`, where they are defined.
 """
 
-from .integrations.opencv import (
+from .integrations.opencv_shaped import (
     COMPAT_CLASSES,
     TrackerCompat,
     TrackerCT,

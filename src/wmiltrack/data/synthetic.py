@@ -14,7 +14,7 @@ nuisance on or off leaves everything else (path, textures, noise) unchanged.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import cv2
 import numpy as np
@@ -318,79 +318,103 @@ def make_sequence(
     height, width = (int(v) for v in size)
     tw, th = (int(v) for v in target_size)
     _check_arguments(n_frames, width, height, tw, th, max_speed, noise, target_size)
-    hidden = _hidden_frames(n_frames, full_occlusion, out_of_view)
     streams = dict(
         zip(
             _STREAMS,
             (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(len(_STREAMS))),
         )
     )
+    scene = _scene(streams, n_frames, (width, height), (tw, th), float(max_speed), clutter,
+                   illumination, full_occlusion, _hidden_frames(n_frames, full_occlusion,
+                                                                out_of_view))
+    frames: list[NDArray[np.uint8]] = []
+    covered = np.zeros(n_frames, np.float64)
+    for t in range(n_frames):
+        f, covered[t] = _draw(scene, t, occlusion)
+        frames.append(_finish(f, scene.light, t, streams["noise"], noise))
+    gt = np.column_stack([scene.path, np.full(n_frames, float(tw)), np.full(n_frames, float(th))])
+    gt[scene.hidden == "out"] = np.nan
+    meta: dict[str, Any] = {
+        "visible": scene.hidden == "",
+        "occlusion": covered,
+        "gain": np.asarray(scene.light.gain, np.float64),
+        "distractors": scene.dboxes,
+        "params": {
+            "n_frames": n_frames, "size": (height, width), "target_size": (tw, th), "seed": seed,
+            "occlusion": occlusion, "illumination": illumination, "clutter": clutter,
+            "max_speed": max_speed, "noise": noise, "full_occlusion": full_occlusion,
+            "out_of_view": out_of_view,
+        },
+    }
+    return Sequence(name=name if name is not None else f"synthetic-s{seed}", groundtruth=gt,
+                    fps=30.0, frames=frames, meta=meta)
+
+
+class _Scene(NamedTuple):
+    """Everything a sequence's frames are drawn from, made once from the generation streams."""
+
+    size: tuple[int, int]  # (width, height)
+    target_size: tuple[int, int]  # (w, h)
+    background: F32
+    target: F32
+    path: F64
+    distractors: list[Any]
+    dboxes: NDArray[np.float64]
+    hidden: NDArray[np.str_]
+    occ_frac: F64
+    occ_side: str
+    occ_tex: F32
+    light: _Lighting
+    block: F32 | None
+
+
+def _scene(streams: dict[str, np.random.Generator], n_frames: int, size: tuple[int, int],
+           target_size: tuple[int, int], max_speed: float, clutter: bool, illumination: bool,
+           full_occlusion: tuple[int, int] | None, hidden: NDArray[np.str_]) -> _Scene:
+    """The sequence's layers: background, target, its path, distractors, the occluder's schedule
+    and texture, the lighting and the full occlusion's block (each from its own stream)."""
+    width, height = size
+    tw, th = target_size
     background = _background_texture(streams["background"], height, width)
     target = _target_texture(streams["target"], tw, th)
     # the pasted patch needs one spare pixel right/below; keep a 1 px margin on the other sides
     lo = np.array([1.0, 1.0])
     hi = np.array([width - tw - 2.0, height - th - 2.0])
-    path = _path(streams["path"], n_frames, lo, hi, float(max_speed))
-    gt = np.column_stack([path, np.full(n_frames, float(tw)), np.full(n_frames, float(th))])
+    path = _path(streams["path"], n_frames, lo, hi, max_speed)
     distractors, dboxes = _distractors(streams["clutter"], n_frames, width, height, tw, th,
-                                       float(max_speed)) if clutter else ([], np.zeros((n_frames, 0, 4)))
+                                       max_speed) if clutter else ([], np.zeros((n_frames, 0, 4)))
     occ_frac, occ_side = _occlusion_schedule(streams["occlusion"], n_frames)
     occ_tex = _occluder_texture(streams["occlusion"], height, width)
     light = _Lighting(streams["illumination"], n_frames, width, illumination)
     block = (_target_texture(streams["hidden"], height, width) * np.float32(0.5)
              if full_occlusion is not None else None)  # a texture unlike the target's
+    return _Scene(size, target_size, background, target, path, distractors, dboxes, hidden,
+                  occ_frac, occ_side, occ_tex, light, block)
 
-    frames: list[NDArray[np.uint8]] = []
-    covered = np.zeros(n_frames, np.float64)
-    for t in range(n_frames):
-        f = background.copy()
-        for tex, alpha, dpath in distractors:
-            _paste(f, tex, alpha, float(dpath[t, 0]), float(dpath[t, 1]))
-        x, y = float(path[t, 0]), float(path[t, 1])
-        if hidden[t] != "out":
-            _paste(f, target, np.ones((th, tw), np.float32), x, y)
-        if hidden[t] == "occluded":
-            assert block is not None
-            x0, y0 = max(int(x - 0.25 * tw), 0), max(int(y - 0.25 * th), 0)
-            x1, y1 = min(int(x + 1.25 * tw) + 1, width), min(int(y + 1.25 * th) + 1, height)
-            f[y0:y1, x0:x1] = block[y0:y1, x0:x1]
-            covered[t] = 1.0
-        elif occlusion and occ_frac[t] > 0:
-            x0, y0, x1, y1 = _occluder_rect(
-                x, y, tw, th, float(occ_frac[t]), occ_side, width, height
-            )
-            if x1 > x0 and y1 > y0:
-                f[y0:y1, x0:x1] = occ_tex[y0:y1, x0:x1]
-                covered[t] = _overlap_fraction((x0, y0, x1, y1), (x, y, float(tw), float(th)))
-        frames.append(_finish(f, light, t, streams["noise"], noise))
 
-    gt[hidden == "out"] = np.nan
-    meta: dict[str, Any] = {
-        "visible": hidden == "",
-        "occlusion": covered,
-        "gain": np.asarray(light.gain, np.float64),
-        "distractors": dboxes,
-        "params": {
-            "n_frames": n_frames,
-            "size": (height, width),
-            "target_size": (tw, th),
-            "seed": seed,
-            "occlusion": occlusion,
-            "illumination": illumination,
-            "clutter": clutter,
-            "max_speed": max_speed,
-            "noise": noise,
-            "full_occlusion": full_occlusion,
-            "out_of_view": out_of_view,
-        },
-    }
-    return Sequence(
-        name=name if name is not None else f"synthetic-s{seed}",
-        groundtruth=gt,
-        fps=30.0,
-        frames=frames,
-        meta=meta,
-    )
+def _draw(scene: _Scene, t: int, occlusion: bool) -> tuple[F32, float]:
+    """Frame ``t`` before lighting and noise, and the fraction of the target's box covered."""
+    (width, height), (tw, th) = scene.size, scene.target_size
+    f = scene.background.copy()
+    for tex, alpha, dpath in scene.distractors:
+        _paste(f, tex, alpha, float(dpath[t, 0]), float(dpath[t, 1]))
+    x, y = float(scene.path[t, 0]), float(scene.path[t, 1])
+    hidden = scene.hidden[t]
+    if hidden != "out":
+        _paste(f, scene.target, np.ones((th, tw), np.float32), x, y)
+    if hidden == "occluded":
+        assert scene.block is not None
+        x0, y0 = max(int(x - 0.25 * tw), 0), max(int(y - 0.25 * th), 0)
+        x1, y1 = min(int(x + 1.25 * tw) + 1, width), min(int(y + 1.25 * th) + 1, height)
+        f[y0:y1, x0:x1] = scene.block[y0:y1, x0:x1]
+        return f, 1.0
+    if occlusion and scene.occ_frac[t] > 0:
+        x0, y0, x1, y1 = _occluder_rect(x, y, tw, th, float(scene.occ_frac[t]), scene.occ_side,
+                                        width, height)
+        if x1 > x0 and y1 > y0:
+            f[y0:y1, x0:x1] = scene.occ_tex[y0:y1, x0:x1]
+            return f, _overlap_fraction((x0, y0, x1, y1), (x, y, float(tw), float(th)))
+    return f, 0.0
 
 
 def _check_arguments(n_frames: int, width: int, height: int, tw: int, th: int, max_speed: float,

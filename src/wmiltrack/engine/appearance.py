@@ -23,10 +23,12 @@ from .features import (
     available_channels,
     check_box_size,
     make_bank,
+    min_box_size,
     rect_planes,
     scale_bank,
 )
 from .frames import IntBox
+from .geometry import roi_around
 from .requests import (
     Drawn,
     Learn,
@@ -48,17 +50,10 @@ from .selection import milboost_select
 if TYPE_CHECKING:
     from .settings import AppearanceSettings
 
-__all__ = ["HaarAppearance", "roi_around"]
+__all__ = ["HaarAppearance"]
 
 _NO_CORNERS = np.zeros((0, 2), dtype=np.int32)  # a learning request whose boxes the core samples
 _NO_CORNERS.setflags(write=False)
-
-
-def roi_around(box: IntBox, margin: int) -> IntBox:
-    """The integral image's region around ``box``: ``margin`` pixels and one more."""
-    x, y, w, h = box
-    m = margin + 1
-    return x - m, y - m, w + 2 * m, h + 2 * m
 
 
 class HaarAppearance:
@@ -84,8 +79,8 @@ class HaarAppearance:
         # the selection of a learning step on bags the core draws (the core drops WMIL if no
         # positive fits in the frame)
         self._core_select = self._select_kind(1)
-        self.first = BagSampler(params, first_frame=True)
-        self.track = BagSampler(params)
+        self.first_sampler = BagSampler(params, first_frame=True)
+        self.sampler = BagSampler(params)
         self.bags: tuple[Any, ...] = ()
         self.chan_names: tuple[str, ...] | None = None
 
@@ -145,12 +140,22 @@ class HaarAppearance:
         """Whether a whole frame step can run as one core call (:meth:`fused_request`): luma
         features only, and negatives the core can draw exactly as numpy would
         (:meth:`~wmiltrack.engine.sampling.BagSampler.drawn_in_core`)."""
-        return self.chan_names is None and self.track.drawn_in_core()
+        return self.chan_names is None and self.sampler.drawn_in_core()
+
+    @property
+    def num_features(self) -> int:
+        """How many features the bank holds (M)."""
+        return self.params.num_features
+
+    @property
+    def min_box(self) -> tuple[int, int]:
+        """The smallest ``(w, h)`` box the features allow."""
+        return min_box_size(self.params)
 
     @property
     def reach(self) -> int:
         """How far from the box the tracking bags reach."""
-        return self.track.reach
+        return self.sampler.reach
 
     def bank(self, w: int, h: int) -> _core.FeatureBank:
         """The feature bank stretched to a ``w x h`` box (cached)."""
@@ -244,7 +249,7 @@ class HaarAppearance:
         ``extra``: feature values of ``n_extra`` more negatives; ``second``: another target
         model the core updates from the same positives (``(mu, sigma, rate, first)``). Returns
         that model's ``(mu, sigma)`` (None without one)."""
-        if sampler is self.track and self.track.drawn_in_core():
+        if sampler is self.sampler and self.sampler.drawn_in_core():
             # The core draws the bags (as the sampler would, from this model's generator) and
             # learns in the same call.
             request, bags = self._learning_on_core_bags(box, extra, second)
@@ -305,7 +310,7 @@ class HaarAppearance:
         request = self._bags_for.get(weights)
         if request is None:
             request = self._bags_for[weights] = _core.BagRequest(self.rng,
-                                                                 *self.track.core_spec(weights))
+                                                                 *self.sampler.core_spec(weights))
         return request
 
     def corners(self) -> tuple[np.ndarray, np.ndarray]:

@@ -2,7 +2,7 @@
 
 Two parts a tracker can compose: :class:`CorrelationFilter` says where the target moved
 (a multi-channel linear correlation filter over a fixed-size template around it, as Staple
-and DSST use) and how sure it is (peak, PSR, APCE); :class:`ScaleEstimator` says by which
+and DSST use) and how sure it is (peak, PSR, APCE); :class:`ScaleFilter` says by which
 factor its size changed (a 1-D filter over a pyramid of scale samples, DSST). Both learn at
 their own rate when the caller says so; neither decides when. The pixel, FFT and filter
 work runs in the compiled core (``_core.fhog_region``, ``_core.TranslationFilter``,
@@ -29,7 +29,7 @@ __all__ = [
     "CorrelationSettings",
     "Location",
     "ScaleEstimate",
-    "ScaleEstimator",
+    "ScaleFilter",
     "ScaleFilterSettings",
     "smooth_size",
     "SparseUpdates",
@@ -189,7 +189,7 @@ class ScaleFilterSettings:
     lam : float
         Regularisation added to the filter's denominator.
     learning_rate : float
-        Default rate of :meth:`ScaleEstimator.learn`.
+        Default rate of :meth:`ScaleFilter.learn`.
     max_area : float
         Each scale sample is resampled to at most this many pixels (the target's aspect).
     cell : int
@@ -276,7 +276,7 @@ class _Sample:
 @dataclass(frozen=True)
 class ScaleEstimate:
     """The scale filter's answer: multiply the target's size by ``factor``; ``response`` is
-    the score per scale sample (``factors`` of :class:`ScaleEstimator`)."""
+    the score per scale sample (``factors`` of :class:`ScaleFilter`)."""
 
     factor: float
     response: npt.NDArray[np.float32]
@@ -432,7 +432,7 @@ class CorrelationFilter(_Trained[_core.TranslationFilter]):
         self._size = (w, h)
 
 
-class ScaleEstimator(_Trained[_core.ScaleFilter]):
+class ScaleFilter(_Trained[_core.ScaleFilter]):
     """DSST's scale filter: fHOG of ``num_scales`` resampled regions around the target, sizes
     ``step**k`` times its size (``k`` from ``-(n-1)/2`` to ``(n-1)/2``), each resampled to
     the same at most ``max_area`` pixels, and a 1-D correlation filter along the scales."""
@@ -447,9 +447,9 @@ class ScaleEstimator(_Trained[_core.ScaleFilter]):
         self._model_size = (0, 0)
         self._estimated: _Sample | None = None
 
-    def copy(self) -> ScaleEstimator:
+    def copy(self) -> ScaleFilter:
         """An independent copy (sample size and model as they are now)."""
-        out = ScaleEstimator(self.settings)
+        out = ScaleFilter(self.settings)
         out._filter = self._filter_copy()
         out._model_size = self._model_size
         return out

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .frames import IntBox
-from .scale import centred
+from .geometry import centred
 from .settings import MotionSettings
 
 __all__ = ["VelocityMotion"]

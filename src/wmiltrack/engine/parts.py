@@ -1,27 +1,38 @@
-"""What the tracker asks of each kind of part: the scale estimator, the motion model, the lost
-state with its re-detection, and the judge of ``ok`` (the cues' interface is
-:class:`~wmiltrack.engine.cues.Cue`).
+"""What the tracker asks of each kind of part: the scale estimator, the motion model, the
+re-detection, the judge and the reported score (the cues' interface is
+:class:`~wmiltrack.engine.cues.Cue`; an appearance model is a
+:class:`~wmiltrack.engine.appearance.HaarAppearance`).
 
 Each interface is exactly what :class:`~wmiltrack.engine.tracker.Tracker` calls on a part of
 that kind, so a class with these members (no base class needed) can stand in for the built-in
-one: ``Tracker(..., parts={"scale": ..., "motion": ..., "recovery": ...})`` takes a factory
-per kind (see :data:`PartFactory`).
+one: ``Tracker(..., parts={"judge": ..., "scale": ..., ...})`` takes a factory per kind (see
+:data:`PartFactory`), called with that kind's own settings only.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from .appearance import HaarAppearance
 from .frames import IntBox
+from .settings import (
+    AppearanceSettings,
+    JudgeSettings,
+    MotionSettings,
+    RecoverySettings,
+    ScaleSettings,
+    ScoreSettings,
+)
 
 if TYPE_CHECKING:
-    from .appearance import HaarAppearance
-    from .params import Params
+    from .judge import Evidence
+    from .state import FrameState
 
-__all__ = ["PART_KINDS", "Judge", "MotionModel", "PartFactory", "Recovery", "ScaleEstimator"]
+__all__ = ["PART_KINDS", "PART_SETTINGS", "Judge", "MotionModel", "PartFactory", "Recovery",
+           "ScaleEstimator", "ScorePolicy"]
 
 
 @runtime_checkable
@@ -29,11 +40,11 @@ class ScaleEstimator(Protocol):
     """Tries other box sizes after the translation search, and learns the target's size.
 
     Built-in: :class:`~wmiltrack.engine.scale.HaarScale` (the appearance model's features at
-    neighbouring sizes), :class:`~wmiltrack.engine.template.DSSTScale` (DSST's 1-D filter).
+    neighbouring sizes), :class:`~wmiltrack.engine.scale.DSSTScale` (DSST's 1-D filter).
     """
 
-    #: The boxes tried at other sizes on the last frame (:meth:`Tracker.samples`); the tracker
-    #: empties it before each frame's search.
+    #: The boxes tried at other sizes by the last :meth:`search` (the part replaces it at each
+    #: search; the tracker copies it into the frame's record for :meth:`Tracker.samples`).
     tried: list[IntBox]
     #: The part learns (:meth:`learn`) only from frames whose reported score is at least this.
     learn_above: float
@@ -95,36 +106,25 @@ class MotionModel(Protocol):
 
 @runtime_checkable
 class Recovery(Protocol):
-    """The lost state: notices a target that is hidden or gone, and finds it again.
+    """Finds a lost target again over the whole frame, and gives the judge one witness of a
+    lost target: the box's likeness to its picture of the target.
 
-    Built-in: :class:`~wmiltrack.engine.recovery.Redetector` (``redetect=True``). While
-    :attr:`lost` is True the tracker holds the last confident box, reports score 0 and ``ok``
-    False, and nothing learns; each frame it first searches around that box as usual, asks
-    :meth:`back`, and else :meth:`find`.
+    Built-in: :class:`~wmiltrack.engine.recovery.Redetector` (``redetect=True``). The judge
+    decides when the target is lost (:class:`Judge`); while it is, the tracker holds the last
+    confident box, nothing learns, and each frame whose usual search did not find the target
+    back asks :meth:`find`.
     """
-
-    #: Whether the target counts as lost.
-    lost: bool
-    #: Frames in the lost state so far (the judge of ``ok`` may start the lost state: it sets
-    #: ``lost`` True and this to 1).
-    frames_lost: int
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
         """The first frame, where the target is ``box``; no history."""
 
-    def judge(self, conf: float, frame: np.ndarray, box: IntBox,
-              witnesses: Sequence[float] = ()) -> bool:
-        """Whether a tracked frame whose box ``box`` has the classifier's confidence ``conf``
-        (and the cues' own confidences ``witnesses``) means the target is lost; True starts
-        the lost state (the part sets :attr:`lost`)."""
+    def likeness(self, frame: np.ndarray, box: IntBox) -> tuple[float, float] | None:
+        """How much ``box`` looks like the target, and how much the tracked boxes usually do
+        (a running mean), or None when the part cannot say."""
 
-    def back(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
-        """Whether a lost frame's usual search, which put the box at ``box`` with confidence
-        ``conf``, found the target again (True ends the lost state)."""
-
-    def find(self, frame: np.ndarray) -> IntBox | None:
-        """Look for the target over the whole frame: a box to resume from (ends the lost
-        state), or None (the frame stays lost)."""
+    def find(self, frame: np.ndarray, frames_lost: int) -> IntBox | None:
+        """Look for the target over the whole frame, lost for ``frames_lost`` frames so far:
+        a box to resume from, or None (the frame stays lost)."""
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
         """Learn from a tracked frame after the tracker placed the target at ``box``."""
@@ -132,33 +132,71 @@ class Recovery(Protocol):
 
 @runtime_checkable
 class Judge(Protocol):
-    """Decides ``ok`` frame by frame with a memory of the target, instead of the policy's
-    threshold on the score.
+    """The one place that decides what a frame means: its verdict (tracked, doubtful, lost,
+    found; :class:`~wmiltrack.engine.state.Verdict`), ``ok``, whether the parts learn from it
+    and whether the motion model takes its move as a velocity.
 
-    Built-in: :class:`~wmiltrack.engine.judge.LostJudge` (``judge_memory > 0``), which reads
-    the first-frame correlation filter's peak.
+    Built-in: :class:`~wmiltrack.engine.judge.FrameJudge` (the threshold on the score, the
+    memory of the target, the lost state's running means).
     """
 
-    #: Whether the judge holds the target for lost (with ``judge_gates`` nothing learns then).
-    lost: bool
-    #: Whether the last frame changed the verdict (with ``judge_holds``, a turn to lost
-    #: starts the lost state).
-    turned: bool
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """The first frame, where the target is ``box``; no history."""
 
-    def verdict(self, score: float, first_peak: float) -> bool:
-        """Fold in one frame's reported score and the first-frame filter's peak on it (NaN
-        when it did not search); whether the target counts as tracked on it."""
+    def back(self, state: FrameState, evidence: Evidence) -> bool:
+        """Whether a lost target's frame found the target again at the located box (else
+        the recovery looks over the whole frame); changes nothing."""
+
+    def verdict(self, state: FrameState, evidence: Evidence) -> FrameState:
+        """The frame's record with ``verdict``, ``ok``, ``learns`` and ``steady`` set (a lost
+        frame: the box held at ``state.previous`` and score 0). Called once per frame, after
+        the search and the score (and, for a lost target's frame, the recovery)."""
 
 
-#: A factory of one kind of part, called when the tracker starts (:meth:`Tracker.init`): the
-#: tracker's parameters, the first frame and the first box (clipped, whole pixels). It returns
-#: the part (whose ``start`` the tracker then calls), or None for no part of that kind.
-PartFactory = Callable[["Params", np.ndarray, IntBox], Any]
+@runtime_checkable
+class ScorePolicy(Protocol):
+    """The score the tracker reports for a frame (``TrackResult.score``).
+
+    Built-in: :class:`~wmiltrack.engine.policy.ReportedScore` (the classifier's confidence, or
+    its blend with the box's colour and intensity contrast).
+    """
+
+    @property
+    def plain(self) -> bool:
+        """Whether the score is the classifier's confidence itself (a paper preset's frame
+        then runs as one core call)."""
+
+    def score(self, conf: float, frame: np.ndarray, box: IntBox) -> float:
+        """The score to report for a frame of classifier confidence ``conf`` at ``box``."""
+
+
+#: A factory of one kind of part, called when the tracker starts (:meth:`Tracker.init`) with
+#: the part's own settings (the kind's class in :data:`PART_SETTINGS`, holding the tracker's
+#: values of its fields), the first frame and the first box (clipped, whole pixels); an
+#: appearance model's factory also gets the tracker's ``seed=`` (it draws the feature bank and
+#: the negatives). It returns the part (whose ``start`` the tracker then calls), or None for
+#: no part of that kind (not for the appearance model, the judge or the policy).
+PartFactory = Callable[..., Any]
 
 #: The kinds of part a user may supply (``Tracker(parts={kind: factory})``), with the interface
-#: each must have.
+#: each must have (an appearance model is a
+#: :class:`~wmiltrack.engine.appearance.HaarAppearance`: the core's search and learning read
+#: its feature bank and Gaussians).
 PART_KINDS: dict[str, type[Any]] = {
+    "appearance": HaarAppearance,
+    "policy": ScorePolicy,
+    "judge": Judge,
     "scale": ScaleEstimator,
     "motion": MotionModel,
     "recovery": Recovery,
+}
+
+#: The settings each kind of part is made with (:func:`~wmiltrack.engine.settings.own`).
+PART_SETTINGS: dict[str, type[Any]] = {
+    "appearance": AppearanceSettings,
+    "policy": ScoreSettings,
+    "judge": JudgeSettings,
+    "scale": ScaleSettings,
+    "motion": MotionSettings,
+    "recovery": RecoverySettings,
 }

@@ -1,5 +1,5 @@
-"""The update policy: how confident a frame is, what score the tracker reports, when the target
-counts as lost, and whether the models learn from the frame."""
+"""The reported score: how confident a frame is, and what score the tracker reports (what the
+score means for ``ok``, the lost state and learning is the judge's: :mod:`.judge`)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from .colour import ColourModel
 from .frames import IntBox
 from .settings import CONFIDENCE_OFFSET, ScoreSettings
 
-__all__ = ["ContrastScore", "UpdatePolicy", "confidence", "logistic"]
+__all__ = ["ContrastScore", "ReportedScore", "confidence", "logistic"]
 
 
 def logistic(z: float) -> float:
@@ -64,10 +64,9 @@ class ContrastScore:
         return (1.0 - w - v) * conf + w * min(max(0.5 + contrast, 0.0), 1.0) + v * luma
 
 
-class UpdatePolicy:
-    """Learn from every frame at the full rate (the paper); report the classifier's confidence,
-    or a :class:`ContrastScore` of it; ``ok`` while the reported score is at least
-    ``lost_threshold``."""
+class ReportedScore:
+    """The score to report: the classifier's confidence (the paper), or a
+    :class:`ContrastScore` of it."""
 
     def __init__(self, settings: ScoreSettings, report: ContrastScore | None = None) -> None:
         self.settings = settings
@@ -81,7 +80,3 @@ class UpdatePolicy:
     def score(self, conf: float, frame: np.ndarray, box: IntBox) -> float:
         """The score to report for a frame of confidence ``conf`` whose box is ``box``."""
         return conf if self.report is None else self.report(conf, frame, box)
-
-    def tracked(self, score: float) -> bool:
-        """Whether a frame with this score counts as tracked (``TrackResult.ok``)."""
-        return score >= self.settings.lost_threshold

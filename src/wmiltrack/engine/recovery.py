@@ -1,22 +1,18 @@
-"""The lost state and re-detection: a part that notices a hidden or departed target, keeps every
-other part from learning it away, and looks for it over the whole frame until it is back.
+"""Re-detection: a part that keeps a grey picture of the target and looks for it over the whole
+frame while the target is lost.
 
 The classifier and the cues learn from whatever the box covers; when an occluder covers the
 target or the target leaves the view, they learn the occluder or the background within a few
 frames and the reported score climbs back, so the tracker never says it lost anything and
-never looks further than its local search. This part reads the classifier's confidence against
-its own recent history instead of a fixed level (confidences differ a lot between videos): a
-target that disappears takes it down by half from one frame to the next, while lighting and
-pose change it over tens of frames. Other witnesses must agree before a frame counts as lost:
-the box's correlation with a grey template of the target, and the own confidence of any cue
-that gives one (the correlation filter's peak, which HOG keeps up under a shadow). While the
-target is lost nothing learns, and every frame is searched whole for the target's last
-confident look.
+never looks further than its local search. The judge (:mod:`.judge`) notices a hidden or
+departed target and holds it for lost (nothing learns then); one of the witnesses it asks is
+the box's correlation with this part's grey picture of the target (:meth:`Redetector.likeness`).
+While the target is lost every frame is searched whole for its last confident look.
 
 That search does not use the classifier: Haar sums on raw intensities, frozen while the target
 is away, stop recognising it as soon as the lighting changes (on the generated sequences its
 confidence on the returned target falls from 0.6 to below 0.1 within twenty frames). A
-normalised cross-correlation with a grey template of the target (OpenCV's ``matchTemplate``,
+normalised cross-correlation with a grey picture of the target (OpenCV's ``matchTemplate``,
 which runs over a whole frame in a few milliseconds) is indifferent to gain and offset: 0.86 to
 0.97 on the returned target there, 0.47 to 0.77 at the best other place.
 """
@@ -24,7 +20,6 @@ which runs over a whole frame in a few milliseconds) is indifferent to gain and 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import cv2
 import numpy as np
@@ -55,52 +50,40 @@ def _match(a: np.ndarray, b: np.ndarray) -> float:
 
 
 class Redetector:
-    """The lost state of one tracker (``Params.redetect``; see
+    """The re-detection of one tracker (``Params.redetect``; see
     :class:`~wmiltrack.engine.settings.RecoverySettings`).
 
-    ``lost`` says whether the target counts as lost; ``reference`` is the running mean of the
-    classifier's confidence over tracked frames (None right after the start or a re-detection),
-    ``match`` the running mean of the tracked boxes' correlation with the template; both are
-    frozen while lost. ``last`` is the last re-detection's best correlation; ``size`` the size
-    of the last tracked box that matched the template at least as well as usual (what
-    :meth:`find` looks for).
+    ``picture`` is the grey picture of the target, ``match`` the running mean of the tracked
+    boxes' correlation with it (both frozen while the target is lost: nothing learns then).
+    ``last`` is the last re-detection's best correlation; ``size`` the size of the last tracked
+    box that matched the picture at least as well as usual (what :meth:`find` looks for).
     """
 
     def __init__(self, settings: RecoverySettings) -> None:
         self.settings = settings
-        self.lost = False
-        self.reference: float | None = None
         self.match: float | None = None
-        self.frames_lost = 0
-        self.witnesses: list[float] = []  # running means of the cues' own confidences
-        self.seen = 0  # tracked frames judged since the start or the last re-detection
         self.last = math.nan
-        self.template: np.ndarray | None = None
+        self.picture: np.ndarray | None = None
         self.size: tuple[int, int] | None = None  # of the last box that matched as usual
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
-        """Take the first look of the target as the template; no history."""
-        self.lost = False
-        self.reference = None
+        """Take the first look of the target as the picture; no history."""
         self.match = None
-        self.frames_lost = 0
-        self.witnesses = []
-        self.seen = 0
         self.last = math.nan
-        self.template = None
+        self.picture = None
         self.size = (box[2], box[3])
         self.learn(frame, box)
 
     def _patch(self, frame: np.ndarray, box: IntBox) -> np.ndarray | None:
-        """The box's grey pixels at the template's size (at most ``recover_template_area`` pixels;
+        """The box's grey pixels at the picture's size (at most ``recover_template_area`` pixels;
         None if the box leaves the frame)."""
         x, y, w, h = box
         fh, fw = frame.shape[:2]
         if x < 0 or y < 0 or x + w > fw or y + h > fh or w < 1 or h < 1:
             return None
         patch = _grey(frame[y:y + h, x:x + w]).astype(np.float32)
-        if self.template is not None:
-            size = self.template.shape[::-1]
+        if self.picture is not None:
+            size = self.picture.shape[::-1]
         else:
             shrink = min(1.0, math.sqrt(self.settings.recover_template_area / (w * h)))
             size = (max(1, round(w * shrink)), max(1, round(h * shrink)))
@@ -110,109 +93,62 @@ class Redetector:
         return patch
 
     def learn(self, frame: np.ndarray, box: IntBox) -> None:
-        """Fold a tracked frame's box into the template and the running match."""
+        """Fold a tracked frame's box into the picture and the running match."""
         patch = self._patch(frame, box)
         if patch is None:
             return
-        if self.template is None:
-            self.template = patch
+        if self.picture is None:
+            self.picture = patch
             return
-        m = _match(patch, self.template)
+        m = _match(patch, self.picture)
         if self.match is None or m >= self.match:
             self.size = (box[2], box[3])
         a, rate = self.settings.recover_memory, self.settings.recover_template_rate
         self.match = m if self.match is None else a * self.match + (1.0 - a) * m
-        cv2.addWeighted(self.template, 1.0 - rate, patch, rate, 0.0, dst=self.template)
+        cv2.addWeighted(self.picture, 1.0 - rate, patch, rate, 0.0, dst=self.picture)
 
-    def _dropped(self, conf: float, frame: np.ndarray, box: IntBox,
-                 witnesses: Sequence[float]) -> bool:
-        """Whether the classifier's confidence, the box's correlation with the template and
-        every cue's own confidence (``witnesses``, see :class:`~wmiltrack.engine.cues.Cue`)
-        all fell below ``lost_drop`` times their running means (a target that changes its look
-        keeps one of them; one that is hidden or gone loses all)."""
-        drop, ref = self.settings.lost_drop, self.reference
-        warmup = self.settings.recover_warmup
-        if ref is None or self.seen < warmup or conf >= drop * ref:  # NaN: dropped
-            return False
-        for value, mean in zip(witnesses, self.witnesses):
-            if value >= drop * mean:
-                return False
+    def likeness(self, frame: np.ndarray, box: IntBox) -> tuple[float, float] | None:
+        """The correlation of ``box``'s grey pixels with the picture and the tracked boxes'
+        running mean of it (what the judge compares), or None without a picture or a mean,
+        or when the box leaves the frame."""
         patch = self._patch(frame, box)
-        if patch is None or self.template is None or self.match is None:
-            return True
-        return not _match(patch, self.template) >= drop * self.match
+        if patch is None or self.picture is None or self.match is None:
+            return None
+        return _match(patch, self.picture), self.match
 
-    def judge(self, conf: float, frame: np.ndarray, box: IntBox,
-              witnesses: Sequence[float] = ()) -> bool:
-        """Whether a tracked frame whose best box ``box`` has the classifier confidence
-        ``conf`` (and the cues' confidences ``witnesses``) means the target is lost (then the
-        lost state starts); otherwise they join their running means."""
-        if self._dropped(conf, frame, box, witnesses):
-            self.lost = True
-            self.frames_lost = 1
-            return True
-        ref, a = self.reference, self.settings.recover_memory
-        self.reference = conf if ref is None else a * ref + (1.0 - a) * conf
-        if len(self.witnesses) != len(witnesses):
-            self.witnesses = list(witnesses)
-        else:
-            self.witnesses = [a * m + (1.0 - a) * v
-                              for m, v in zip(self.witnesses, witnesses)]
-        self.seen += 1
-        return False
-
-    def back(self, conf: float, frame: np.ndarray, box: IntBox) -> bool:
-        """Whether a lost frame's usual search found the target again at ``box``: its
-        confidence or its correlation with the template is back above ``lost_drop`` times the
-        running mean (then the lost state ends). The cues' own confidences are not asked: they
-        tell a target whose look changed from one that left, but a cue that learnt the
-        target's surroundings (the correlation filter's padding) answers nearly as well on
-        the empty place it left, so they cannot say that it came back."""
-        if self._dropped(conf, frame, box, ()):
-            return False
-        self.lost = False
-        self.frames_lost = 0
-        return True
-
-    def required(self) -> float:
-        """The correlation with the template a re-detected box needs to end the lost state."""
+    def required(self, frames_lost: int) -> float:
+        """The correlation with the picture a re-detected box needs to end the lost state
+        after ``frames_lost`` frames in it."""
         s = self.settings
         match = self.match if self.match is not None else 1.0
-        relative = s.recover_ratio * match * s.recover_decay ** max(self.frames_lost - 1, 0)
+        relative = s.recover_ratio * match * s.recover_decay ** max(frames_lost - 1, 0)
         return max(s.recover_floor, relative)
 
-    def find(self, frame: np.ndarray) -> IntBox | None:
-        """The box that matches the template best over the whole frame (:meth:`best_place`),
-        if it matches well enough to end the lost state (then the lost state ends); else None
-        and one more frame is lost."""
+    def find(self, frame: np.ndarray, frames_lost: int) -> IntBox | None:
+        """The box that matches the picture best over the whole frame (:meth:`best_place`),
+        if it matches well enough (:meth:`required`) to end a lost state of ``frames_lost``
+        frames so far; else None."""
         place = self.best_place(frame)
         if place is None:
-            self.frames_lost += 1
             return None
         best, box = place
         self.last = best
-        if not best >= self.required():
-            self.frames_lost += 1
+        if not best >= self.required(frames_lost):
             return None
-        self.lost = False
-        self.frames_lost = 0
-        self.reference = None  # the classifier may have fallen behind the target's look
-        self.witnesses = []
-        self.seen = 0
         return box
 
     def best_place(self, frame: np.ndarray) -> tuple[float, IntBox] | None:
-        """The box of the whole frame that matches the template best, and its correlation
-        (None without a template, or when the box would not fit the frame); changes nothing.
-        The box has the size of the last tracked box that matched the template at least as
+        """The box of the whole frame that matches the picture best, and its correlation
+        (None without a picture, or when the box would not fit the frame); changes nothing.
+        The box has the size of the last tracked box that matched the picture at least as
         well as usual (:attr:`size`): a target that an occluder covered bit by bit may have
         had its box shrunk or grown before it counted as lost.
 
-        Two passes: the whole frame at a resolution where the template has at most
+        Two passes: the whole frame at a resolution where the picture has at most
         ``recover_search_area`` pixels (a 32-px target on a 640 x 480 frame: 0.6 instead of 4 ms),
-        then the neighbourhood of its best place at the template's own resolution, whose
+        then the neighbourhood of its best place at the picture's own resolution, whose
         correlation decides."""
-        if self.template is None or self.size is None:
+        if self.picture is None or self.size is None:
             return None
         w, h = self.size
         fh, fw = frame.shape[:2]
@@ -222,26 +158,26 @@ class Redetector:
         return best, (bx, by, w, h)
 
     def similarity(self, frame: np.ndarray, box: IntBox) -> float:
-        """The correlation of ``box``'s grey pixels with the template (NaN without a template
+        """The correlation of ``box``'s grey pixels with the picture (NaN without a picture
         or when the box leaves the frame): what :meth:`best_place` maximises."""
         patch = self._patch(frame, box)
-        if patch is None or self.template is None:
+        if patch is None or self.picture is None:
             return math.nan
-        return _match(patch, self.template)
+        return _match(patch, self.picture)
 
     def _whole_frame(self, grey: np.ndarray, w: int, h: int) -> tuple[float, tuple[int, int]]:
-        """The best correlation of the template with a ``w x h`` box of the grey frame, and that
+        """The best correlation of the picture with a ``w x h`` box of the grey frame, and that
         box's top-left corner (see :meth:`find`)."""
-        assert self.template is not None
+        assert self.picture is not None
         fh, fw = grey.shape
-        th, tw = self.template.shape
-        # Pass 2's scale: the template's resolution, relative to the frame (a box of w x h
-        # becomes the template's size; a box smaller than the template: the frame's own).
+        th, tw = self.picture.shape
+        # Pass 2's scale: the picture's resolution, relative to the frame (a box of w x h
+        # becomes the picture's size; a box smaller than the picture: the frame's own).
         sx, sy = min(1.0, tw / w), min(1.0, th / h)
-        templ = self.template
+        templ = self.picture
         if templ.shape != (round(h * sy), round(w * sx)):
             templ = cv2.resize(templ, (round(w * sx), round(h * sy)), interpolation=cv2.INTER_AREA)
-        # Pass 1: the whole frame with the template shrunk to at most recover_search_area pixels.
+        # Pass 1: the whole frame with the picture shrunk to at most recover_search_area pixels.
         c = min(1.0, math.sqrt(self.settings.recover_search_area / templ.size))
         small = cv2.resize(templ, (max(4, round(templ.shape[1] * c)), max(4, round(templ.shape[0] * c))),
                            interpolation=cv2.INTER_AREA) if c < 1.0 else templ

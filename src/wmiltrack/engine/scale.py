@@ -1,6 +1,7 @@
-"""The scale estimator: after the translation search, the box at neighbouring scales competes with
-it. The Haar rectangles are stretched to each tried size (their weights rescaled by the areas),
-so no image pyramid is built and a scale costs what a translation candidate costs.
+"""The scale estimators: after the translation search, the box at neighbouring scales competes with
+it. :class:`HaarScale` stretches the Haar rectangles to each tried size (their weights rescaled
+by the areas), so no image pyramid is built and a scale costs what a translation candidate
+costs; :class:`DSSTScale` is DSST's 1-D correlation filter over the sizes.
 """
 
 from __future__ import annotations
@@ -11,30 +12,24 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 
 from .classifier import GaussianPool
-from .correlation import ScaleEstimator, ScaleFilterSettings, SparseUpdates
+from .correlation import ScaleFilter, ScaleFilterSettings, SparseUpdates
 from .features import box_area_ok
 from .frames import IntBox
-from .settings import NO_GATE, FilterLearning, ScaleSettings
+from .geometry import centred
+from .settings import FilterLearning, ScaleSettings
 
 if TYPE_CHECKING:
     from .appearance import HaarAppearance
 
-__all__ = ["HaarScale", "centred", "dsst_filter"]
+__all__ = ["DSSTScale", "HaarScale", "dsst_filter", "dsst_min_side"]
 
 
-def centred(box: IntBox, w: int, h: int, dx: float = 0.0, dy: float = 0.0) -> IntBox:
-    """A ``w x h`` box with the centre of ``box`` moved by ``(dx, dy)``."""
-    cx = box[0] + box[2] / 2.0 + dx
-    cy = box[1] + box[3] / 2.0 + dy
-    return int(math.floor(cx - w / 2.0 + 0.5)), int(math.floor(cy - h / 2.0 + 0.5)), w, h
-
-
-def dsst_filter(samples: int, learning: FilterLearning) -> tuple[SparseUpdates, ScaleEstimator]:
+def dsst_filter(samples: int, learning: FilterLearning) -> tuple[SparseUpdates, ScaleFilter]:
     """DSST's scale filter (``samples`` sizes over DSST's range) and its learning schedule
     (every ``learning.every``-th frame, at the rate that keeps DSST's memory), as the scale
     model and as the Haar scale search's vote both use them."""
     updates = SparseUpdates(ScaleFilterSettings().learning_rate, learning.every)
-    return updates, ScaleEstimator(ScaleFilterSettings.spanning(samples, updates.rate))
+    return updates, ScaleFilter(ScaleFilterSettings.spanning(samples, updates.rate))
 
 
 class HaarScale:
@@ -46,24 +41,23 @@ class HaarScale:
     colour cue, also by the box's colour contrast. Boxes at wrong scales can be learnt as
     negatives.
 
-    Besides its own settings it is given, by :func:`~wmiltrack.engine.tracker.compose`: the
-    smallest box the appearance model's features allow (``min_box``,
-    :func:`~wmiltrack.engine.features.min_box_size`), their number (``num_features``, the size
-    of its target model) and the correlation filters' learning rule (``learning``, for DSST's
-    vote).
+    What it needs of the appearance model (the smallest box its features allow, how many
+    features its target model holds) it reads from the model it is handed at each search and
+    learning step.
     """
 
     def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
-                 frame_wh: tuple[int, int], *, min_box: tuple[int, int], num_features: int,
-                 learning: FilterLearning = NO_GATE) -> None:
+                 frame_wh: tuple[int, int]) -> None:
         self.settings = settings
         self.base_wh = base_wh
         self.frame_wh = frame_wh
-        self.min_box = min_box
         self.index = 0
         self.tried: list[IntBox] = []  # the boxes tried at other scales in the last frame
-        self.pool = GaussianPool(num_features) if settings.scale_model != "ratio" else None
-        # DSST's vote on the size (scale_dsst), learnt as the translation filter (``learning``)
+        # its target model (not for "ratio"), made at the first learning step (its size is the
+        # appearance model's feature count)
+        self.pool: GaussianPool | None = None
+        # DSST's vote on the size (scale_dsst), learnt as the translation filter
+        learning = FilterLearning.of(settings)
         self.dsst_updates, dsst = dsst_filter(settings.scale_samples, learning)
         self.learn_above = learning.above
         self.dsst = dsst if settings.scale_dsst > 0 else None
@@ -84,13 +78,15 @@ class HaarScale:
         w, h = self.box_size(self.index + max(p.scale_steps, p.scale_negatives) + p.scale_steps)
         return (max(w - box[2], h - box[3]) + 1) // 2 + 1
 
-    def allowed(self, index: int) -> bool:
+    def allowed(self, index: int, model: HaarAppearance) -> bool:
+        """Whether the scale ``index`` is within the limits, the frame and ``model``'s
+        smallest box."""
         p = self.settings
         s = p.scale_factor ** index
         if not (p.scale_min - 1e-9 <= s <= p.scale_max + 1e-9):
             return False
         w, h = self.box_size(index)
-        mw, mh = self.min_box
+        mw, mh = model.min_box
         return mw <= w <= self.frame_wh[0] and mh <= h <= self.frame_wh[1] and box_area_ok(w, h)
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
@@ -162,7 +158,7 @@ class HaarScale:
         best_index, best_box = self.index, box
         for j in range(-p.scale_steps, p.scale_steps + 1):
             index = self.index + j
-            if j == 0 or not self.allowed(index):
+            if j == 0 or not self.allowed(index, model):
                 continue
             w, h = self.box_size(index)
             candidate = centred(box, w, h)
@@ -195,7 +191,7 @@ class HaarScale:
         best_index, best_box = self.index, box
         for j in range(-p.scale_steps, p.scale_steps + 1):
             index = self.index + j
-            if j != 0 and not self.allowed(index):
+            if j != 0 and not self.allowed(index, model):
                 continue
             w, h = self.box_size(index)
             candidate = box if j == 0 else centred(box, w, h)
@@ -219,6 +215,8 @@ class HaarScale:
         p = self.settings
         wrong = self._wrong_scale_values(model, box) if p.scale_negatives > 0 else []
         extra = np.concatenate(wrong, axis=1) if wrong else None
+        if self.pool is None and p.scale_model != "ratio":
+            self.pool = GaussianPool(model.num_features)
         pool = self.pool
         second = None if pool is None else (pool.mu1, pool.sigma1, p.scale_learning_rate,
                                             pool.first(1))
@@ -237,7 +235,7 @@ class HaarScale:
         out = []
         for j in (-p.scale_negatives, p.scale_negatives):
             index = self.index + j
-            if not self.allowed(index):
+            if not self.allowed(index, model):
                 continue
             w, h = self.box_size(index)
             x, y, _, _ = centred(box, w, h)
@@ -245,3 +243,92 @@ class HaarScale:
                 continue
             out.append(model.project(w, h, np.array([[x, y]], dtype=np.int32)))
         return out
+
+
+def _centre(box: IntBox) -> tuple[float, float]:
+    return box[0] + box[2] / 2.0, box[1] + box[3] / 2.0
+
+
+def dsst_min_side(min_box_size: int) -> int:
+    """The smallest side of a box DSST's scale filter gives, for the features' ``min_box_size``
+    (:class:`~wmiltrack.engine.settings.FeatureSettings`)."""
+    return max(min_box_size, 4)
+
+
+class DSSTScale:
+    """DSST's scale filter as the scale estimator (``scale_model="dsst"``): after the translation
+    search, the best of 33 sizes 1.02 apart by a 1-D correlation filter on fHOG, within
+    ``scale_min``..``scale_max`` of the first box and the frame, no side below
+    :func:`dsst_min_side`. It learns as the translation filter does (the ``template_*``
+    learning settings it shares: :class:`~wmiltrack.engine.settings.FilterLearning`)."""
+
+    def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
+                 frame_wh: tuple[int, int]) -> None:
+        self.settings = settings
+        self.base_wh = base_wh
+        self.frame_wh = frame_wh
+        self.min_side = dsst_min_side(settings.min_box_size)
+        learning = FilterLearning.of(settings)
+        self.reuse = learning.reuse
+        self.updates, self.estimator = dsst_filter(settings.scale_samples, learning)
+        self.learn_above = learning.above
+        self.size = (float(base_wh[0]), float(base_wh[1]))  # continuous; the box is rounded
+        self.given = base_wh  # the size of the box this part last gave
+        self.tried: list[IntBox] = []
+
+    @property
+    def scale(self) -> float:
+        """The box size relative to the first box."""
+        return math.sqrt(self.size[0] * self.size[1] / (self.base_wh[0] * self.base_wh[1]))
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        self.estimator.init(frame, box)
+
+    def margin(self, box: IntBox) -> int:
+        """Extra integral-image margin for the largest box the filter may choose around
+        ``box`` (the appearance model learns at it)."""
+        s = self.estimator.settings
+        largest = s.step ** ((s.num_scales - 1) // 2)
+        return math.ceil((largest - 1.0) * max(box[2], box[3]) / 2.0) + 1
+
+    def search(self, model: HaarAppearance, frame: np.ndarray, box: IntBox, raw: float,
+               contrast: Callable[[IntBox], float] | None) -> tuple[IntBox, float]:
+        """The box at the size the filter prefers, centred where the search put it. With
+        ``scale_veto`` and a colour cue (``contrast``), a new size whose box has less colour
+        contrast than the current one is refused."""
+        p = self.settings
+        if (box[2], box[3]) != self.given:  # another part sized the box (a re-detection)
+            self.size = (float(box[2]), float(box[3]))
+        factor = self.estimator.estimate(frame, _centre(box), self.size).factor
+        w, h = self.size[0] * factor, self.size[1] * factor
+        s = math.sqrt(w * h / (self.base_wh[0] * self.base_wh[1]))
+        s_ok = min(max(s, p.scale_min), p.scale_max)
+        w, h = w * s_ok / s, h * s_ok / s
+        min_side = self.min_side
+        fw, fh = self.frame_wh
+        shrink = min(1.0, fw / w, fh / h)
+        grow = max(1.0, min_side / (w * shrink), min_side / (h * shrink))
+        size = (w * shrink * grow, h * shrink * grow)
+        iw, ih = max(min_side, round(size[0])), max(min_side, round(size[1]))
+        out = centred(box, min(iw, fw), min(ih, fh))
+        if (p.scale_veto and contrast is not None and (out[2], out[3]) != (box[2], box[3])
+                and contrast(out) < contrast(box)):
+            out = box
+        else:
+            self.size = size
+        self.given = (out[2], out[3])
+        return out, raw
+
+    def learning_extras(self, model: HaarAppearance, box: IntBox) -> tuple[None, int, None]:
+        """(Nothing for the appearance model's learning step.)"""
+        return None, 0, None
+
+    def take_learnt(self, learnt: tuple[Any, Any], n_pos: int) -> None:
+        """(No model in the appearance model's learning step.)"""
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        """Fold in the scale samples around the frame's final box (every ``template_every``-th
+        frame)."""
+        if self.updates.due():
+            self.estimator.learn(frame, _centre(box), self.size,
+                                 from_estimate=self.reuse)

@@ -58,6 +58,13 @@ def _need(ok: bool, message: str) -> None:
         raise ValueError(message)
 
 
+def _check_memory(obj: Any) -> None:
+    """``recover_memory``, which the judge's and the recovery's settings share, checked."""
+    _check_numbers(obj, "recover_memory")
+    _need(0.0 <= obj.recover_memory < 1.0,
+          f"recover_memory must be in [0, 1), got {obj.recover_memory}")
+
+
 def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
@@ -355,7 +362,7 @@ class ScaleSettings:
         Ratio between neighbouring scales (> 1).
     scale_model : {"ratio", "likelihood", "both", "dsst"}
         ``dsst``: a separate 1-D correlation filter along 33 scales 1.02 apart on fHOG
-        (DSST; :class:`wmiltrack.engine.template.DSSTScale`), run after the translation
+        (DSST; :class:`wmiltrack.engine.scale.DSSTScale`), run after the translation
         search; ``scale_steps`` must be > 0 to switch it on, and the other ``scale_*``
         settings but ``scale_min``/``scale_max`` do not apply. Otherwise scales are compared
         by Haar features: ``ratio``, the strong classifier's mean log ratio (best of a
@@ -401,6 +408,11 @@ class ScaleSettings:
         else the size is kept. DSST's fHOG scale samples cannot tell a low-textured or
         deforming target from its surroundings and let the box grow into them (a bag on a
         street: 0.70 -> 0.24 AUC); the colour contrast falls as soon as background enters.
+    template_gate, template_every, template_reuse
+        Shared with :class:`TemplateSettings`: the DSST scale filters (``scale_model="dsst"``
+        and ``scale_dsst``'s vote) learn on the translation filter's schedule.
+    min_box_size
+        Shared with :class:`FeatureSettings`: DSST gives no box side below it (nor below 4).
     """
 
     scale_steps: int = 0
@@ -417,6 +429,10 @@ class ScaleSettings:
     scale_dsst: float = 0.0
     scale_samples: int = 33
     scale_veto: bool = False
+    template_gate: float = 0.0
+    template_every: int = 1
+    template_reuse: bool = False
+    min_box_size: int = 4
 
     def __post_init__(self) -> None:
         ScaleSettings.check(self)
@@ -542,13 +558,10 @@ class ColourSettings:
 
 @dataclass(frozen=True)
 class ScoreSettings:
-    """The update policy (:mod:`wmiltrack.engine.policy`): the reported score and the lost state.
+    """The reported score (:mod:`wmiltrack.engine.policy`).
 
     Attributes
     ----------
-    lost_threshold : float
-        ``TrackResult.ok`` is False when the reported score falls below this; the motion
-        model reads the classifier's confidence against it.
     score_colour : float
         Weight ``w`` of the box's colour contrast in the reported confidence
         (``TrackResult.score``): ``(1 - w) * logistic(raw / K - offset) + w * clip(0.5 +
@@ -571,7 +584,6 @@ class ScoreSettings:
         frames without colour the colour term reads the luma contrast. 0: off.
     """
 
-    lost_threshold: float = 0.5
     score_colour: float = 0.0
     score_colour_model: Literal["current", "first"] = "current"
     score_luma: float = 0.0
@@ -582,9 +594,6 @@ class ScoreSettings:
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
         _check_choices(self, {"score_colour_model": ("current", "first")})
-        _check_numbers(self, "lost_threshold")
-        _need(0.0 <= self.lost_threshold <= 1.0,
-              f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
         _need(_is_number(self.score_colour) and 0.0 <= self.score_colour <= 1.0,
               f"score_colour must be in [0, 1], got {self.score_colour!r}")
         _need(_is_number(self.score_luma) and 0.0 <= self.score_luma <= 1.0
@@ -683,7 +692,8 @@ class TemplateSettings:
 
 @dataclass(frozen=True)
 class RecoverySettings:
-    """The lost state and re-detection (:class:`wmiltrack.engine.recovery.Redetector`).
+    """The re-detection of a lost target (:class:`wmiltrack.engine.recovery.Redetector`; the
+    judge's ``redetect``, ``lost_drop`` and ``recover_warmup`` start the lost state).
 
     A target that is hidden (a full occlusion) or gone (out of view) must not be learnt: the
     classifier, the cues and the scale model would adopt the occluder or the background, and the
@@ -700,11 +710,6 @@ class RecoverySettings:
 
     Attributes
     ----------
-    redetect : bool
-        Whether a lost target is held, not learnt, and searched for over the whole frame.
-    lost_drop : float
-        A frame counts as lost when its confidence is below this fraction of the running mean
-        confidence of the tracked frames (in (0, 1)).
     recover_ratio : float
         A re-detected place is taken when its correlation with the template is at least this
         fraction of the tracked boxes' running correlation.
@@ -714,12 +719,9 @@ class RecoverySettings:
         The least correlation a re-detected place needs in any case: people, cars and textures
         of one kind reach 0.7-0.77 at the wrong place on the shared sequences.
     recover_memory : float
-        Weight of the old value in the running means (confidence, template match, the cues'
-        own confidences), in [0, 1).
-    recover_warmup : int
-        Tracked frames before the first judgement: the first frames' confidence is inflated
-        (the classifier has just been trained on the first box) and their running mean not yet
-        formed.
+        Weight of the old value in the running mean of the tracked boxes' correlation with the
+        template, in [0, 1) (the judge's running means take the same weight:
+        :class:`JudgeSettings`).
     recover_template_rate : float
         Weight of each tracked frame's patch in the grey template, in (0, 1].
     recover_template_area : float
@@ -733,13 +735,10 @@ class RecoverySettings:
         resolution.
     """
 
-    redetect: bool = False
-    lost_drop: float = 0.6
     recover_ratio: float = 0.9
     recover_decay: float = 1.0
     recover_floor: float = 0.9
     recover_memory: float = 0.9
-    recover_warmup: int = 10
     recover_template_rate: float = 0.05
     recover_template_area: float = 1600.0
     recover_search_area: float = 256.0
@@ -749,9 +748,7 @@ class RecoverySettings:
 
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
-        _need(isinstance(self.redetect, bool), f"redetect must be True or False, got {self.redetect!r}")
-        _check_numbers(self, "lost_drop", "recover_ratio", "recover_decay", "recover_floor")
-        _need(0.0 < self.lost_drop < 1.0, f"lost_drop must be in (0, 1), got {self.lost_drop}")
+        _check_numbers(self, "recover_ratio", "recover_decay", "recover_floor")
         _need(0.0 < self.recover_ratio <= 1.0,
               f"recover_ratio must be in (0, 1], got {self.recover_ratio}")
         _need(0.0 < self.recover_decay <= 1.0,
@@ -760,10 +757,7 @@ class RecoverySettings:
               f"recover_floor must be in [-1, 1], got {self.recover_floor}")
         _check_numbers(self, "recover_memory", "recover_template_rate", "recover_template_area",
                        "recover_search_area")
-        _check_ints(self, "recover_warmup")
-        _need(0.0 <= self.recover_memory < 1.0,
-              f"recover_memory must be in [0, 1), got {self.recover_memory}")
-        _need(self.recover_warmup >= 0, f"recover_warmup must be >= 0, got {self.recover_warmup}")
+        _check_memory(self)
         _need(0.0 < self.recover_template_rate <= 1.0,
               f"recover_template_rate must be in (0, 1], got {self.recover_template_rate}")
         _need(self.recover_template_area >= 1.0 and self.recover_search_area >= 1.0,
@@ -772,9 +766,11 @@ class RecoverySettings:
 
 @dataclass(frozen=True)
 class JudgeSettings:
-    """The judge of ``TrackResult.ok`` (:class:`wmiltrack.engine.judge.LostJudge`).
+    """The judge (:class:`wmiltrack.engine.judge.FrameJudge`): each frame's verdict (tracked,
+    doubtful, lost, found), hence ``TrackResult.ok``, the lost state and what learns.
 
-    Without the judge, ``ok`` is the reported score against ``lost_threshold``, frame by frame.
+    Without its memory (``judge_memory = 0``), ``ok`` is the reported score against
+    ``lost_threshold``, frame by frame.
     A tracker that drifted onto a distractor keeps a high score there (everything it learns
     follows it), so on the 34 development sequences that rule flags 12.8 % of well-tracked
     frames and misses 28 % of the frames off the target. The judge adds a memory and a delay:
@@ -788,11 +784,36 @@ class JudgeSettings:
       ``judge_low``, and as found again after ``judge_leave`` frames in a row above
       ``judge_high``.
 
-    Only ``ok`` changes: the boxes are the same with the judge or without it. Needs the
+    Only ``ok`` changes: the boxes are the same with the memory or without it. Needs the
     correlation-filter template (``template_weight > 0`` or ``template_motion``).
+
+    With ``redetect``, the judge also starts the lost state: a frame whose classifier
+    confidence drops below ``lost_drop`` times its running mean over tracked frames, while the
+    cues' own confidences and the box's correlation with the recovery's grey template fell
+    alike, is lost: the box is held at the last confident one, ``ok`` is False and nothing
+    learns; each lost frame the target is found again where the usual search around the held
+    box sees the confidence back, or where the recovery finds it over the whole frame
+    (:class:`RecoverySettings`).
 
     Attributes
     ----------
+    lost_threshold : float
+        ``TrackResult.ok`` is False when the reported score falls below this; the motion
+        model takes a frame's move as a velocity only when the classifier's confidence is at
+        least this.
+    redetect : bool
+        Whether a lost target is held, not learnt, and searched for over the whole frame.
+    lost_drop : float
+        A frame counts as lost when its confidence is below this fraction of the running mean
+        confidence of the tracked frames (in (0, 1)).
+    recover_memory : float
+        Weight of the old value in the running means of the confidence and the cues' own
+        confidences, in [0, 1) (shared with :class:`RecoverySettings`: one rate for the
+        running means of the lost state).
+    recover_warmup : int
+        Tracked frames before the first judgement: the first frames' confidence is inflated
+        (the classifier has just been trained on the first box) and their running mean not yet
+        formed.
     judge_memory : float
         Weight of the log of the first-frame filter's peak; 0 leaves the judge out.
     judge_score : float
@@ -812,6 +833,11 @@ class JudgeSettings:
         the whole frame until the classifier or the re-detection finds it again.
     """
 
+    lost_threshold: float = 0.5
+    redetect: bool = False
+    lost_drop: float = 0.6
+    recover_memory: float = 0.9
+    recover_warmup: int = 10
     judge_memory: float = 0.0
     judge_score: float = 8.0
     judge_peak: float = 0.082
@@ -827,6 +853,15 @@ class JudgeSettings:
 
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
+        _check_numbers(self, "lost_threshold")
+        _need(0.0 <= self.lost_threshold <= 1.0,
+              f"lost_threshold must be in [0, 1], got {self.lost_threshold}")
+        _need(isinstance(self.redetect, bool), f"redetect must be True or False, got {self.redetect!r}")
+        _check_numbers(self, "lost_drop")
+        _need(0.0 < self.lost_drop < 1.0, f"lost_drop must be in (0, 1), got {self.lost_drop}")
+        _check_memory(self)
+        _check_ints(self, "recover_warmup")
+        _need(self.recover_warmup >= 0, f"recover_warmup must be >= 0, got {self.recover_warmup}")
         _check_numbers(self, "judge_memory", "judge_score", "judge_peak", "judge_low", "judge_high")
         _check_ints(self, "judge_enter", "judge_leave")
         _need(self.judge_memory >= 0.0, f"judge_memory must be >= 0, got {self.judge_memory}")
@@ -862,7 +897,7 @@ class AppearanceSettings(SearchSettings, ClassifierSettings, BagSettings, Featur
 class FilterLearning:
     """When the correlation filters learn, the one rule the translation template
     (:class:`~wmiltrack.engine.template.CorrelationTemplate`) and the DSST scale filters
-    (:class:`~wmiltrack.engine.template.DSSTScale`, the Haar scale search's vote) share: every
+    (:class:`~wmiltrack.engine.scale.DSSTScale`, the Haar scale search's vote) share: every
     ``every``-th frame, among frames whose reported score is at least ``above``; with
     ``reuse``, from the sample the frame's search already took. Made from the template's
     settings by :meth:`of` (``template_every``, ``template_gate``, ``template_reuse``)."""
@@ -872,8 +907,9 @@ class FilterLearning:
     reuse: bool = False
 
     @classmethod
-    def of(cls, template: TemplateSettings) -> FilterLearning:
-        """The rule that ``template``'s settings give."""
+    def of(cls, template: TemplateSettings | ScaleSettings) -> FilterLearning:
+        """The rule that the ``template_*`` settings give (the template's, or those the
+        scale settings share)."""
         return cls(every=template.template_every, above=template.template_gate,
                    reuse=template.template_reuse)
 

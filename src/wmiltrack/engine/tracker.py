@@ -1,12 +1,16 @@
 """The tracker: an appearance model composed with optional cues, a scale estimator, a motion
-model and an update policy.
+model, the reported score's policy, a recovery part and a judge.
 
-One frame walks one way: the motion model says where to centre the search -> the cues map the
-search region -> the appearance model's coarse and fine candidate scoring (C++), with the cues
-merged in -> the scale estimator tries the neighbouring sizes -> the policy scores the frame ->
-the appearance model learns from the bags around the new box (C++) -> the cues and the motion
-model learn. A preset is a composition plus values (:func:`compose`); one made of the appearance
-model alone runs the whole frame in one call to the core.
+One frame walks one way, through one list of stages (:attr:`Tracker.stages`), each taking the
+frame's immutable record (:class:`~wmiltrack.engine.state.FrameState`) and returning the next:
+locate (the motion model's origin, the cues' maps, the appearance model's coarse and fine
+candidate scoring in C++) -> rescale (the scale estimator) -> score (the confidence, the policy's
+reported score) -> recover (a lost target looked for over the whole frame) -> judge (the
+verdict: tracked, doubtful, lost or found, and what learns) -> learn (the appearance model's
+bags in C++, the cues, the scale estimator, the recovery part) -> follow (the motion model).
+A tracked target's frame, a lost target's frame and a paper preset's frame take the same
+stages; a preset made of the appearance model alone locates and learns in one core call. A
+preset is a composition plus values (:func:`compose`).
 """
 
 from __future__ import annotations
@@ -22,27 +26,34 @@ import numpy as np
 
 from .. import _core
 from . import copying as _copying  # noqa: F401 (installs deepcopy for the core's objects)
-from .appearance import HaarAppearance, roi_around
+from .appearance import HaarAppearance
 from .colour import ColourModel
 from .cues import ColourCue, Cue, check_cue_weights
 from .experts import TwoExperts
-from .features import min_box_size
 from .frames import IntBox, as_frame, clip_box, frame_size
-from .judge import LostJudge
+from .geometry import roi_around
+from .judge import NO_EVIDENCE, Evidence, FrameJudge
 from .motion import VelocityMotion
 from .params import Params
-from .parts import PART_KINDS, Judge, MotionModel, PartFactory, Recovery, ScaleEstimator
-from .policy import ContrastScore, UpdatePolicy, confidence
+from .parts import (
+    PART_KINDS,
+    PART_SETTINGS,
+    Judge,
+    MotionModel,
+    PartFactory,
+    Recovery,
+    ScaleEstimator,
+    ScorePolicy,
+)
+from .policy import ContrastScore, ReportedScore, confidence
 from .recovery import Redetector
 from .requests import Search, Steps, drive, run_batches
 from .result import TrackResult
-from .scale import HaarScale
+from .scale import DSSTScale, HaarScale
 from .settings import (
     AppearanceSettings,
     ColourSettings,
     ExpertSettings,
-    FeatureSettings,
-    FilterLearning,
     JudgeSettings,
     MotionSettings,
     RecoverySettings,
@@ -51,10 +62,16 @@ from .settings import (
     TemplateSettings,
     own,
 )
-from .template import CorrelationTemplate, DSSTScale, dsst_min_side
+from .state import FrameState, SearchStage, Verdict, new_frame
+from .template import CorrelationTemplate
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "compose", "confidence",
            "update_many"]
+
+
+#: The pixels of a record kept between frames: none (the tracker holds no frame).
+_NO_FRAME = np.zeros((0, 0), dtype=np.uint8)
+_NO_FRAME.setflags(write=False)
 
 
 class NotInitializedError(ValueError):
@@ -87,30 +104,27 @@ class Parts:
     cues: list[Cue]
     scale: ScaleEstimator | None
     motion: MotionModel | None
-    policy: UpdatePolicy
+    policy: ScorePolicy
+    judge: Judge
     recovery: Recovery | None = None
-    judge: Judge | None = None
-    template: CorrelationTemplate | None = None  # (the judge reads its first-frame filter)
+    template: CorrelationTemplate | None = None  # (its first-frame filter's peak: evidence)
     experts: TwoExperts | None = None  # a second expert and the judge between the two
 
     @property
     def appearance_only(self) -> bool:
-        """Whether nothing but the appearance model (and the paper's policy) makes up the
-        tracker, so that a frame can run as one core call."""
+        """Whether nothing but the appearance model (with the paper's score and a judge that
+        lets every frame learn) makes up the tracker, so that a frame can run as one core
+        call."""
         return (not self.cues and self.scale is None and self.motion is None
-                and self.recovery is None and self.policy.plain and self.judge is None
+                and self.recovery is None and self.policy.plain
+                and isinstance(self.judge, FrameJudge) and self.judge.always_learns
                 and self.experts is None)
-
-    @property
-    def lost(self) -> bool:
-        """Whether the recovery part holds the target for lost (never without one)."""
-        return self.recovery is not None and self.recovery.lost
 
     def others(self) -> list[Any]:
         """The parts besides the appearance model and the policy, each once (a correlation
         template may be both a cue and the motion model), in the order they start."""
         out: list[Any] = []
-        for part in (*self.cues, self.motion, self.scale, self.recovery):
+        for part in (*self.cues, self.motion, self.scale, self.recovery, self.judge):
             if part is not None and not any(part is seen for seen in out):
                 out.append(part)
         return out
@@ -119,12 +133,14 @@ class Parts:
 def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
             cues: Sequence[Cue] = (), parts: Mapping[str, PartFactory] | None = None) -> Parts:
     """The parts that ``params`` asks for, for a tracker started on ``frame`` at ``box``, with
-    ``cues`` added after the preset's own and each kind of part in ``parts`` (``"scale"``,
-    ``"motion"``, ``"recovery"``: a factory, see :data:`~wmiltrack.engine.parts.PartFactory`)
-    made by its factory instead of from ``params``. The appearance model is created but not
-    started."""
-    appearance = HaarAppearance(own(AppearanceSettings, params), seed, variant=params.variant)
-    learning = FilterLearning.of(own(TemplateSettings, params))  # the filters' one rule
+    ``cues`` added after the preset's own and each kind of part in ``parts`` (a factory, see
+    :data:`~wmiltrack.engine.parts.PartFactory`) made by its factory, from its own settings,
+    instead of from ``params``. The appearance model is created but not started."""
+    parts = parts or {}
+    if "appearance" in parts:
+        appearance = _made(parts, "appearance", params, frame, box, None, seed=seed)
+    else:
+        appearance = HaarAppearance(own(AppearanceSettings, params), seed, variant=params.variant)
     all_cues: list[Cue] = []
     colour: ColourCue | None = None
     if ColourCue.wanted(own(ColourSettings, params), frame):
@@ -132,21 +148,10 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
         all_cues.append(colour)
     template = None
     if params.template_weight > 0 or params.template_motion:
-        template = CorrelationTemplate(own(TemplateSettings, params),
-                                       remembers=params.judge_memory > 0)
+        template = CorrelationTemplate(own(TemplateSettings, params))
         if params.template_weight > 0:
             all_cues.append(template)
     all_cues.extend(cues)
-    fw, fh = frame_size(frame)
-    scale: ScaleEstimator | None = None
-    if params.scale_steps > 0:
-        if params.scale_model == "dsst":
-            scale = DSSTScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
-                              min_side=dsst_min_side(params.min_box_size), learning=learning)
-        else:
-            scale = HaarScale(own(ScaleSettings, params), (box[2], box[3]), (fw, fh),
-                              min_box=min_box_size(own(FeatureSettings, params)),
-                              num_features=params.num_features, learning=learning)
     motion: MotionModel | None = None
     if params.template_motion:
         motion = template
@@ -158,30 +163,43 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
                                colour.model if colour is not None else None, None)
     recovery: Recovery | None = (Redetector(own(RecoverySettings, params)) if params.redetect
                                  else None)
-    judge = (LostJudge(own(JudgeSettings, params), threshold=params.lost_threshold)
-             if params.judge_memory > 0 else None)
-    if parts:
-        scale = _made(parts, "scale", params, frame, box, scale)
-        motion = _made(parts, "motion", params, frame, box, motion)
-        recovery = _made(parts, "recovery", params, frame, box, recovery)
-    experts = TwoExperts(own(ExpertSettings, params)) if params.network else None
-    return Parts(appearance, all_cues, scale, motion,
-                 UpdatePolicy(own(ScoreSettings, params), report), recovery, judge, template,
-                 experts)
+    return Parts(appearance, all_cues,
+                 _made(parts, "scale", params, frame, box, _scale_part(params, frame, box)),
+                 _made(parts, "motion", params, frame, box, motion),
+                 _made(parts, "policy", params, frame, box,
+                       ReportedScore(own(ScoreSettings, params), report)),
+                 _made(parts, "judge", params, frame, box, FrameJudge(own(JudgeSettings, params))),
+                 _made(parts, "recovery", params, frame, box, recovery), template,
+                 TwoExperts(own(ExpertSettings, params)) if params.network else None)
+
+
+def _scale_part(params: Params, frame: np.ndarray, box: IntBox) -> ScaleEstimator | None:
+    """The scale estimator ``params`` asks for (None without scale search)."""
+    if params.scale_steps <= 0:
+        return None
+    kind = DSSTScale if params.scale_model == "dsst" else HaarScale
+    return kind(own(ScaleSettings, params), (box[2], box[3]), frame_size(frame))
 
 
 def _made(parts: Mapping[str, PartFactory], kind: str, params: Params, frame: np.ndarray,
-          box: IntBox, default: Any) -> Any:
-    """The part of ``kind`` made by the user's factory in ``parts`` (checked against the kind's
-    interface), else ``default``, the one ``params`` asks for."""
+          box: IntBox, default: Any, **more: Any) -> Any:
+    """The part of ``kind`` made by the user's factory in ``parts`` from the kind's own
+    settings (checked against the kind's interface), else ``default``, the one ``params``
+    asks for."""
     if kind not in parts:
         return default
-    part = parts[kind](params, frame, box)
+    part = parts[kind](own(PART_SETTINGS[kind], params), frame, box, **more)
+    if part is None and kind in _REQUIRED:
+        raise TypeError(f"the {kind} part's factory returned None: a tracker needs one")
     if part is not None and not isinstance(part, PART_KINDS[kind]):
         missing = [m for m in _members(PART_KINDS[kind]) if not hasattr(part, m)]
-        raise TypeError(f"the {kind} part {part!r} lacks {', '.join(missing)} (see "
-                        f"wmiltrack.engine.parts.{PART_KINDS[kind].__name__})")
+        raise TypeError(f"the {kind} part {part!r} lacks {', '.join(missing) or 'the class'} "
+                        f"(see wmiltrack.engine.parts.PART_KINDS[{kind!r}])")
     return part
+
+
+#: The kinds of part every tracker has (a factory may not leave them out).
+_REQUIRED = ("appearance", "policy", "judge")
 
 
 def _members(protocol: type[Any]) -> list[str]:
@@ -236,12 +254,14 @@ class Tracker:
         preset's own; their weights, ``colour_weight`` and ``template_weight`` add up to at
         most 1 (:func:`~wmiltrack.engine.cues.check_cue_weights`).
     parts : mapping, optional
-        Parts of your own instead of the preset's: ``{"scale": factory, "motion": factory,
-        "recovery": factory}`` (any of the three), each factory called at :meth:`init` as
-        ``factory(params, frame, box)`` and returning an object with the kind's interface
-        (:mod:`wmiltrack.engine.parts`: ``ScaleEstimator``, ``MotionModel``, ``Recovery``), or
-        None for no part of that kind. A class whose ``__init__`` takes ``(params, frame,
-        box)`` is such a factory.
+        Parts of your own instead of the preset's, by kind: ``"appearance"``, ``"policy"``,
+        ``"judge"``, ``"scale"``, ``"motion"``, ``"recovery"``; each a factory called at
+        :meth:`init` as ``factory(settings, frame, box)`` with the kind's own settings
+        (:data:`~wmiltrack.engine.parts.PART_SETTINGS`; an appearance model's factory also
+        gets ``seed=``), returning an object with the kind's interface
+        (:data:`~wmiltrack.engine.parts.PART_KINDS`), or None for no scale estimator, motion
+        model or re-detection. A class whose ``__init__`` takes ``(settings, frame, box)`` is
+        such a factory.
     **overrides
         Any :class:`~wmiltrack.Params` field, e.g. ``num_selected=30``.
 
@@ -270,25 +290,25 @@ class Tracker:
             params = params.replace(**overrides)
         check_cue_weights(params.colour_weight, params.template_weight, cues)
         self._params = params
-        # the search's (radius, step) stages: the coarse grid, then the fine one if any
-        self._stages = [(params.coarse_radius, params.coarse_step)]
+        # the search's (radius, step) grids: the coarse one, then the fine one if any
+        self._grids = [(params.coarse_radius, params.coarse_step)]
         if params.fine_radius > 0:
-            self._stages.append((params.fine_radius, params.fine_step))
+            self._grids.append((params.fine_radius, params.fine_step))
         self._seed = int(seed)
         self._extra_cues = tuple(cues)
         self._part_factories = check_part_factories(parts)
         self._busy = threading.Lock()
         self._initialized = False
         self._frame_wh = (0, 0)
-        self._box: IntBox = (0, 0, 0, 0)
-        self._score = math.nan
-        self._search_log: list[tuple[IntBox, int, int]] = []
 
     # -- copies: copy.deepcopy(tracker) forks it ------------------------------------------
     def __getstate__(self) -> dict[str, Any]:
-        """Everything but the lock that keeps two threads out (a copy gets its own)."""
+        """Everything but the lock that keeps two threads out (a copy gets its own) and the last
+        frame's pixels."""
         state = self.__dict__.copy()
         del state["_busy"]
+        if "_last" in state:  # the last frame's pixels are not part of the tracker's state
+            state["_last"] = state["_last"].evolve(frame=_NO_FRAME, integral=None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -323,7 +343,7 @@ class Tracker:
         self._require_init()
         if self._parts.experts is not None:
             return self._parts.experts.box
-        x, y, w, h = self._box
+        x, y, w, h = self._last.box
         return float(x), float(y), float(w), float(h)
 
     @_one_thread_at_a_time
@@ -344,18 +364,17 @@ class Tracker:
         model.start(img, b)
         for part in parts.others():
             part.start(img, b)
-        if parts.policy.report is not None:
+        if isinstance(parts.policy, ReportedScore) and parts.policy.report is not None:
             _start_report(parts.policy.report, self._params, img, b)
         if parts.experts is not None:
             parts.experts.start(img, (float(b[0]), float(b[1]), float(b[2]), float(b[3])))
         self._parts = parts
         self._frame_wh = (fw, fh)
-        self._box = b
-        model.compute_integral(img, b, model.first.reach)
-        drive(self._learn_steps(model.first))
-        self._search_log = []
-        self._score = 1.0
-        self._ok = self._tracked = True
+        model.compute_integral(img, b, model.first_sampler.reach)
+        drive(self._learn_steps(model.first_sampler, b))
+        # the first frame's record: the given box, tracked with score 1
+        self._last = FrameState(_NO_FRAME, b, False, None, b, b, score=1.0,
+                                verdict=Verdict.TRACKED, ok=True, learns=True)
         self._fused = parts.appearance_only and model.can_fuse
         self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
@@ -367,7 +386,15 @@ class Tracker:
         image covers this rectangle clipped to the frame (what :class:`~wmiltrack.MultiTracker`
         needs to prepare one integral image for several targets)."""
         self._require_init()
-        return roi_around(self._origin(), self._margin())
+        box = self._last.box
+        return roi_around(self._origin(None, box), self._margin(box))
+
+    @property
+    def lost(self) -> bool:
+        """Whether the judge holds the target for lost after the last frame (the next
+        :meth:`update` looks for it again)."""
+        self._require_init()
+        return self._last.verdict is Verdict.LOST
 
     @property
     def uses_channels(self) -> bool:
@@ -424,13 +451,13 @@ class Tracker:
         """
         self._require_init()
         pos, neg = self._parts.appearance.corners()
-        scale = self._parts.scale
+        last = self._last
         return {
             "positive": pos.copy(),
             "negative": neg.copy(),
-            "search": list(self._search_log),
-            "scales": list(scale.tried) if scale is not None else [],
-            "box": self._box,
+            "search": list(last.searched),
+            "scales": list(last.tried),
+            "box": last.box,
         }
 
     @property
@@ -440,22 +467,32 @@ class Tracker:
         return self._parts.scale.scale if self._parts.scale is not None else 1.0
 
     def __repr__(self) -> str:
-        state = f"box={self._box}" if self._initialized else "not initialised"
+        state = f"box={self._last.box}" if self._initialized else "not initialised"
         return f"Tracker({self._params.variant!r}, seed={self._seed}, {state})"
 
     # -- one frame -------------------------------------------------------------------------
     def _update_steps(self, img: np.ndarray, integral: _core.IntegralImage | None) -> Steps:
         """:meth:`update` on a checked frame, as a generator of core requests (see
-        :data:`~wmiltrack.engine.requests.Steps`): a lost target's frame
-        (:meth:`_redetect_steps`) or a tracked one (:meth:`_tracked_steps`), then the one end
-        of a frame (:meth:`_report`)."""
+        :data:`~wmiltrack.engine.requests.Steps`): the frame's record
+        (:class:`~wmiltrack.engine.state.FrameState`) walks through :attr:`stages` in order,
+        each stage returning the next record (or a generator of core requests that returns
+        it); the last record is kept as the tracker's state and read out as the result. A
+        tracked target's frame, a lost target's and a paper preset's one-call frame take the
+        same stages; each stage reads from the record which of them it is on."""
         self._check_frame(img)
-        previous = self._box
-        if self._parts.lost:
-            self._score = yield from self._redetect_steps(img, previous)
-        else:
-            self._score = yield from self._tracked_steps(img, integral, previous)
-        result = self._report()
+        last = self._last
+        state = new_frame(img, last, integral)
+        model = self._parts.appearance
+        own_table = model.ii
+        try:
+            for stage in self.stages:
+                out = stage(self, state)
+                state = out if isinstance(out, FrameState) else (yield from out)
+        finally:
+            model.ii = own_table  # a shared integral image is only borrowed for the frame
+        self._last = state  # (copies and pickles leave its pixels out: __getstate__)
+        x, y, w, h = state.box
+        result = TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
         if self._parts.experts is not None:  # the second expert, and the judge of the two
             return self._parts.experts.step(img, result, self.recentre)
         return result
@@ -467,157 +504,141 @@ class Tracker:
         :meth:`init`, nothing is relearnt."""
         self._require_init()
         x, y, w, h = (float(v) for v in box)
-        _, _, bw, bh = self._box
+        last = self._last
+        _, _, bw, bh = last.box
         fw, fh = self._frame_wh
         nx = min(max(int(round(x + w / 2 - bw / 2)), 0), max(fw - bw, 0))
         ny = min(max(int(round(y + h / 2 - bh / 2)), 0), max(fh - bh, 0))
-        self._box = (nx, ny, bw, bh)
-        if self._parts.recovery is not None and self._parts.recovery.lost:
-            self._parts.recovery.lost, self._parts.recovery.frames_lost = False, 0
+        if last.verdict is Verdict.LOST:
+            last = last.evolve(verdict=Verdict.TRACKED, lost_for=0)
+        self._last = last.evolve(box=(nx, ny, bw, bh))
 
-    def _tracked_steps(self, img: np.ndarray, integral: _core.IntegralImage | None,
-                       previous: IntBox) -> Steps:
-        """A frame of a tracked target, stage by stage: locate (the motion model's origin, the
-        search with the cues merged), scale, judge, learn; returns the frame's score. A paper
-        preset (the appearance model alone, which reads luma only and has no other part to
-        consult) runs the locate and learn stages as one core call
-        (:meth:`~wmiltrack.engine.appearance.HaarAppearance.fused_request`), then the
-        verdict. ``integral``: a shared luma table of this frame, borrowed for the frame if it covers
-        the search."""
-        model = self._parts.appearance
-        origin = self._origin(img)
-        margin = self._margin()
-        own = model.ii
-        shared = integral is not None and model.covered_by(integral, roi_around(origin, margin),
-                                                           self._frame_wh)
+    def _locate(self, state: FrameState) -> Steps:
+        """Locate: the search with the cues merged, from the motion model's origin (a lost
+        target's frame: from the last confident box). A paper preset (the appearance model
+        alone, reading luma only, with no other part to consult) locates and learns in one
+        core call (:meth:`~wmiltrack.engine.appearance.HaarAppearance.fused_request`). The
+        frame's shared luma table (``integral``) is borrowed if it covers the search."""
+        if state.lost:
+            return (yield from self._search_at(state, state.previous, self._grids))
+        img, model = state.frame, self._parts.appearance
+        origin = self._origin(img, state.previous)
+        margin = self._margin(state.previous)
+        shared = state.integral is not None and model.covered_by(
+            state.integral, roi_around(origin, margin), self._frame_wh)
         if shared:
-            assert integral is not None
-            model.ii = integral
-        try:
-            search = self._search(img, origin, self._stages, margin, shared=shared)
-            if self._fused:  # locate and learn as one core call, then judge
-                answer = yield model.fused_request(search, origin)
-                raw = self._move(origin, self._stages, model.take_fused(answer))
-                score = confidence(raw, model.k, self._params.confidence_offset)
-                self._verdict(score, None)
-                return score
-            raw = self._move(origin, self._stages, (yield search))  # locate
-            raw = self._rescale(img, raw)                             # scale
-            conf = confidence(raw, model.k, self._params.confidence_offset)
-            score = self._parts.policy.score(conf, img, self._box)
-            if self._judge(img, conf, score, previous):               # judge
-                return 0.0  # (the score of a frame in the lost state)
-            yield from self._learn_all(img, score)                    # learn
-            if self._parts.motion is not None:
-                self._parts.motion.follow(previous, self._box, self._parts.policy.tracked(conf))
-            return score
-        finally:
-            model.ii = own  # a shared table is only borrowed for this frame
-
-    def _rescale(self, img: np.ndarray, raw: float) -> float:
-        """The scale stage: the scale estimator tries other sizes around the located box
-        (when the search found one); the raw score to report."""
-        scale = self._parts.scale
-        if scale is not None:
-            scale.tried = []
-            if math.isfinite(raw):
-                self._box, raw = scale.search(self._parts.appearance, img, self._box, raw,
-                                              self._contrast())
-        return raw
-
-    def _judge(self, img: np.ndarray, conf: float, score: float, previous: IntBox) -> bool:
-        """The judge stage: whether the frame counts as tracked (:meth:`_verdict`), and
-        whether it starts the lost state, by the recovery part (the box goes back to
-        ``previous``) or by the judge of ``ok`` with ``judge_holds`` (the box stays): then
-        True, the box is held and nothing learns."""
-        parts = self._parts
-        if parts.recovery is not None and parts.recovery.judge(conf, img, self._box,
-                                                               self._witnesses()):
-            self._hold(previous)  # the target is lost from this frame on
-            self._verdict(0.0, img)
-            return True
-        self._verdict(score, img)
-        judge = parts.judge
-        if (judge is not None and judge.lost and judge.turned and self._params.judge_holds
-                and parts.recovery is not None):
-            parts.recovery.lost, parts.recovery.frames_lost = True, 1  # look for it again
-            self._hold(self._box)
-            return True
-        return False
-
-    def _verdict(self, score: float, img: np.ndarray | None) -> None:
-        """Whether the frame ``img`` of this score counts as tracked: the policy's threshold,
-        or the judge's verdict (which keeps its own history). Once per frame, before
-        learning."""
-        parts = self._parts
-        if parts.judge is not None and parts.template is not None and img is not None:
-            self._tracked = parts.judge.verdict(score, parts.template.first_peak_on(img))
+            model.ii = state.integral  # (given back by _update_steps)
+        search = self._search(img, origin, self._grids, margin, shared=shared)
+        if self._fused:
+            results = model.take_fused((yield model.fused_request(search, origin)))
         else:
-            self._tracked = parts.policy.tracked(score)
+            results = yield search
+        box, raw, searched = _moved(origin, self._grids, results)
+        return state.evolve(origin=origin, box=box, raw=raw, searched=searched,
+                              learnt=self._fused)
 
-    def _report(self) -> TrackResult:
-        """The end of a frame: its result, the box, the score, and ``ok`` from its verdict and
-        the lost state."""
-        self._ok = self._tracked and not self._parts.lost
-        x, y, w, h = self._box
-        return TrackResult((float(x), float(y), float(w), float(h)), self._score, self._ok)
+    def _rescale(self, state: FrameState) -> FrameState:
+        """Rescale: the scale estimator tries other sizes around the located box (on a tracked
+        target's frame whose search found a candidate)."""
+        scale = self._parts.scale
+        if scale is None or state.lost or not math.isfinite(state.raw):
+            return state
+        box, raw = scale.search(self._parts.appearance, state.frame, state.box, state.raw,
+                                self._contrast())
+        return state.evolve(box=box, raw=raw, tried=tuple(scale.tried))
 
-    def _learn_all(self, img: np.ndarray, score: float) -> Steps:
-        """Every part learns from the frame at the current box (none while the judge, with
-        ``judge_gates``, holds the target for lost)."""
+    def _score(self, state: FrameState) -> FrameState:
+        """Score: the classifier's confidence at the box and the score to report (the
+        policy's)."""
+        conf = confidence(state.raw, self._parts.appearance.k, self._params.confidence_offset)
+        return state.evolve(conf=conf,
+                              score=self._parts.policy.score(conf, state.frame, state.box))
+
+    def _recover(self, state: FrameState) -> FrameState | Steps:
+        """Recover: on a lost target's frame where the judge does not see the target back at
+        the located box, the recovery part looks for it over the whole frame; where it
+        matches well enough the fine search places the box (``rescued``)."""
+        recovery = self._parts.recovery
+        if (not state.lost or recovery is None
+                or self._parts.judge.back(state, self._evidence(state))):
+            return state
+        found = recovery.find(state.frame, state.lost_for)
+        if found is None:
+            return state
+        return self._found_steps(state, found)
+
+    def _found_steps(self, state: FrameState, found: IntBox) -> Steps:
+        """The recover stage's search from the box the recovery part ``found``, then the
+        frame's score there."""
+        p = self._params
+        grids = [(p.fine_radius, p.fine_step)] if p.fine_radius > 0 else self._grids
+        state = yield from self._search_at(state, found, grids)
+        return self._score(state).evolve(rescued=True)
+
+    def _judge(self, state: FrameState) -> FrameState:
+        """Judge: the judge's verdict on the frame (:class:`~wmiltrack.engine.parts.Judge`),
+        from the record and the other parts' evidence; the count of frames lost."""
+        state = self._parts.judge.verdict(state, self._evidence(state))
+        if state.verdict is Verdict.LOST:
+            return state.evolve(lost_for=state.lost_for + 1)
+        return state.evolve(lost_for=0) if state.lost_for else state
+
+    def _evidence(self, state: FrameState) -> Evidence:
+        """What the judge weighs besides the record: the cues' own confidences, the
+        recovery's likeness of the box to the target, the first-frame filter's peak."""
         parts = self._parts
-        if parts.judge is not None and parts.judge.lost and self._params.judge_gates:
-            parts.appearance.skip_learning()
-            return
-        yield from self._learn_steps(parts.appearance.track)
+        if not parts.cues and parts.recovery is None and parts.template is None:
+            return NO_EVIDENCE
+        recovery, template = parts.recovery, parts.template
+        return Evidence(
+            self._witnesses(),
+            None if recovery is None else functools.partial(recovery.likeness, state.frame,
+                                                            state.box),
+            math.nan if template is None else template.first_peak_on(state.frame))
+
+    def _learn(self, state: FrameState) -> FrameState | Steps:
+        """Learn: every part learns from the frame at its box, if the judge lets it (the
+        appearance model of a one-call frame has learnt already)."""
+        if state.learnt:
+            return state
+        if not state.learns:
+            self._parts.appearance.skip_learning()
+            return state
+        return self._learn_all(state)
+
+    def _learn_all(self, state: FrameState) -> Steps:
+        """The learn stage's work: the appearance model (one core request), the cues and the
+        scale estimator (from frames of a high enough score) and the recovery part."""
+        parts, img, box = self._parts, state.frame, state.box
+        yield from self._learn_steps(parts.appearance.sampler, box)
         for cue in parts.cues:
-            if score >= getattr(cue, "learn_above", 0.0):
-                cue.learn(img, self._box)
-        if parts.scale is not None and score >= parts.scale.learn_above:
-            parts.scale.learn(img, self._box)
+            if state.score >= getattr(cue, "learn_above", 0.0):
+                cue.learn(img, box)
+        if parts.scale is not None and state.score >= parts.scale.learn_above:
+            parts.scale.learn(img, box)
         if parts.recovery is not None:
-            parts.recovery.learn(img, self._box)
+            parts.recovery.learn(img, box)
+        return state.evolve(learnt=True)
 
-    def _hold(self, box: IntBox) -> None:
-        """A lost frame: the box stays at ``box`` (the last confident one) and nothing
-        learns."""
-        self._box = box
-        self._parts.appearance.skip_learning()
-        if self._parts.motion is not None:
-            self._parts.motion.follow(box, box, False)
+    def _follow(self, state: FrameState) -> FrameState:
+        """Follow: the motion model sees the frame's move (a lost, found or held frame is no
+        move: the target stands at its box, not steady)."""
+        motion = self._parts.motion
+        if motion is not None:
+            if state.lost or state.verdict is Verdict.LOST:
+                motion.follow(state.box, state.box, False)
+            else:
+                motion.follow(state.previous, state.box, state.steady)
+        return state
 
-    def _redetect_steps(self, img: np.ndarray, previous: IntBox) -> Steps:
-        """A frame of the lost state. First the usual search around the last confident box
-        (the classifier with every cue): if its confidence is back, tracking resumes there.
-        Else the whole frame is searched for the target's template
-        (:meth:`~wmiltrack.engine.recovery.Redetector.find`) and, where it matches well
-        enough, the fine search places the box. Either way every part then learns from the
-        box; if neither finds the target the last confident box is held and nothing learns.
-        Returns the frame's score (0 for a held frame)."""
-        parts, model, p = self._parts, self._parts.appearance, self._params
-        recovery = parts.recovery
-        assert recovery is not None
-        if parts.scale is not None:
-            parts.scale.tried = []
-        raw = yield from self._search_from(img, previous, self._stages)
-        conf = confidence(raw, model.k, p.confidence_offset)
-        if not recovery.back(conf, img, self._box):
-            found = recovery.find(img)
-            if found is None:
-                self._hold(previous)
-                self._verdict(0.0, img)
-                return 0.0
-            stages = [(p.fine_radius, p.fine_step)] if p.fine_radius > 0 else self._stages
-            raw = yield from self._search_from(img, found, stages)
-            conf = confidence(raw, model.k, p.confidence_offset)
-        score = parts.policy.score(conf, img, self._box)
-        self._verdict(score, img)
-        yield from self._learn_all(img, score)
-        if parts.motion is not None:  # a jump back is not a velocity
-            parts.motion.follow(self._box, self._box, False)
-        return score
+    #: The stages every frame walks through, in order: each takes the tracker and the frame's
+    #: record and returns the next record, or a generator of core requests that returns it
+    #: (:meth:`_update_steps`). A stage of one's own goes into an instance's or a subclass's
+    #: copy of this tuple.
+    stages: tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...] = (
+        _locate, _rescale, _score, _recover, _judge, _learn, _follow)
 
-    def _witnesses(self) -> list[float]:
+    def _witnesses(self) -> tuple[float, ...]:
         """The cues' own confidences of this frame (those that give one; see
         :class:`~wmiltrack.engine.cues.Cue`)."""
         out = []
@@ -625,15 +646,15 @@ class Tracker:
             value = getattr(cue, "confidence", math.nan)
             if math.isfinite(value):
                 out.append(float(value))
-        return out
+        return tuple(out)
 
-    def _search_from(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]]
-                     ) -> Steps:
-        """The classifier's search from ``origin`` over ``stages`` with every cue merged (its
-        own integral image); moves the box and returns the raw score (see :meth:`_move`)."""
-        search = self._search(img, origin, stages, self._margin())
-        raw: float = self._move(origin, stages, (yield search))
-        return raw
+    def _search_at(self, state: FrameState, origin: IntBox, grids: list[tuple[int, int]]
+                   ) -> Steps:
+        """The classifier's search from ``origin`` over ``grids`` with every cue merged (its
+        own integral image): the record with the box moved (see :func:`_moved`)."""
+        search = self._search(state.frame, origin, grids, self._margin(state.box))
+        box, raw, searched = _moved(origin, grids, (yield search))
+        return state.evolve(origin=origin, box=box, raw=raw, searched=searched)
 
     def _search(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]],
                 margin: int, *, shared: bool = False) -> Search:
@@ -646,18 +667,18 @@ class Tracker:
         return model.search_request(origin, stages, self._frame_wh, frame, roi,
                                     self._cue_tables(img, origin))
 
-    def _origin(self, frame: np.ndarray | None = None) -> IntBox:
-        """Where the search on ``frame`` is centred (without the frame: the motion model's
-        guess before seeing it)."""
+    def _origin(self, frame: np.ndarray | None, box: IntBox) -> IntBox:
+        """Where the search on ``frame`` is centred for a target last at ``box`` (without the
+        frame: the motion model's guess before seeing it)."""
         motion = self._parts.motion
-        return self._box if motion is None else motion.origin(self._box, frame)
+        return box if motion is None else motion.origin(box, frame)
 
-    def _margin(self) -> int:
-        """The integral image's margin around the search origin."""
+    def _margin(self, box: IntBox) -> int:
+        """The integral image's margin around a search from ``box``."""
         scale = self._parts.scale
         if scale is None:
             return self._reach
-        return self._reach + scale.margin(self._box)
+        return self._reach + scale.margin(box)
 
     def _cue_tables(self, img: np.ndarray, origin: IntBox) -> tuple[Any, ...] | None:
         """The cues' merged table for the core's search from ``origin``, or None without
@@ -686,30 +707,14 @@ class Tracker:
                 return cue.contrast
         return None
 
-    def _move(self, origin: IntBox, stages: list[tuple[int, int]],
-              results: Sequence[tuple[int, int, float, int]]) -> float:
-        """Move the box from ``origin`` by a search's per-stage ``(dx, dy, score, n)``; the
-        raw score of the last stage that had candidates (-inf if none had)."""
-        best = -math.inf
-        self._box = origin
-        self._search_log = []
-        for (radius, step), (dx, dy, score, n) in zip(stages, results):
-            self._search_log.append((self._box, radius, step))
-            if n == 0:  # no candidate fitted in the frame: stay
-                continue
-            x, y, w, h = self._box
-            self._box = (x + dx, y + dy, w, h)
-            best = score
-        return best
-
-    def _learn_steps(self, sampler: Any) -> Steps:
-        """The appearance model's learning at the current box, with the scale estimator's
-        extras (wrong-scale negatives, its own target model)."""
+    def _learn_steps(self, sampler: Any, box: IntBox) -> Steps:
+        """The appearance model's learning at ``box``, with the scale estimator's extras
+        (wrong-scale negatives, its own target model)."""
         parts = self._parts
         extra, n_extra, second = (None, 0, None)
         if parts.scale is not None:
-            extra, n_extra, second = parts.scale.learning_extras(parts.appearance, self._box)
-        learnt = yield from parts.appearance.learn_steps(self._box, self._frame_wh, sampler, extra,
+            extra, n_extra, second = parts.scale.learning_extras(parts.appearance, box)
+        learnt = yield from parts.appearance.learn_steps(box, self._frame_wh, sampler, extra,
                                                          n_extra, second)
         if parts.scale is not None:
             parts.scale.take_learnt(learnt, len(parts.appearance.corners()[0]))
@@ -725,6 +730,24 @@ class Tracker:
     def _require_init(self) -> None:
         if not self._initialized:
             raise NotInitializedError("call init(frame, box) before update(frame)")
+
+
+def _moved(origin: IntBox, grids: list[tuple[int, int]],
+           results: Sequence[tuple[int, int, float, int]]
+           ) -> tuple[IntBox, float, tuple[SearchStage, ...]]:
+    """The box moved from ``origin`` by a search's per-grid ``(dx, dy, score, n)``, the raw
+    score of the last grid that had candidates (-inf if none had), and each grid's start."""
+    best = -math.inf
+    box = origin
+    searched = []
+    for (radius, step), (dx, dy, score, n) in zip(grids, results):
+        searched.append((box, radius, step))
+        if n == 0:  # no candidate fitted in the frame: stay
+            continue
+        x, y, w, h = box
+        box = (x + dx, y + dy, w, h)
+        best = score
+    return box, best, tuple(searched)
 
 
 def update_many(trackers: list[Tracker], frame: np.ndarray, *,

@@ -1,4 +1,6 @@
-"""Drop-in replacements shaped like OpenCV's tracker classes.
+"""wmiltrack's trackers in OpenCV's shape: drop-in replacements for OpenCV's tracker classes
+(the other way round from :class:`wmiltrack.trackers.OpenCVTracker`, which puts OpenCV's
+trackers behind wmiltrack's interface).
 
 Code written for ``cv2.TrackerMIL`` runs unchanged with one of these::
 
