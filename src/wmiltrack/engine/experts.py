@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from enum import Enum
 from pathlib import Path
 
 import numpy as np
@@ -31,19 +30,11 @@ import numpy as np
 from .result import TrackResult
 from .settings import ExpertSettings
 from .siamese import INSTANCE, NANO_VERSIONS, SiameseLocator, as_bgr, context_side, load_network
+from .state import Verdict
 
 __all__ = ["ExpertJudge", "TwoExperts", "Verdict"]
 
 FloatBox = tuple[float, float, float, float]
-
-
-class Verdict(Enum):
-    """The judge's word on one frame."""
-
-    TRACKED = "tracked"    # the target is where the box is
-    DOUBTFUL = "doubtful"  # a frame against it, not yet enough to call it lost
-    LOST = "lost"          # hidden, gone, or somewhere the experts are not looking
-    FOUND = "found"        # lost until now, and the likeliest place has been alike enough
 
 
 class ExpertJudge:
