@@ -464,6 +464,37 @@ def _score_and_write(
     env = environment(settings["cv_threads"])
     missing = settings["missing"]
     title = caption(env, {**settings, "missing": missing if protocol == "ope" else None})
+    scored, table, got10k = _score(runs, gts, protocol, settings, repeats, timed, notes, ds, title)
+    if notes:
+        table += "\nNotes:\n" + "".join(f"- {n}\n" for n in notes)
+    if want_plots:
+        write = write_longterm_plots if protocol == "longterm" else write_plots
+        files.update(write(scored, out, len(gts)))
+    table_path = out / f"eval_{protocol}.md"
+    table_path.write_text(table, encoding="utf-8")
+    files["table"] = str(table_path)
+    files["json"] = str(out / f"eval_{protocol}.json")
+    return {
+        "protocol": protocol,
+        "sequences": list(gts),
+        "repeats": repeats,
+        "settings": settings,
+        "caption": title,
+        "environment": env,
+        "notes": notes,
+        "summary": scored["summary"],
+        "results": scored["results"],
+        "got10k": got10k,
+        "files": files,
+    }
+
+
+def _score(runs: Sequence[RunOutcome], gts: dict[str, FloatArray], protocol: Protocol,
+           settings: dict[str, Any], repeats: int, timed: bool, notes: list[str], ds: _Dataset,
+           title: str) -> tuple[dict[str, Any], str, dict[str, Any] | None]:
+    """The protocol's scores, its table (without the notes; the notes it adds go to ``notes``)
+    and, for GOT-10k, its own section's figures."""
+    missing = settings["missing"]
     got10k: dict[str, Any] | None = None
     if protocol == "ope":
         fail = [n for n in gts if ds.metas[n].get("absent_policy") == "fail"]
@@ -490,28 +521,7 @@ def _score_and_write(
     else:
         scored = score_vot(runs, reference=REFERENCE)
         table = format_vot_table(scored, repeats, settings["skip"], settings["burnin"], title=title)
-    if notes:
-        table += "\nNotes:\n" + "".join(f"- {n}\n" for n in notes)
-    if want_plots:
-        write = write_longterm_plots if protocol == "longterm" else write_plots
-        files.update(write(scored, out, len(gts)))
-    table_path = out / f"eval_{protocol}.md"
-    table_path.write_text(table, encoding="utf-8")
-    files["table"] = str(table_path)
-    files["json"] = str(out / f"eval_{protocol}.json")
-    return {
-        "protocol": protocol,
-        "sequences": list(gts),
-        "repeats": repeats,
-        "settings": settings,
-        "caption": title,
-        "environment": env,
-        "notes": notes,
-        "summary": scored["summary"],
-        "results": scored["results"],
-        "got10k": got10k,
-        "files": files,
-    }
+    return scored, table, got10k
 
 
 class EvalArgumentError(ValueError):
