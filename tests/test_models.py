@@ -8,9 +8,8 @@ without it, failing under ``CI``). No test contacts any host but 127.0.0.1.
 
 from __future__ import annotations
 
-import functools
-
 import dataclasses
+import functools
 import hashlib
 import http.server
 import os

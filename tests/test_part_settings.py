@@ -59,7 +59,7 @@ COMPOSER_READS = {
     "variant", "coarse_radius", "coarse_step", "fine_radius", "fine_step", "colour_weight",
     "template_weight", "template_motion", "motion", "scale_steps", "scale_model", "redetect",
     "score_colour", "score_luma", "score_colour_model", "colour_sample", "confidence_offset",
-    "colour_relative", "stage_reach", "judge_memory",
+    "colour_relative", "stage_reach", "judge_memory", "network",
 }
 
 SETTINGS = {*PARTS, AppearanceSettings, Params}
@@ -139,7 +139,8 @@ def test_each_part_reads_only_its_own_settings(
         held = [k for k, v in vars(part).items() if isinstance(v, Params)]
         assert not held, f"{type(part).__name__} holds the whole Params in {held}"
     # no part can call back into the tracker: none holds it or one of its bound methods
-    for part in (*parts.others(), parts.policy, parts.appearance):
+    experts = [parts.experts] if parts.experts is not None else []
+    for part in (*parts.others(), parts.policy, parts.appearance, *experts):
         back = [k for k, v in vars(part).items()
                 if v is t or getattr(v, "__self__", None) is t]
         assert not back, f"{type(part).__name__} holds the tracker in {back}"

@@ -293,7 +293,7 @@ class SiameseLocator:
         """``exp(-k (r s - 1))``: the change of context size ``s`` and aspect ratio ``r``
         from the current size ``(w, h)`` (in crop pixels), each as max(x, 1/x)."""
         bw, bh = np.maximum(boxes[2], 1e-6), np.maximum(boxes[3], 1e-6)
-        s = _sz(bw, bh) / _sz(np.float64(w), np.float64(h))
+        s = _sz(bw, bh) / _sz(np.asarray(w), np.asarray(h))
         r = (w / h) / (bw / bh)
         change = np.maximum(s, 1 / s) * np.maximum(r, 1 / r)
         out: np.ndarray = np.exp(-(change - 1) * self.constants.penalty_k)
@@ -353,7 +353,8 @@ class NanoTracker:
         from .frames import as_frame, clip_box
 
         img = as_bgr(as_frame(frame))
-        self._locator.start(img, tuple(float(v) for v in clip_box(box, img.shape[1], img.shape[0])))
+        x, y, w, h = clip_box(box, img.shape[1], img.shape[0])
+        self._locator.start(img, (float(x), float(y), float(w), float(h)))
 
     def update(self, frame: np.ndarray) -> Any:
         """One tracking step: the new box and the network's score."""
