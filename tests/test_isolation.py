@@ -207,7 +207,11 @@ def test_core_call_releases_the_gil(name: str) -> None:
 
 
 def test_gil_probe_sees_a_call_that_holds_the_gil() -> None:
-    """Control: one C call that keeps the GIL (builtin ``sum`` over a range) scores near 0."""
-    ratio, elapsed = _relative_progress(lambda: sum(range(3_000_000)))
-    assert elapsed > 0.01
-    assert ratio < 0.25
+    """Control: one C call that keeps the GIL (builtin ``sum`` over a range) scores near 0.
+    The probe keeps the best of three tries (what a releasing call needs); on a loaded machine
+    the sleep it is compared with runs slower too, so one try of the control can score high by
+    chance: the control keeps the lowest of three probes, which a call that released the GIL
+    would still fail."""
+    runs = [_relative_progress(lambda: sum(range(3_000_000))) for _ in range(3)]
+    assert all(elapsed > 0.01 for _, elapsed in runs)
+    assert min(ratio for ratio, _ in runs) < 0.25
