@@ -14,7 +14,7 @@
 #   python    build the extension modules (_core and the Cython _learn) with ASan + UBSan in
 #             build/sanitize-py, copy them next to a copy of the Python sources, and run a short
 #             tracking run of every variant (plus the awkward geometries and frame layouts of
-#             tests/test_reliability.py) with libasan preloaded into the interpreter
+#             tests/engine/test_reliability.py) with libasan preloaded into the interpreter
 #             (LD_PRELOAD, ASAN_OPTIONS=detect_leaks=0: CPython's own allocations are not
 #             leaks). The run imports the sanitized modules, never the installed ones.
 #
@@ -116,7 +116,7 @@ run_tsan() {
   local py_exe
   py_exe=$("$PY" -c "import sys; print(sys.executable)")
   LD_PRELOAD="$libtsan" TSAN_OPTIONS="halt_on_error=1:abort_on_error=0:report_signal_unsafe=0" \
-    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests" "${run[@]}" "$py_exe" - <<'PYEOF'
+    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests/core" "${run[@]}" "$py_exe" - <<'PYEOF'
 import os, sys
 sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__module__.lower()]
 sys.path.insert(0, os.environ["WMILTRACK_SANITIZED_SITE"])
@@ -165,7 +165,7 @@ run_python() {
   [ -f "$libasan" ] || { echo "libasan.so not found ($libasan)" >&2; return 1; }
   # detect_leaks=0: the interpreter's own allocations are not ours to report.
   LD_PRELOAD="$libasan" ASAN_OPTIONS="detect_leaks=0:halt_on_error=1:abort_on_error=0" \
-    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests" "$PY" - <<'PYEOF'
+    WMILTRACK_SANITIZED_SITE="$ROOT/$site" WMILTRACK_TESTS="$ROOT/tests/engine" "$PY" - <<'PYEOF'
 import os, sys, time
 # Import the sanitized copy, never the installed package (an editable install's finder
 # would otherwise win over sys.path).

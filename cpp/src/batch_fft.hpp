@@ -342,7 +342,7 @@ WMILTRACK_KERNEL void fft_run_body(const FftPlan& plan, ConstLanes in, Lanes out
 #ifdef WMILTRACK_AVX2_COPIES
 // The transforms compiled for AVX2 (8 lanes a step): the same IEEE operations in the same order
 // (no fused multiply-add), so the same bits as the baseline copy. Named *_avx2 for the
-// portable-build test (tests/test_core_hardening.py); run only where vmath::avx2().
+// portable-build test (tests/core/test_core_hardening.py); run only where vmath::avx2().
 __attribute__((target("avx2"))) inline void batch_fft_run_avx2(const FftPlan& plan,
                                                                ConstLanes in, Lanes out,
                                                                std::size_t lanes,

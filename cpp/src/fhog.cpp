@@ -310,7 +310,7 @@ constexpr int kCellStride = kBins + 1;
 
 // Orientation without std::atan2 (otherwise the costliest step): atan of the smaller over
 // the larger of |gx|, |gy| in [0, 1] by a degree-11 odd minimax polynomial (largest error
-// 1.7e-6 rad, checked against numpy in tests/test_correlation.py), then unfolded into the
+// 1.7e-6 rad, checked against numpy in tests/engine/test_correlation.py), then unfolded into the
 // octant of (gx, gy). For one pixel with gradient (dx, dy), whose cells start at offset cell
 // of a row's histograms (its second cell kCellStride later) with weight fx in the second: the
 // offset of its lower bin o0 in the first cell, and its votes, magnitude m split between o0
@@ -520,7 +520,7 @@ WMILTRACK_KERNEL void normalise_body(const float* __restrict hist, int cr, int c
 namespace detail {
 // The kernels above compiled for AVX2 (8 floats a step): the same IEEE operations in the same
 // order (no fused multiply-add), so the same bits as the baseline copies. Named *_avx2 for the
-// portable-build test (tests/test_core_hardening.py).
+// portable-build test (tests/core/test_core_hardening.py).
 __attribute__((target("avx2"))) void fhog_orient_row_avx2(const float* up, const float* mid,
                                                          const float* down, int cols,
                                                          const int* col_cell,

@@ -120,7 +120,7 @@ namespace base_lanes = lanes1;
 }  // namespace
 
 // The kernels, once per instruction set. Named (not file-local) so that a stripped module still
-// labels them: tests/test_core_hardening.py checks that AVX instructions appear only in the
+// labels them: tests/core/test_core_hardening.py checks that AVX instructions appear only in the
 // *_avx2 kernels, which run only on a CPU that has AVX2.
 namespace detail {
 #define WMILTRACK_VMATH_LOOPS(SUFFIX, ATTR, NS)                                                \

@@ -6,7 +6,7 @@
 // Why our own copies of numpy's draws: the core must not depend on numpy, and numpy exposes its
 // bit generators (bitgen_t: state and next_* functions) but not Generator.choice's algorithm.
 // choice_sorted() and bernoulli_first() reproduce what Generator.choice(n, k, replace=False)
-// and Generator.random(n) < p consume and return; tests/test_core_kernels.py checks them
+// and Generator.random(n) < p consume and return; tests/core/test_core_kernels.py checks them
 // against numpy (picks, flags and the generator's state afterwards).
 #pragma once
 

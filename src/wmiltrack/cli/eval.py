@@ -154,6 +154,16 @@ def add_eval(sub: Subparsers) -> None:
     )
     p.add_argument("--out", type=Path, required=True, help="output folder")
     add_executor_options(p, "the dataset")
+    _add_protocol_options(p)
+    _add_output_options(p)
+    add_model_options(p)
+    p.set_defaults(func=_cmd_eval)
+
+
+def _add_protocol_options(p: argparse.ArgumentParser) -> None:
+    """Add the options that say how the trackers are run and scored: repeats, the protocol,
+    the sequences, the seed and each protocol's own settings (kept apart from ``add_eval`` so
+    that each function reads as one group of the help text, in the same order)."""
     p.add_argument(
         "--repeats",
         type=int,
@@ -187,6 +197,11 @@ def add_eval(sub: Subparsers) -> None:
         "the OTB and got10k toolkits), or every frame a tracker reports lost is a miss (miss); "
         "either way the same rule for every tracker",
     )
+
+
+def _add_output_options(p: argparse.ArgumentParser) -> None:
+    """Add the options for the workers' threads, resuming, the plots and what is printed (the
+    last group of ``eval``'s help text, in the same order)."""
     p.add_argument(
         "--cv-threads",
         type=int,
@@ -204,5 +219,3 @@ def add_eval(sub: Subparsers) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="no progress bar, notes or list of files written: the table only")
-    add_model_options(p)
-    p.set_defaults(func=_cmd_eval)

@@ -713,6 +713,76 @@ def _as_config(config: EvalConfig | str | os.PathLike[str], out: str | os.PathLi
     return EvalConfig(config, out, **options)
 
 
+def _scored_truths(ds: _Dataset, notes: list[str]) -> tuple[dict[str, FloatArray], list[str]]:
+    """The ground truths that are scored, and the names of the sequences annotated on the first
+    frame only (run, their boxes written, but left to the benchmark's server to score; a note
+    says so)."""
+    first_only = [n for n in ds.gts if ds.metas[n].get("first_frame_only")]
+    gts = {n: g for n, g in ds.gts.items() if n not in first_only}
+    if first_only:
+        notes.append(
+            f"not scored: {len(first_only)} sequence(s) annotated on the first frame only "
+            "(the benchmark's server scores them); their boxes are written"
+        )
+    return gts, first_only
+
+
+@dataclass(frozen=True)
+class _Runs:
+    """What the run stage hands to scoring: the runs (scored sequences only), whether they were
+    timed, the trackers' names, the number of repeats, and how many runs were read back
+    (``--resume``) or failed on sequences that are not scored."""
+
+    runs: list[RunOutcome]
+    timed: bool
+    trackers: list[str]
+    repeats: int
+    n_resumed: int
+    unscored_errors: int
+
+
+def _obtain_runs(cfg: EvalConfig, ds: _Dataset, gts: dict[str, FloatArray], out: Path,
+                 notes: list[str], files: dict[str, str], say: Callable[[str], None]) -> _Runs:
+    """The run stage: read the box files of ``cfg.results`` (untimed), or run the usable
+    trackers on the executor, writing their boxes under ``out`` (recorded in ``files``)."""
+    if cfg.results is not None:
+        runs = read_results(Path(cfg.results), gts, notes)
+        names = list(dict.fromkeys(r.tracker for r in runs))
+        return _Runs(runs, False, names, 1 + max(r.repeat for r in runs), 0, 0)
+    specs = [t.strip() for t in cfg.trackers if t.strip()]
+    names = _check_trackers(specs, notes)
+    for n in notes:
+        say(n)
+    if not names:
+        raise ValueError("no tracker left to run")
+    protocol = cfg.protocol
+    box_root = out / {"ope": "boxes", "vot": "boxes_vot"}.get(protocol, f"boxes_{protocol}")
+    files["boxes"] = str(box_root)
+    ex = _executor(cfg.executor, cfg.jobs, cfg.cv_threads, cfg.scheduler, say)
+    runs, n_resumed, unscored_errors = _run_trackers(ds, names, cfg, ex, box_root, notes, say)
+    runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
+    return _Runs(runs, True, names, cfg.repeats, n_resumed, unscored_errors)
+
+
+def _settings(cfg: EvalConfig, n_resumed: int) -> dict[str, Any]:
+    """The settings recorded in the JSON document and the table's caption: how the runs were
+    made (or ``None`` where box files were read) and how they are scored."""
+    results = cfg.results
+    return {
+        "jobs": cfg.jobs,
+        "executor": None if results is not None else _executor_name(cfg.executor, cfg.jobs),
+        "resumed_runs": n_resumed,
+        "missing": cfg.missing,
+        "skip": cfg.skip,
+        "burnin": cfg.burnin,
+        "cv_threads": cfg.cv_threads,
+        "seeds": list(cfg.seeds) if results is None else None,
+        "success_thresholds": [float(t) for t in SUCCESS_THRESHOLDS],
+        "precision_thresholds": [float(t) for t in PRECISION_THRESHOLDS],
+        "std": "population (ddof=0) over repeats",
+    }
+
+
 def run_eval(config: EvalConfig | str | os.PathLike[str],
              out: str | os.PathLike[str] | None = None, **options: Any) -> dict[str, Any]:
     """Run (or read) and score trackers on a dataset; write the table, JSON, plots and boxes.
@@ -757,67 +827,25 @@ def run_eval(config: EvalConfig | str | os.PathLike[str],
     out_p = Path(cfg.out)
     ds = _open_dataset(dataset_p, cfg.layout, cfg.sequences)
     notes: list[str] = []
-    first_only = [n for n in ds.gts if ds.metas[n].get("first_frame_only")]
-    gts = {n: g for n, g in ds.gts.items() if n not in first_only}
-    if first_only:
-        notes.append(
-            f"not scored: {len(first_only)} sequence(s) annotated on the first frame only "
-            "(the benchmark's server scores them); their boxes are written"
-        )
-    seeds = cfg.seeds
+    gts, first_only = _scored_truths(ds, notes)
     t_start = time.perf_counter()
     files: dict[str, str] = {}
     out_p.mkdir(parents=True, exist_ok=True)
-
-    n_resumed = 0
-    unscored_errors = 0
-    if results is not None:
-        runs = read_results(Path(results), gts, notes)
-        timed = False
-        tracker_names = list(dict.fromkeys(r.tracker for r in runs))
-        n_repeats = 1 + max(r.repeat for r in runs)
-    else:
-        specs = [t.strip() for t in cfg.trackers if t.strip()]
-        tracker_names = _check_trackers(specs, notes)
-        for n in notes:
-            say(n)
-        if not tracker_names:
-            raise ValueError("no tracker left to run")
-        box_root = out_p / {"ope": "boxes", "vot": "boxes_vot"}.get(protocol, f"boxes_{protocol}")
-        files["boxes"] = str(box_root)
-        ex = _executor(cfg.executor, cfg.jobs, cfg.cv_threads, cfg.scheduler, say)
-        runs, n_resumed, unscored_errors = _run_trackers(ds, tracker_names, cfg, ex, box_root,
-                                                         notes, say)
-        runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
-        timed = True
-        n_repeats = cfg.repeats
+    got = _obtain_runs(cfg, ds, gts, out_p, notes, files, say)
     wall = time.perf_counter() - t_start
-
-    settings = {
-        "jobs": cfg.jobs,
-        "executor": None if results is not None else _executor_name(cfg.executor, cfg.jobs),
-        "resumed_runs": n_resumed,
-        "missing": cfg.missing,
-        "skip": cfg.skip,
-        "burnin": cfg.burnin,
-        "cv_threads": cfg.cv_threads,
-        "seeds": list(seeds) if results is None else None,
-        "success_thresholds": [float(t) for t in SUCCESS_THRESHOLDS],
-        "precision_thresholds": [float(t) for t in PRECISION_THRESHOLDS],
-        "std": "population (ddof=0) over repeats",
-    }
+    settings = _settings(cfg, got.n_resumed)
     source = "run" if results is None else f"results:{Path(results).resolve()}"
     doc = _score_and_write(
-        runs, gts, out_p, protocol, settings, n_repeats, timed, notes, want_plots and bool(gts),
-        files, ds,
+        got.runs, gts, out_p, protocol, settings, got.repeats, got.timed, notes,
+        want_plots and bool(gts), files, ds,
     )
     doc.update(
         dataset=str(dataset_p.resolve()),
         layout=ds.layout,
         unscored_sequences=first_only,
-        unscored_errors=unscored_errors,
-        trackers=tracker_names,
-        box_folders={t: safe_name(t) for t in tracker_names},
+        unscored_errors=got.unscored_errors,
+        trackers=got.trackers,
+        box_folders={t: safe_name(t) for t in got.trackers},
         seeds=settings["seeds"],
         source=source,
         wall_time=wall,

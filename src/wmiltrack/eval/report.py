@@ -406,12 +406,36 @@ def format_ope_table(
     ]
     if timed:
         headers += ["FPS", "FPS ratio", "Init ms"]
-    rows: list[list[str]] = []
     results = scored["results"]
+    rows = _ope_rows(results, repeats, timed, reference)
+    bold: list[list[str]] = []
+    for tracker, s in scored["summary"].items():
+        row = [f"mean ({s['n_sequences']} seq)", *_accuracy_cells(tracker, s, repeats)]
+        if timed:
+            row += [_f(s["fps"], ".1f"), _f(s["fps_ratio"], ".2f"), _ms(s["init_time"])]
+        bold.append(row)
+    notes = _ope_notes(timed, missing, reference)
+    notes += _run_notes(results, repeats, "(!) tracker errors (remaining frames scored as misses):")
+    head = [title, ""] if title else []
+    return "\n".join(head + _markdown(headers, rows, bold) + notes) + "\n"
+
+
+def _sequence_order(results: Mapping[str, Any]) -> list[str]:
+    """Every sequence any tracker ran, in the order first met (tracker by tracker), so that a
+    table's rows follow the dataset even when a tracker skipped some sequences."""
     seqs: list[str] = []
     for tr in results.values():
         seqs += [s for s in tr if s not in seqs]
-    for seq in seqs:
+    return seqs
+
+
+def _ope_rows(
+    results: Mapping[str, Any], repeats: int, timed: bool, reference: str
+) -> list[list[str]]:
+    """The OPE table's per-sequence rows, every tracker under each sequence; the FPS ratio
+    divides by ``reference``'s FPS on the same sequence (NaN where it did not run)."""
+    rows: list[list[str]] = []
+    for seq in _sequence_order(results):
         for tracker, tr in results.items():
             if seq not in tr:
                 continue
@@ -423,12 +447,12 @@ def format_ope_table(
                 ratio = float(m["fps"]) / base if base > 0 else math.nan
                 row += [_pm(m, "fps", ".1f", repeats), _f(ratio, ".2f"), _ms(m["init_time"])]
             rows.append(row)
-    bold: list[list[str]] = []
-    for tracker, s in scored["summary"].items():
-        row = [f"mean ({s['n_sequences']} seq)", *_accuracy_cells(tracker, s, repeats)]
-        if timed:
-            row += [_f(s["fps"], ".1f"), _f(s["fps_ratio"], ".2f"), _ms(s["init_time"])]
-        bold.append(row)
+    return rows
+
+
+def _ope_notes(timed: bool, missing: str, reference: str) -> list[str]:
+    """The OPE table's notes: what each figure means, the missing-box rule the boxes were
+    scored with and, for a timed table, how speed was measured."""
     rule = (
         "a frame where a tracker gave no box gets its last box (OTB/got10k toolkits)"
         if missing == "hold"
@@ -454,9 +478,7 @@ def format_ope_table(
             "run. Init ms: time of init(). With -j > 1 the processes share the cores, so "
             "speed is best measured with -j 1."
         )
-    notes += _run_notes(results, repeats, "(!) tracker errors (remaining frames scored as misses):")
-    head = [title, ""] if title else []
-    return "\n".join(head + _markdown(headers, rows, bold) + notes) + "\n"
+    return notes
 
 
 def _run_notes(results: Mapping[str, Any], repeats: int, error_title: str) -> list[str]:
@@ -514,11 +536,30 @@ def format_vot_table(
         "Init ms",
     ]
     results = scored["results"]
-    seqs: list[str] = []
-    for tr in results.values():
-        seqs += [s for s in tr if s not in seqs]
+    rows = _vot_rows(results, repeats)
+    bold = _vot_summary_rows(scored["summary"], repeats)
+    notes = [
+        "",
+        (
+            "VOT-style supervised protocol (VOT2015's rules on axis-aligned OTB boxes, so "
+            "not VOT's own numbers): failure = overlap 0 with the ground truth; the "
+            f"tracker is re-initialised {skip} frames later; accuracy = mean overlap leaving "
+            f"out the {burnin} frames from each (re)initialisation; robustness = "
+            "exp(-100 * failures / frames) (VOT2016 reliability). Summary rows: accuracy = "
+            "mean over sequences, failures = total (per sequence in brackets). FPS: "
+            "update-only, frames decoded before timing."
+        ),
+    ]
+    notes += _run_notes(results, repeats, "(!) tracker errors:")
+    head = [title, ""] if title else []
+    return "\n".join(head + _markdown(headers, rows, bold) + notes) + "\n"
+
+
+def _vot_rows(results: Mapping[str, Any], repeats: int) -> list[list[str]]:
+    """The VOT table's per-sequence rows, every tracker under each sequence, a tracker with
+    errors marked ``(!)``."""
     rows: list[list[str]] = []
-    for seq in seqs:
+    for seq in _sequence_order(results):
         for tracker, tr in results.items():
             if seq not in tr:
                 continue
@@ -535,8 +576,14 @@ def format_vot_table(
                     _ms(m["init_time"]),
                 ]
             )
+    return rows
+
+
+def _vot_summary_rows(summary: Mapping[str, Any], repeats: int) -> list[list[str]]:
+    """The VOT table's summary row per tracker: mean accuracy, total failures with the
+    failures per sequence in brackets, robustness and speed over the whole dataset."""
     bold: list[list[str]] = []
-    for tracker, s in scored["summary"].items():
+    for tracker, s in summary.items():
         fails = (
             _pm(s, "failures", ".1f", repeats)
             + " ("
@@ -555,21 +602,7 @@ def format_vot_table(
                 _ms(s["init_time"]),
             ]
         )
-    notes = [
-        "",
-        (
-            "VOT-style supervised protocol (VOT2015's rules on axis-aligned OTB boxes, so "
-            "not VOT's own numbers): failure = overlap 0 with the ground truth; the "
-            f"tracker is re-initialised {skip} frames later; accuracy = mean overlap leaving "
-            f"out the {burnin} frames from each (re)initialisation; robustness = "
-            "exp(-100 * failures / frames) (VOT2016 reliability). Summary rows: accuracy = "
-            "mean over sequences, failures = total (per sequence in brackets). FPS: "
-            "update-only, frames decoded before timing."
-        ),
-    ]
-    notes += _run_notes(results, repeats, "(!) tracker errors:")
-    head = [title, ""] if title else []
-    return "\n".join(head + _markdown(headers, rows, bold) + notes) + "\n"
+    return bold
 
 
 

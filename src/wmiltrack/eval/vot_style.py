@@ -171,70 +171,94 @@ def run_supervised(
     """
     g = as_boxes(gt, "gt")
     n = len(frames)
-    if g.shape[0] != n:
-        raise ValueError(f"{n} frames but {g.shape[0]} ground-truth rows")
-    if skip < 1:
-        raise ValueError(f"skip must be at least 1, got {skip}")
-    if burnin < 0:
-        raise ValueError(f"burnin must be non-negative, got {burnin}")
+    _check_supervised(g, n, skip, burnin)
     valid = valid_mask(g)
-
-    overlaps = np.full(n, np.nan)
-    boxes = np.full((n, 4), np.nan)
-    tracked = np.zeros(n, dtype=bool)
-    excluded = np.zeros(n, dtype=bool)
-    init_frames: list[int] = []
-    failure_frames: list[int] = []
-
+    trace = _Trace.empty(n)
     start = _next_valid(valid, 0)
     if start is None:
         raise ValueError("no frame has a valid ground-truth box to start from")
 
     while start is not None:
-        tracker = make_tracker()
-        x, y, w, h = (float(v) for v in g[start])
-        init_box = (x, y, w, h)
-        tracker.init(frames[start], init_box)
-        init_frames.append(start)
-        boxes[start] = g[start]
-        overlaps[start] = 1.0
-        tracked[start] = True
-        excluded[start : start + max(burnin, 1)] = True
-
-        failed_at: int | None = None
-        for f in range(start + 1, n):
-            box = np.asarray(tracker.update(frames[f]).box, dtype=np.float64)
-            boxes[f] = box
-            tracked[f] = True
-            if valid[f]:
-                ov = float(iou(box[None, :], g[f][None, :])[0])
-                overlaps[f] = ov
-                if ov <= 0.0:
-                    failed_at = f
-                    break
+        failed_at = _track_from(make_tracker(), frames, g, valid, start, burnin, trace)
         if failed_at is None:
             break
-        failure_frames.append(failed_at)
+        trace.failure_frames.append(failed_at)
         restart = failed_at + skip
         start = _next_valid(valid, restart) if restart < n else None
 
-    mask = tracked & valid & ~excluded
-    mask[failure_frames] = False
-    accuracy = float(np.mean(overlaps[mask])) if mask.any() else float("nan")
-    failures = len(failure_frames)
+    mask = trace.tracked & valid & ~trace.excluded
+    mask[trace.failure_frames] = False
+    accuracy = float(np.mean(trace.overlaps[mask])) if mask.any() else float("nan")
+    failures = len(trace.failure_frames)
     return SupervisedResult(
         accuracy=accuracy,
         failures=failures,
         robustness=float(math.exp(-sensitivity * failures / n)),
         failures_per_100=100.0 * failures / n,
         n_frames=n,
-        init_frames=init_frames,
-        failure_frames=failure_frames,
-        overlaps=overlaps,
-        boxes=boxes,
-        tracked=tracked,
+        init_frames=trace.init_frames,
+        failure_frames=trace.failure_frames,
+        overlaps=trace.overlaps,
+        boxes=trace.boxes,
+        tracked=trace.tracked,
         accuracy_mask=mask,
         skip=skip,
         burnin=burnin,
         sensitivity=sensitivity,
     )
+
+
+def _check_supervised(g: FloatArray, n: int, skip: int, burnin: int) -> None:
+    """Refuse ground truth of another length than the frames and settings the protocol cannot
+    follow, before any tracker runs."""
+    if g.shape[0] != n:
+        raise ValueError(f"{n} frames but {g.shape[0]} ground-truth rows")
+    if skip < 1:
+        raise ValueError(f"skip must be at least 1, got {skip}")
+    if burnin < 0:
+        raise ValueError(f"burnin must be non-negative, got {burnin}")
+
+
+@dataclass
+class _Trace:
+    """The per-frame record of one supervised run, filled as the tracker is (re)started:
+    overlaps, boxes, which frames were tracked and which are left out of the accuracy (the
+    burn-in after each start), and the frames of each start and failure."""
+
+    overlaps: FloatArray
+    boxes: FloatArray
+    tracked: BoolArray
+    excluded: BoolArray
+    init_frames: list[int] = field(default_factory=list)
+    failure_frames: list[int] = field(default_factory=list)
+
+    @classmethod
+    def empty(cls, n: int) -> _Trace:
+        """A record of ``n`` frames with nothing tracked yet (NaN overlaps and boxes)."""
+        return cls(np.full(n, np.nan), np.full((n, 4), np.nan), np.zeros(n, dtype=bool),
+                   np.zeros(n, dtype=bool))
+
+
+def _track_from(tracker: TrackerLike, frames: Sequence[npt.NDArray[np.uint8]], g: FloatArray,
+                valid: BoolArray, start: int, burnin: int, trace: _Trace) -> int | None:
+    """Start ``tracker`` on frame ``start`` from its ground truth and run it on, recording each
+    frame in ``trace``, until its box stops overlapping the ground truth: that frame, or
+    ``None`` when it reaches the end without failing."""
+    x, y, w, h = (float(v) for v in g[start])
+    init_box = (x, y, w, h)
+    tracker.init(frames[start], init_box)
+    trace.init_frames.append(start)
+    trace.boxes[start] = g[start]
+    trace.overlaps[start] = 1.0
+    trace.tracked[start] = True
+    trace.excluded[start : start + max(burnin, 1)] = True
+    for f in range(start + 1, len(frames)):
+        box = np.asarray(tracker.update(frames[f]).box, dtype=np.float64)
+        trace.boxes[f] = box
+        trace.tracked[f] = True
+        if valid[f]:
+            ov = float(iou(box[None, :], g[f][None, :])[0])
+            trace.overlaps[f] = ov
+            if ov <= 0.0:
+                return f
+    return None

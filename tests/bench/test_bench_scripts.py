@@ -12,14 +12,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from conftest import skip_or_fail, write_generated_otb
+from conftest import REPO_ROOT, skip_or_fail, write_generated_otb
 
 import wmiltrack
 from wmiltrack.cli import main
 from wmiltrack.data.synthetic import make_sequence
 from wmiltrack.trackers import parse_spec
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = REPO_ROOT
 BENCH = REPO / "benchmarks"
 
 

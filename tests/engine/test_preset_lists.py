@@ -5,14 +5,14 @@ docstrings (which point at the registry instead of listing names) and the docs' 
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import pytest
+from conftest import REPO_ROOT
 
 from wmiltrack.engine import params as params_module
 from wmiltrack.engine.params import VARIANTS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO_ROOT
 PRESET = re.compile(r"(?<![\w-])(" + "|".join(sorted(map(re.escape, VARIANTS), key=len, reverse=True))
                     + r")(?![\w-])")
 COMMANDS = ("track", "inspect", "eval", "demo")

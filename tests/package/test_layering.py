@@ -7,7 +7,9 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-PKG = Path(__file__).resolve().parent.parent / "src" / "wmiltrack"
+from conftest import REPO_ROOT
+
+PKG = REPO_ROOT / "src" / "wmiltrack"
 #: Files allowed to import the evaluation package, with the reason.
 ALLOWED = {
     "cli/eval.py": "the eval command itself",

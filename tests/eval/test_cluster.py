@@ -339,7 +339,7 @@ def test_resume_is_ope_only(otb: Path, tmp_path: Path, capsys: pytest.CaptureFix
 
 # ----------------------------------------------------------------------------- --layout
 def _build(root: Path, layout: str, n: int = 12, absent: tuple[int, ...] = ()) -> Any:
-    """One generated sequence written in a benchmark's layout (as tests/test_layouts.py's
+    """One generated sequence written in a benchmark's layout (as tests/data/test_layouts.py's
     end-to-end test does); ``absent`` frames are flagged absent (LaSOT out_of_view, GOT-10k
     absence.label).  Returns the sequence as the layout loader reads it."""
     from wmiltrack.data.layouts import load_layout

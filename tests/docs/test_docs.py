@@ -10,8 +10,9 @@ import re
 from pathlib import Path
 
 import pytest
+from conftest import REPO_ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = REPO_ROOT
 README = ROOT / "README.md"
 PERFORMANCE = ROOT / "docs" / "performance.md"
 

@@ -18,11 +18,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from conftest import REPO_ROOT
 
 from wmiltrack.data.boxes import write_boxes
 from wmiltrack.data.synthetic import make_preset
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+README = REPO_ROOT / "README.md"
 N_FRAMES = 40
 
 
