@@ -27,9 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .geometry import centre, overlap, within
 from .result import TrackResult
 from .settings import ExpertSettings
-from .siamese import INSTANCE, NANO_VERSIONS, SiameseLocator, as_bgr, context_side, load_network
+from .siamese import EXEMPLAR, INSTANCE, NANO_VERSIONS, SiameseLocator, as_bgr, context_side, load_network
 from .state import Verdict
 
 __all__ = ["ExpertJudge", "TwoExperts", "Verdict"]
@@ -114,22 +115,21 @@ class TwoExperts:
                                settings.network_threads)
         self.settings = settings
         self.locator = SiameseLocator(network, NANO_VERSIONS[version])
-        self.judge = ExpertJudge(settings)
-        self.box: FloatBox = (0.0, 0.0, 0.0, 0.0)
-        self._held: FloatBox = self.box
-        self._sweep: list[tuple[float, float]] = []
-        self._since = 0
-        self._score = 1.0
-        self._lost_for = 0
+        self._restart((0.0, 0.0, 0.0, 0.0))
 
     def start(self, frame: np.ndarray, box: FloatBox) -> None:
         """Take the network's template at ``box`` of the first frame."""
         self.locator.start(as_bgr(frame), box)
+        self._restart(box)
+
+    def _restart(self, box: FloatBox) -> None:
+        """The judge and the per-run state as on a first frame at ``box``."""
         self.judge = ExpertJudge(self.settings)
-        self.box = self._held = tuple(float(v) for v in box)  # type: ignore[assignment]
-        self._sweep = []
+        self.box: FloatBox = (float(box[0]), float(box[1]), float(box[2]), float(box[3]))
+        self._held: FloatBox = self.box  # the last tracked box: where the sweep starts
+        self._sweep: list[tuple[float, float]] = []  # the sweep's centres still to search
         self._since = 0  # vouched frames since the likeness was last measured
-        self._score = 1.0
+        self._score = 1.0  # the last measured confidence
         self._lost_for = 0  # frames in the lost state
 
     def step(self, frame: np.ndarray, tracker: TrackResult,
@@ -140,7 +140,7 @@ class TwoExperts:
         if self.judge.lost:
             return self._lost_step(img, tracker, recentre)
         found = self.locator.locate(img)
-        agree = _iou(found.box, tracker.box) >= self.settings.expert_agree
+        agree = overlap(found.box, tracker.box) >= self.settings.expert_agree
         vouched = agree and tracker.ok
         self._since += 1
         if not vouched or self._since >= self.settings.likeness_every:
@@ -150,7 +150,8 @@ class TwoExperts:
             self._score = self.judge.confidence(likeness)
         else:  # the experts vouch for the box: no need to ask the memory this frame
             verdict = self.judge.verdict(math.nan, vouched)
-        box = _inside(self._merge(found.box, tracker.box, agree, recentre, verdict), img)
+        box = within(self._merge(found.box, tracker.box, agree, recentre, verdict),
+                     img.shape[1], img.shape[0])
         if verdict is Verdict.TRACKED:
             self._held = box
         self.box = box
@@ -190,18 +191,18 @@ class TwoExperts:
             recentre(best.box)
             self._held = best.box
             self._sweep, self._lost_for = [], 0
-        self.box = _inside(best.box, img)
+        self.box = within(best.box, img.shape[1], img.shape[0])
         return TrackResult(self.box, self.judge.confidence(likeness), verdict is Verdict.FOUND)
 
     def _places(self, img: np.ndarray, tracker: FloatBox) -> list[tuple[float, float]]:
         """The centres this lost frame searches besides the network's own: the tracker's box,
         then the next ``redetect_windows`` of the whole-frame sweep."""
-        places = [_centre(tracker)]
+        places = [centre(tracker)]
         n = self.settings.redetect_windows
         if n <= 0 or self._lost_for < self.settings.redetect_after:
             return places
         if not self._sweep:
-            self._sweep = _sweep(img.shape[1], img.shape[0], self.locator.size, _centre(self._held))
+            self._sweep = _sweep(img.shape[1], img.shape[0], self.locator.size, centre(self._held))
         places += self._sweep[:n]
         self._sweep = self._sweep[n:]
         return places
@@ -211,36 +212,10 @@ def _sweep(fw: int, fh: int, size: tuple[float, float], near: tuple[float, float
            ) -> list[tuple[float, float]]:
     """Search-window centres covering a ``fw x fh`` frame for a target of ``size`` (windows
     0.8 of the network's reach apart), nearest to ``near`` first."""
-    reach = context_side(*size) * (INSTANCE / 127) * 0.44  # half the answer grid's span
+    reach = context_side(*size) * (INSTANCE / EXEMPLAR) * 0.44  # half the answer grid's span
     step = max(0.8 * 2 * reach, 8.0)
     xs = np.arange(step / 2, fw + step / 2, step).clip(0, fw)
     ys = np.arange(step / 2, fh + step / 2, step).clip(0, fh)
     centres = [(float(x), float(y)) for y in ys for x in xs]
     centres.sort(key=lambda c: (c[0] - near[0]) ** 2 + (c[1] - near[1]) ** 2)
     return centres
-
-
-def _inside(box: FloatBox, img: np.ndarray) -> FloatBox:
-    """``box`` cut to the frame (the network's step keeps the centre in the frame, not the
-    box), at least one pixel wide and high."""
-    fh, fw = img.shape[:2]
-    x, y, w, h = box
-    x0, y0 = min(max(x, 0.0), fw - 1.0), min(max(y, 0.0), fh - 1.0)
-    x1, y1 = min(max(x + w, x0 + 1.0), float(fw)), min(max(y + h, y0 + 1.0), float(fh))
-    return x0, y0, x1 - x0, y1 - y0
-
-
-def _centre(box: FloatBox) -> tuple[float, float]:
-    x, y, w, h = box
-    return x + w / 2, y + h / 2
-
-
-def _iou(a: FloatBox, b: FloatBox) -> float:
-    ax, ay, aw, ah = a
-    bx, by, bw, bh = b
-    iw = max(0.0, min(ax + aw, bx + bw) - max(ax, bx))
-    ih = max(0.0, min(ay + ah, by + bh) - max(ay, by))
-    inter = iw * ih
-    union = aw * ah + bw * bh - inter
-    return inter / union if union > 0 else 0.0
-

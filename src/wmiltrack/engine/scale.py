@@ -15,7 +15,7 @@ from .classifier import GaussianPool
 from .correlation import ScaleFilter, ScaleFilterSettings, SparseUpdates
 from .features import box_area_ok
 from .frames import IntBox
-from .geometry import centred
+from .geometry import centre, centred
 from .settings import FilterLearning, ScaleSettings
 
 if TYPE_CHECKING:
@@ -245,10 +245,6 @@ class HaarScale:
         return out
 
 
-def _centre(box: IntBox) -> tuple[float, float]:
-    return box[0] + box[2] / 2.0, box[1] + box[3] / 2.0
-
-
 def dsst_min_side(min_box_size: int) -> int:
     """The smallest side of a box DSST's scale filter gives, for the features' ``min_box_size``
     (:class:`~wmiltrack.engine.settings.FeatureSettings`)."""
@@ -299,7 +295,7 @@ class DSSTScale:
         p = self.settings
         if (box[2], box[3]) != self.given:  # another part sized the box (a re-detection)
             self.size = (float(box[2]), float(box[3]))
-        factor = self.estimator.estimate(frame, _centre(box), self.size).factor
+        factor = self.estimator.estimate(frame, centre(box), self.size).factor
         w, h = self.size[0] * factor, self.size[1] * factor
         s = math.sqrt(w * h / (self.base_wh[0] * self.base_wh[1]))
         s_ok = min(max(s, p.scale_min), p.scale_max)
@@ -330,5 +326,5 @@ class DSSTScale:
         """Fold in the scale samples around the frame's final box (every ``template_every``-th
         frame)."""
         if self.updates.due():
-            self.estimator.learn(frame, _centre(box), self.size,
+            self.estimator.learn(frame, centre(box), self.size,
                                  from_estimate=self.reuse)

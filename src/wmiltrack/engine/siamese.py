@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from .geometry import centre
+
 __all__ = ["NANO_VERSIONS", "NanoConstants", "NanoTracker", "NetworkRuntime", "SiameseLocator", "Located",
            "as_bgr", "context_side", "load_network", "make_dynamic"]
 
@@ -240,13 +242,12 @@ class SiameseLocator:
 
     def recentre(self, box: tuple[float, float, float, float]) -> None:
         """Move the state to ``box`` (the template is kept)."""
-        x, y, w, h = (float(v) for v in box)
-        self.centre, self.size = (x + w / 2, y + h / 2), (w, h)
+        self.centre, self.size = centre(box), (float(box[2]), float(box[3]))
 
     def locate(self, frame: np.ndarray) -> Located:
         """One tracking step on ``frame`` from the current state; the state follows."""
         found = self.search_at(frame, self.centre, self.size, window=True)
-        self.centre, self.size = _centre_of(found.box), (found.box[2], found.box[3])
+        self.centre, self.size = centre(found.box), (found.box[2], found.box[3])
         return found
 
     def search_at(self, frame: np.ndarray, centre: tuple[float, float],
@@ -304,8 +305,7 @@ class SiameseLocator:
         the cosine of their feature maps (1: the same appearance). A memory of the target that
         the network's own score is not: its best point scores close to 1 on almost every
         frame, on the target or not, while this falls when the crop holds something else."""
-        x, y, w, h = box
-        patch = crop(frame, x + w / 2, y + h / 2, context_side(w, h), EXEMPLAR,
+        patch = crop(frame, *centre(box), context_side(box[2], box[3]), EXEMPLAR,
                      self.fill)  # type: ignore[arg-type]
         return float(np.dot(_unit(self.network.features(patch)), self.first_embedding))
 
@@ -320,11 +320,6 @@ def _sz(w: np.ndarray, h: np.ndarray) -> np.ndarray:
     pad = (w + h) * 0.5
     out: np.ndarray = np.sqrt((w + pad) * (h + pad))
     return out
-
-
-def _centre_of(box: tuple[float, float, float, float]) -> tuple[float, float]:
-    x, y, w, h = box
-    return x + w / 2, y + h / 2
 
 
 class NanoTracker:

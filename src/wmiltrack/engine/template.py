@@ -17,17 +17,13 @@ import numpy as np
 
 from .correlation import CorrelationFilter, CorrelationSettings, Location, SparseUpdates
 from .frames import IntBox
-from .geometry import centred
+from .geometry import centre, centred
 from .settings import FilterLearning, TemplateSettings
 
 if TYPE_CHECKING:
     pass
 
 __all__ = ["CorrelationTemplate"]
-
-
-def _centre(box: IntBox) -> tuple[float, float]:
-    return box[0] + box[2] / 2.0, box[1] + box[3] / 2.0
 
 
 class CorrelationTemplate:
@@ -77,7 +73,7 @@ class CorrelationTemplate:
         the last box."""
         if frame is None:
             return box
-        loc = self.filter.locate(frame, _centre(box), (box[2], box[3]))
+        loc = self.filter.locate(frame, centre(box), (box[2], box[3]))
         self._searched = loc
         self._searched_frame = frame
         self.confidence = loc.peak
