@@ -145,3 +145,16 @@ def test_the_record_is_immutable_and_evolves_by_name() -> None:
     assert moved._replace(score=0.25) == state._replace(box=(2, 2, 3, 4), score=0.25)
     with pytest.raises(KeyError):
         state.evolve(boxx=(0, 0, 1, 1))
+
+
+def test_the_stage_records_equal_evolve_with_their_fields() -> None:
+    """``located``, ``scored`` and ``judged`` (the records every frame makes, built by
+    position for speed) set exactly their fields, as ``evolve`` by name does."""
+    values = {name: object() for name in FrameState._fields}  # every field told apart
+    state = FrameState(**values)
+    found = {"origin": (1, 2, 3, 4), "box": (5, 6, 3, 4), "raw": 0.25,
+             "searched": (((1, 2, 3, 4), 9, 2),), "learnt": True}
+    assert state.located(**found) == state.evolve(**found)
+    assert state.scored(0.5, 0.75) == state.evolve(conf=0.5, score=0.75)
+    assert state.judged(Verdict.DOUBTFUL, False, True, False) == state.evolve(
+        verdict=Verdict.DOUBTFUL, ok=False, learns=True, steady=False)

@@ -12,6 +12,7 @@ build and the search it runs."""
 from __future__ import annotations
 
 import dataclasses
+import enum
 import os
 import sys
 from typing import Any
@@ -54,12 +55,12 @@ OWNER = {
 }
 
 #: What the tracker itself reads: which parts to build, the search's grids and reach, the
-#: confidence's offset, how the cues' maps merge, and the reported score's first-frame models.
+#: confidence's offset and how the cues' maps merge.
 COMPOSER_READS = {
     "variant", "coarse_radius", "coarse_step", "fine_radius", "fine_step", "colour_weight",
     "template_weight", "template_motion", "motion", "scale_steps", "scale_model", "redetect",
-    "score_colour", "score_luma", "score_colour_model", "colour_sample", "confidence_offset",
-    "colour_relative", "stage_reach", "judge_memory", "network",
+    "score_colour", "score_luma", "confidence_offset", "colour_relative", "stage_reach",
+    "judge_memory", "network",
 }
 
 SETTINGS = {*PARTS, AppearanceSettings, Params}
@@ -144,6 +145,63 @@ def test_each_part_reads_only_its_own_settings(
         back = [k for k, v in vars(part).items()
                 if v is t or getattr(v, "__self__", None) is t]
         assert not back, f"{type(part).__name__} holds the tracker in {back}"
+    # and no part holds another part, or an object another part holds (its histograms, its
+    # filter): each part's state is its own
+    shared = _shared_objects(parts)
+    assert not shared, f"parts that hold the same object (part, part, attribute): {shared}"
+
+
+def _held(part: Any) -> dict[int, tuple[str, Any]]:
+    """The objects a part holds that can change (not numbers, strings, tuples, enums or frozen
+    settings), by identity: its attributes and theirs, one level down (a model's arrays)."""
+    out: dict[int, tuple[str, Any]] = {}
+    for name, value in vars(part).items():
+        for sub_name, sub in [(name, value), *((f"{name}.{k}", v) for k, v in
+                                               getattr(value, "__dict__", {}).items())]:
+            if sub is None or isinstance(sub, (int, float, str, bytes, tuple, frozenset,
+                                               type, enum.Enum)) or type(sub) in SETTINGS:
+                continue
+            if dataclasses.is_dataclass(sub) and type(sub).__dataclass_params__.frozen:  # type: ignore[attr-defined]
+                continue
+            out.setdefault(id(sub), (sub_name, sub))
+    return out
+
+
+def _shared_objects(parts: Any) -> list[tuple[str, str, str]]:
+    """(part, other part, what) for each object two parts hold, or a part that holds another."""
+    experts = [parts.experts] if parts.experts is not None else []
+    report = getattr(parts.policy, "report", None)
+    own: list[Any] = []
+    for part in (*parts.others(), parts.policy, *([report] if report is not None else []),
+                 parts.appearance, *experts):
+        if not any(part is seen for seen in own):
+            own.append(part)
+    found = []
+    held = [_held(p) for p in own]
+    for i, a in enumerate(own):
+        for j, b in enumerate(own):
+            if i == j or (a is parts.policy and b is report) or (b is parts.policy and a is report):
+                continue  # (the reported score is the policy's own)
+            if id(b) in held[i]:
+                found.append((type(a).__name__, type(b).__name__, held[i][id(b)][0]))
+            elif i < j:
+                for key in held[i].keys() & held[j].keys():
+                    if not isinstance(held[i][key][1], np.ndarray) or held[i][key][1].size:
+                        found.append((type(a).__name__, type(b).__name__, held[i][key][0]))
+    return found
+
+
+def test_the_check_sees_a_part_that_holds_another_parts_object(
+        sequence: tuple[list[np.ndarray], Any]) -> None:
+    """A reported score that reads the colour cue's live histograms (as rcwmil-plus's did
+    before the score kept its own) is caught: the check above would fail on it."""
+    frames, box = sequence
+    t = wmiltrack.Tracker("rcwmil-plus", seed=0, score_colour_model="current")
+    t.init(frames[0], box)
+    assert not _shared_objects(t.parts)
+    colour = next(c for c in t.parts.cues if isinstance(c, ColourCue))
+    t.parts.policy.report.colour = colour.model
+    assert ("ColourCue", "ContrastScore", "model") in _shared_objects(t.parts)
 
 
 def test_the_recording_sees_a_part_that_reads_another_parts_settings(

@@ -123,6 +123,7 @@ class HaarAppearance:
             edge_plane = np.array([c in EDGE_CHANNELS for c in names], dtype=bool)
             self.edge_rects = edge_plane[self.rect_planes]
         self.base_wh = (w, h)
+        self._min_box = min_box_size(p)
         self._banks: dict[tuple[int, int], _core.FeatureBank] = {
             (w, h): self._core_bank(self.bank_arrays)}
         self.pool = GaussianPool(p)
@@ -149,8 +150,9 @@ class HaarAppearance:
 
     @property
     def min_box(self) -> tuple[int, int]:
-        """The smallest ``(w, h)`` box the features allow."""
-        return min_box_size(self.params)
+        """The smallest ``(w, h)`` box the features allow (found at :meth:`start`: the scale
+        search asks it for every size it tries)."""
+        return self._min_box
 
     @property
     def reach(self) -> int:

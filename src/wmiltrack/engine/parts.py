@@ -163,11 +163,17 @@ class ScorePolicy(Protocol):
 
     @property
     def plain(self) -> bool:
-        """Whether the score is the classifier's confidence itself (a paper preset's frame
-        then runs as one core call)."""
+        """Whether the score is the classifier's confidence itself and the policy learns
+        nothing (a paper preset's frame then runs as one core call, without :meth:`learn`)."""
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """The first frame, where the target is ``box``."""
 
     def score(self, conf: float, frame: np.ndarray, box: IntBox) -> float:
         """The score to report for a frame of classifier confidence ``conf`` at ``box``."""
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        """A frame the parts learn from, the target at ``box`` (after :meth:`score`)."""
 
 
 #: A factory of one kind of part, called when the tracker starts (:meth:`Tracker.init`) with

@@ -42,13 +42,38 @@ class ContrastScore:
     A box that drifted onto background keeps a high classifier confidence (the classifier
     learns whatever it sits on), but its colours and brightness no longer stand out from its
     surroundings under the first frame's histograms.
+
+    Its histograms are its own, learnt as the colour cue learns its (same settings, same
+    frames): with ``score_colour_model="first"`` only on the first frame, with ``"current"``
+    on every frame the parts learn from, so that they equal the cue's. ``colour``: whether the
+    tracker has a colour cue (the colour term is left out without one).
     """
 
-    def __init__(self, settings: ScoreSettings, colour: ColourModel | None,
-                 luma: ColourModel | None) -> None:
+    def __init__(self, settings: ScoreSettings, *, colour: bool) -> None:
         self.settings = settings
-        self.colour = colour  # the search cue's model, or the first frame's copy; None: no colour
-        self.luma = luma      # the first frame's intensities (score_luma > 0)
+        self.has_colour = colour
+        self.colour: ColourModel | None = None  # colour histograms (None: no colour term)
+        self.luma: ColourModel | None = None    # the first frame's intensities (score_luma > 0)
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """Learn the first frame's histograms (colour ones of the cue's kind: luma ones on a
+        gray video, as :class:`~wmiltrack.engine.cues.ColourCue`)."""
+        s = self.settings
+        self.colour = self.luma = None
+        if self.has_colour and s.score_colour > 0:
+            self.colour = ColourModel(learning_rate=s.colour_learning_rate,
+                                      intensity=not ColourModel.usable(frame),
+                                      sample=s.colour_sample)
+            self.colour.learn(frame, box)
+        if s.score_luma > 0:
+            self.luma = ColourModel(intensity=True, sample=s.colour_sample)
+            self.luma.learn(frame, box)
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        """With ``score_colour_model="current"``, fold the frame into the colour histograms
+        (the first frame's stay as they were otherwise)."""
+        if self.colour is not None and self.settings.score_colour_model == "current":
+            self.colour.learn(frame, box)
 
     def __call__(self, conf: float, frame: np.ndarray, box: IntBox) -> float:
         """``(1 - w - v) conf + w clip(0.5 + colour contrast, 0, 1) + v clip(0.5 + luma
@@ -80,3 +105,13 @@ class ReportedScore:
     def score(self, conf: float, frame: np.ndarray, box: IntBox) -> float:
         """The score to report for a frame of confidence ``conf`` whose box is ``box``."""
         return conf if self.report is None else self.report(conf, frame, box)
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """The first frame: the contrast's histograms, if any, learn it."""
+        if self.report is not None:
+            self.report.start(frame, box)
+
+    def learn(self, frame: np.ndarray, box: IntBox) -> None:
+        """A frame the parts learn from (the contrast's histograms may learn it)."""
+        if self.report is not None:
+            self.report.learn(frame, box)

@@ -52,6 +52,7 @@ class HaarScale:
         self.base_wh = base_wh
         self.frame_wh = frame_wh
         self.index = 0
+        self._sizes: dict[int, tuple[int, int]] = {}  # box_size's answers, by index
         self.tried: list[IntBox] = []  # the boxes tried at other scales in the last frame
         # its target model (not for "ratio"), made at the first learning step (its size is the
         # appearance model's feature count)
@@ -69,8 +70,14 @@ class HaarScale:
         return float(self.settings.scale_factor ** self.index)
 
     def box_size(self, index: int) -> tuple[int, int]:
-        s = self.settings.scale_factor ** index
-        return max(1, round(self.base_wh[0] * s)), max(1, round(self.base_wh[1] * s))
+        """The first box's size scaled by ``scale_factor ** index`` (kept: a frame asks for
+        about nine)."""
+        size = self._sizes.get(index)
+        if size is None:
+            s = self.settings.scale_factor ** index
+            size = self._sizes[index] = (max(1, round(self.base_wh[0] * s)),
+                                         max(1, round(self.base_wh[1] * s)))
+        return size
 
     def margin(self, box: IntBox) -> int:
         """Extra integral-image margin for the largest box tried or learnt around ``box``."""

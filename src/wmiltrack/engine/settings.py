@@ -65,6 +65,16 @@ def _check_memory(obj: Any) -> None:
           f"recover_memory must be in [0, 1), got {obj.recover_memory}")
 
 
+def _check_colour_model(obj: Any) -> None:
+    """``colour_learning_rate`` and ``colour_sample``, which the colour cue's and the reported
+    score's settings share, checked."""
+    _check_numbers(obj, "colour_learning_rate")
+    _need(0.0 < obj.colour_learning_rate <= 1.0,
+          f"colour_learning_rate must be in (0, 1], got {obj.colour_learning_rate!r}")
+    _need(_is_int(obj.colour_sample) and obj.colour_sample >= 0,
+          f"colour_sample must be an integer >= 0, got {obj.colour_sample!r}")
+
+
 def _is_int(v: Any) -> bool:
     return isinstance(v, int) and not isinstance(v, bool)
 
@@ -543,15 +553,12 @@ class ColourSettings:
 
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
-        _check_numbers(self, "colour_weight", "colour_learning_rate")
+        _check_numbers(self, "colour_weight")
         _need(self.colour_relative is None or _is_number(self.colour_relative),
               f"colour_relative must be None or a finite number, got {self.colour_relative!r}")
         _need(0.0 <= self.colour_weight <= 1.0,
               f"colour_weight must be in [0, 1], got {self.colour_weight}")
-        _need(0.0 < self.colour_learning_rate <= 1.0,
-              f"colour_learning_rate must be in (0, 1], got {self.colour_learning_rate!r}")
-        _need(_is_int(self.colour_sample) and self.colour_sample >= 0,
-              f"colour_sample must be an integer >= 0, got {self.colour_sample!r}")
+        _check_colour_model(self)
         _need(isinstance(self.gray_colour, bool),
               f"gray_colour must be True or False, got {self.gray_colour!r}")
 
@@ -582,17 +589,25 @@ class ScoreSettings:
         updated, on colour and gray frames alike. The score becomes ``(1 - w - v) * conf +
         w * clip(0.5 + colour contrast, 0, 1) + v * clip(0.5 + luma contrast, 0, 1)``; on
         frames without colour the colour term reads the luma contrast. 0: off.
+    colour_learning_rate, colour_sample : float, int
+        The colour cue's (:class:`ColourSettings`, which documents them), shared: the
+        reported score keeps histograms of its own, learnt as the cue's are (with
+        ``score_colour_model="current"``, learnt on the same frames as the cue's, so equal to
+        them).
     """
 
     score_colour: float = 0.0
     score_colour_model: Literal["current", "first"] = "current"
     score_luma: float = 0.0
+    colour_learning_rate: float = 0.04
+    colour_sample: int = 0
 
     def __post_init__(self) -> None:
         ScoreSettings.check(self)
 
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
+        _check_colour_model(self)
         _check_choices(self, {"score_colour_model": ("current", "first")})
         _need(_is_number(self.score_colour) and 0.0 <= self.score_colour <= 1.0,
               f"score_colour must be in [0, 1], got {self.score_colour!r}")

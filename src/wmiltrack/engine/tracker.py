@@ -72,6 +72,7 @@ __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "c
 #: The pixels of a record kept between frames: none (the tracker holds no frame).
 _NO_FRAME = np.zeros((0, 0), dtype=np.uint8)
 _NO_FRAME.setflags(write=False)
+_LOST = Verdict.LOST  # (an enum member read from its class costs ~70 ns, this name ~10 ns)
 
 
 class NotInitializedError(ValueError):
@@ -159,8 +160,7 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
         motion = VelocityMotion(own(MotionSettings, params))
     report = None
     if (params.score_colour > 0 and colour is not None) or params.score_luma > 0:
-        report = ContrastScore(own(ScoreSettings, params),
-                               colour.model if colour is not None else None, None)
+        report = ContrastScore(own(ScoreSettings, params), colour=colour is not None)
     recovery: Recovery | None = (Redetector(own(RecoverySettings, params)) if params.redetect
                                  else None)
     return Parts(appearance, all_cues,
@@ -227,15 +227,6 @@ def check_part_factories(parts: Mapping[str, Any] | None) -> dict[str, PartFacto
     return dict(parts)
 
 
-def _start_report(report: ContrastScore, params: Params, frame: np.ndarray, box: IntBox) -> None:
-    """Give the reported score its first-frame histograms (after the cues learnt the frame)."""
-    if report.colour is not None and params.score_colour > 0 and params.score_colour_model == "first":
-        report.colour = report.colour.copy()
-    if params.score_luma > 0:
-        report.luma = ColourModel(intensity=True, sample=params.colour_sample)
-        report.luma.learn(frame, box)
-
-
 class Tracker:
     """A single-object tracker.
 
@@ -300,6 +291,8 @@ class Tracker:
         self._busy = threading.Lock()
         self._initialized = False
         self._frame_wh = (0, 0)
+        # (stages, the stages a frame walks) for those stages: _stages_walked
+        self._walk: tuple[tuple[Any, ...], tuple[Any, ...]] | None = None
 
     # -- copies: copy.deepcopy(tracker) forks it ------------------------------------------
     def __getstate__(self) -> dict[str, Any]:
@@ -307,6 +300,7 @@ class Tracker:
         frame's pixels."""
         state = self.__dict__.copy()
         del state["_busy"]
+        state.pop("_walk", None)  # worked out again (it may hold a subclass's stages)
         if "_last" in state:  # the last frame's pixels are not part of the tracker's state
             state["_last"] = state["_last"].evolve(frame=_NO_FRAME, integral=None)
         return state
@@ -314,6 +308,7 @@ class Tracker:
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._busy = threading.Lock()
+        self._walk = None
 
     # -- public API ------------------------------------------------------------------------
     @property
@@ -364,8 +359,7 @@ class Tracker:
         model.start(img, b)
         for part in parts.others():
             part.start(img, b)
-        if isinstance(parts.policy, ReportedScore) and parts.policy.report is not None:
-            _start_report(parts.policy.report, self._params, img, b)
+        parts.policy.start(img, b)
         if parts.experts is not None:
             parts.experts.start(img, (float(b[0]), float(b[1]), float(b[2]), float(b[3])))
         self._parts = parts
@@ -376,6 +370,7 @@ class Tracker:
         self._last = FrameState(_NO_FRAME, b, False, None, b, b, score=1.0,
                                 verdict=Verdict.TRACKED, ok=True, learns=True)
         self._fused = parts.appearance_only and model.can_fuse
+        self._walk = None  # parts of another kind may lack other stages
         self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
 
@@ -485,7 +480,7 @@ class Tracker:
         model = self._parts.appearance
         own_table = model.ii
         try:
-            for stage in self.stages:
+            for stage in self._stages_walked():
                 out = stage(self, state)
                 state = out if isinstance(out, FrameState) else (yield from out)
         finally:
@@ -496,6 +491,19 @@ class Tracker:
         if self._parts.experts is not None:  # the second expert, and the judge of the two
             return self._parts.experts.step(img, result, self.recentre)
         return result
+
+    def _stages_walked(self) -> tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...]:
+        """:attr:`stages` less those of the parts this tracker lacks (rescale without a scale
+        estimator, recover without re-detection, follow without a motion model: each would
+        hand the record back unchanged: a call a frame saved), worked out again when
+        ``stages`` changes."""
+        stages, walk = self.stages, self._walk
+        if walk is None or walk[0] is not stages:
+            parts = self._parts
+            needs: dict[Any, Any] = {Tracker._rescale: parts.scale, Tracker._recover: parts.recovery,
+                     Tracker._follow: parts.motion}
+            walk = self._walk = (stages, tuple(s for s in stages if needs.get(s, s) is not None))
+        return walk[1]
 
     def recentre(self, box: Any) -> None:
         """Move the target to the centre of ``box = (x, y, w, h)`` keeping its current size and
@@ -534,8 +542,7 @@ class Tracker:
         else:
             results = yield search
         box, raw, searched = _moved(origin, self._grids, results)
-        return state.evolve(origin=origin, box=box, raw=raw, searched=searched,
-                              learnt=self._fused)
+        return state.located(origin, box, raw, searched, self._fused)
 
     def _rescale(self, state: FrameState) -> FrameState:
         """Rescale: the scale estimator tries other sizes around the located box (on a tracked
@@ -550,9 +557,9 @@ class Tracker:
     def _score(self, state: FrameState) -> FrameState:
         """Score: the classifier's confidence at the box and the score to report (the
         policy's)."""
-        conf = confidence(state.raw, self._parts.appearance.k, self._params.confidence_offset)
-        return state.evolve(conf=conf,
-                              score=self._parts.policy.score(conf, state.frame, state.box))
+        parts = self._parts
+        conf = confidence(state.raw, parts.appearance.k, self._params.confidence_offset)
+        return state.scored(conf, parts.policy.score(conf, state.frame, state.box))
 
     def _recover(self, state: FrameState) -> FrameState | Steps:
         """Recover: on a lost target's frame where the judge does not see the target back at
@@ -579,7 +586,7 @@ class Tracker:
         """Judge: the judge's verdict on the frame (:class:`~wmiltrack.engine.parts.Judge`),
         from the record and the other parts' evidence; the count of frames lost."""
         state = self._parts.judge.verdict(state, self._evidence(state))
-        if state.verdict is Verdict.LOST:
+        if state.verdict is _LOST:
             return state.evolve(lost_for=state.lost_for + 1)
         return state.evolve(lost_for=0) if state.lost_for else state
 
@@ -614,6 +621,7 @@ class Tracker:
         for cue in parts.cues:
             if state.score >= getattr(cue, "learn_above", 0.0):
                 cue.learn(img, box)
+        parts.policy.learn(img, box)
         if parts.scale is not None and state.score >= parts.scale.learn_above:
             parts.scale.learn(img, box)
         if parts.recovery is not None:
@@ -625,7 +633,7 @@ class Tracker:
         move: the target stands at its box, not steady)."""
         motion = self._parts.motion
         if motion is not None:
-            if state.lost or state.verdict is Verdict.LOST:
+            if state.lost or state.verdict is _LOST:
                 motion.follow(state.box, state.box, False)
             else:
                 motion.follow(state.previous, state.box, state.steady)
@@ -654,7 +662,7 @@ class Tracker:
         own integral image): the record with the box moved (see :func:`_moved`)."""
         search = self._search(state.frame, origin, grids, self._margin(state.box))
         box, raw, searched = _moved(origin, grids, (yield search))
-        return state.evolve(origin=origin, box=box, raw=raw, searched=searched)
+        return state.located(origin, box, raw, searched, state.learnt)
 
     def _search(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]],
                 margin: int, *, shared: bool = False) -> Search:
