@@ -559,7 +559,7 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
 
   // Feature values, one feature at a time over all candidates (run by run, several
   // candidates of a run a step: consecutive table entries), then the log ratios.
-  std::vector<double> values(static_cast<std::size_t>(c)), total(static_cast<std::size_t>(c), 0.0);
+  std::vector<double> total(static_cast<std::size_t>(c), 0.0);
   const IntegralImage::Entry* table = ii.data();
   const bool vector = compiled.max_rect_area() <= kMaxSignedRectArea &&
                       (step == 1 || ii.num_channels() == 1);
@@ -613,6 +613,7 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
     }
     fused_scores(fused_table, fused_runs, fused_step, fused_corners, wf.data(), ff, total.data());
   } else {
+    std::vector<double> values(static_cast<std::size_t>(c));  // (the fused path needs none)
     for (int k = 0; k < compiled.size(); ++k) {
 #ifdef WMILTRACK_GRID_SIMD
       const int r0 = compiled.first_rect(k), n_rects = compiled.end_rect(k) - r0;
