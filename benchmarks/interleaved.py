@@ -14,6 +14,12 @@ and prints the ratio of their times: a burst of noise falls on both alike.
 Each worker decodes the sequences' first ``--frames`` frames beforehand (or generates them:
 ``--generated WxH/BOX,...``, as ``fps_compare.py --sizes WxH --boxes BOX`` does), times only
 ``Tracker.update`` (OpenCV on one thread) and starts the tracker again at a sequence's end.
+
+Both workers run on one core (``--cpu``, by default the last one this process may use; ``-1``
+lets the system place them): left to the system, each may sit on a core of its own whose
+neighbours differ, and one interpreter against itself then measured anywhere from 0.96 to 1.05
+in runs of 30 s on our 2-core VM; pinned, from 0.999 to 1.002 (Linux only; elsewhere the
+workers are not pinned).
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ import sys
 import time
 
 WORKER = r"""
-import sys, time
+import os, sys, time
 import cv2
 import wmiltrack
 from wmiltrack.data.sequences import load_dataset
@@ -35,6 +41,9 @@ from wmiltrack.trackers import parse_spec
 
 cv2.setNumThreads(1)
 root, names, frames, spec, chunk = sys.argv[1], sys.argv[2].split(","), int(sys.argv[3]), sys.argv[4], int(sys.argv[5])
+cpu = int(sys.argv[6])
+if cpu >= 0 and hasattr(os, "sched_setaffinity"):
+    os.sched_setaffinity(0, {cpu})
 variant, overrides = parse_spec(spec)
 if root:
     data = [(s.load()[:frames + 1], s.init_box) for s in (load_dataset(root, [n])[0] for n in names)]
@@ -109,6 +118,13 @@ def _turns(procs: list[subprocess.Popen[str]], pythons: tuple[str, str], sequenc
     return times
 
 
+def _last_cpu() -> int:
+    """The last core this process may run on (-1 where the system cannot say)."""
+    if not hasattr(os, "sched_getaffinity"):
+        return -1
+    return max(os.sched_getaffinity(0))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("old", help="the Python interpreter of the old code")
@@ -122,6 +138,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tracker", default="rcwmil-cf", help="a spec, as wmiltrack eval takes it")
     ap.add_argument("--chunk", type=int, default=30, help="updates per turn")
     ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--cpu", type=int, default=_last_cpu(),
+                    help="the core both workers run on (-1: not pinned; default: the last one "
+                         "this process may use)")
     args = ap.parse_args(argv)
     if args.generated:
         args.otb, args.sequences = "", args.generated
@@ -133,8 +152,11 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--frames and --chunk must be >= 1 and --seconds > 0")
     names = args.sequences.split(",")
     pythons = (args.old, args.new)
+    if args.cpu >= 0 and hasattr(os, "sched_getaffinity") and args.cpu not in os.sched_getaffinity(0):
+        ap.error(f"--cpu {args.cpu}: not a core this process may use "
+                 f"({sorted(os.sched_getaffinity(0))})")
     procs = _start(pythons, [args.otb, args.sequences, str(args.frames), args.tracker,
-                             str(args.chunk)])
+                             str(args.chunk), str(args.cpu)])
     try:
         times = _turns(procs, pythons, len(names), args.seconds)
     finally:
@@ -145,7 +167,8 @@ def main(argv: list[str] | None = None) -> int:
     old, new = (sum(t) for t in times)
     updates = len(times[0]) * args.chunk
     pairs = [b / a for a, b in zip(*times)]
-    print(f"{args.tracker} on {args.sequences} ({args.frames} frames each), {len(pairs)} turns "
+    where = f"core {args.cpu}" if args.cpu >= 0 and hasattr(os, "sched_setaffinity") else "not pinned"
+    print(f"{args.tracker} on {args.sequences} ({args.frames} frames each; {where}), {len(pairs)} turns "
           f"of {args.chunk} updates each: old {updates / old:.0f} updates/s, new "
           f"{updates / new:.0f} updates/s; new / old time: {new / old:.3f} in all, "
           f"{statistics.median(pairs):.3f} as the median of the turns")

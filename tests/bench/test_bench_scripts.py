@@ -329,13 +329,20 @@ def test_interleaved_times_two_interpreters_in_turns(tmp_path: Path) -> None:
             "--seconds", "1", "--tracker", "rcwmil"]
     r = _run(args)
     assert r.returncode == 0, r.stderr
-    assert re.search(r"rcwmil on Seq \(5 frames each\), \d+ turns of 3 updates each: old \d+ "
-                     r"updates/s, new \d+ updates/s; new / old time: [\d.]+ in all", r.stdout)
+    assert re.search(r"rcwmil on Seq \(5 frames each; (core \d+|not pinned)\), \d+ turns of 3 "
+                     r"updates each: old \d+ updates/s, new \d+ updates/s; new / old time: "
+                     r"[\d.]+ in all", r.stdout)
     gen = _run([str(BENCH / "interleaved.py"), sys.executable, sys.executable, "--generated",
                 "128x96/24", "--frames", "5", "--chunk", "3", "--seconds", "1", "--tracker",
                 "rcwmil"])
     assert gen.returncode == 0, gen.stderr
-    assert "rcwmil on 128x96/24 (5 frames each)" in gen.stdout
+    assert "rcwmil on 128x96/24 (5 frames each;" in gen.stdout
+    free = _run([*args, "--cpu", "-1"])
+    assert free.returncode == 0 and "(5 frames each; not pinned)" in free.stdout, free.stderr
+    if hasattr(os, "sched_getaffinity"):
+        beyond = max(os.sched_getaffinity(0)) + 1
+        far = _run([*args, "--cpu", str(beyond)])
+        assert far.returncode != 0 and f"--cpu {beyond}" in far.stderr
     wrong = _run([str(BENCH / "interleaved.py"), sys.executable, sys.executable, "--generated",
                   "128x96"])
     assert wrong.returncode != 0 and "WxH/BOX" in wrong.stderr
