@@ -18,7 +18,7 @@ Each worker decodes the sequences' first ``--frames`` frames beforehand (or gene
 Both workers run on one core (``--cpu``, by default the last one this process may use; ``-1``
 lets the system place them): left to the system, each may sit on a core of its own whose
 neighbours differ, and one interpreter against itself then measured anywhere from 0.96 to 1.05
-in runs of 30 s on our 2-core VM; pinned, from 0.999 to 1.002 (Linux only; elsewhere the
+in runs of 30 s on our 2-core VM; pinned, from 0.992 to 1.002 (Linux only; elsewhere the
 workers are not pinned).
 """
 
