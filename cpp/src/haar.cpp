@@ -66,6 +66,12 @@ CompiledFeatures::CompiledFeatures(const FeatureBank& bank, const std::int32_t* 
   const int n = all ? bank.size() : n_features;
   starts_.reserve(static_cast<std::size_t>(n) + 1);
   starts_.push_back(0);
+  std::size_t rects = 0;  // (room for every rectangle at once; a wrong index is refused below)
+  for (int k = 0; k < n; ++k) {
+    const int f = all ? k : features[k];
+    if (f >= 0 && f < bank.size()) rects += static_cast<std::size_t>(bank.starts()[f + 1] - bank.starts()[f]);
+  }
+  corners_.reserve(rects);
   for (int k = 0; k < n; ++k) {
     const int f = all ? k : features[k];
     if (f < 0 || f >= bank.size()) {

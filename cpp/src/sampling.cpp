@@ -192,6 +192,12 @@ static void weigh_positives(const BagSpec& spec, const std::vector<double>& term
 Bags sample_bags(const BagSpec& spec, const Rect& box, int frame_w, int frame_h, BitSource& bits) {
   Bags bags;
   std::vector<double> terms;
+  // (room for the positives and the most negatives the spec draws, so the bags grow once)
+  const std::size_t most = static_cast<std::size_t>(spec.n_pos_offsets) +
+                           static_cast<std::size_t>(std::max(spec.neg_count, 0));
+  bags.xs.reserve(most);
+  bags.ys.reserve(most);
+  if (spec.pos_terms != nullptr) terms.reserve(static_cast<std::size_t>(spec.n_pos_offsets));
   for (int i = 0; i < spec.n_pos_offsets; ++i) {
     const std::int64_t x = static_cast<std::int64_t>(box.x) + spec.pos[2 * i];
     const std::int64_t y = static_cast<std::int64_t>(box.y) + spec.pos[2 * i + 1];

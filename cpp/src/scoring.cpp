@@ -520,6 +520,11 @@ GridResult grid_stage(const IntegralImage& ii, const Rect& e, const CompiledFeat
   // consecutive grid columns within one grid row (equally spaced in the table).
   std::vector<int> cand_dx, cand_dy;
   std::vector<GridRun> runs;
+  // (room for the whole square grid at once: growing them candidate by candidate moved them
+  // about a dozen times a search)
+  cand_dx.reserve(static_cast<std::size_t>(side) * side);
+  cand_dy.reserve(static_cast<std::size_t>(side) * side);
+  runs.reserve(static_cast<std::size_t>(side));
   for (int j = -n; j <= n; ++j) {
     bool open = false;
     for (int i = -n; i <= n; ++i) {
