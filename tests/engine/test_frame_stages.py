@@ -133,6 +133,28 @@ def test_a_stage_of_ones_own_sees_tracked_and_lost_frames(sequence) -> None:
     assert results[3].ok and abs(results[3].box[0] - found[0]) <= fine
 
 
+@pytest.mark.usefixtures("nanotrack_models")
+def test_the_second_expert_is_a_stage_too(sequence) -> None:
+    """rcwmil-nano's experts are the consult stage: a stage after it sees the experts' result
+    in the record, and without it the tracker is rcwmil-cf alone (the same boxes)."""
+    frames, gt = sequence
+    seen: list[FrameState] = []
+
+    def after(tracker: Tracker, state: FrameState) -> FrameState:
+        seen.append(state)
+        return state
+
+    t = Tracker("rcwmil-nano", seed=0)
+    t.stages = (*t.stages, after)
+    t.init(frames[0], gt[0])
+    results = [t.update(f) for f in frames[1:6]]
+    assert [s.reported for s in seen] == results  # (the experts' fractional boxes)
+    alone = Tracker("rcwmil-nano", seed=0)
+    alone.stages = tuple(s for s in alone.stages if s.__name__ != "_consult")
+    cf = Tracker("rcwmil-cf", seed=0)
+    np.testing.assert_array_equal(alone.track(frames[:10], gt[0]), cf.track(frames[:10], gt[0]))
+
+
 def test_the_record_is_immutable_and_evolves_by_name() -> None:
     frame = np.zeros((4, 4), np.uint8)
     last = FrameState(frame, (1, 2, 3, 4), box=(1, 2, 3, 4), verdict=Verdict.TRACKED)

@@ -1,7 +1,7 @@
 """One frame's record: what the tracker knows about a frame at each stage of its step.
 
-A frame walks through one list of stages (:data:`~wmiltrack.engine.tracker.FRAME_STAGES`:
-locate, rescale, score, judge, recover, learn, report); each stage takes the record and returns
+A frame walks through one list of stages (:attr:`~wmiltrack.engine.tracker.Tracker.stages`:
+locate, rescale, score, recover, judge, learn, follow, consult); each stage takes the record and returns
 a new one, so a value of the frame is written once, by the stage that finds it, and read by the
 stages after it instead of travelling through the tracker's attributes. The record of the last
 frame is the tracker's whole state between frames (its box, score, ``ok``, and whether the
@@ -55,7 +55,9 @@ class FrameState(NamedTuple):
     tried, ``learnt`` whether the appearance model has learnt from the frame (a paper
     preset's one-call step learns as it locates), ``rescued`` whether the recovery placed the
     box by looking over the whole frame, ``lost_for`` the frames in the lost state so far
-    (counting this one once it is judged lost).
+    (counting this one once it is judged lost); ``reported`` the frame's result when a second
+    expert makes it (rcwmil-nano's experts and their judge: a fractional box, their score and
+    ``ok``), else None (the result is read from ``box``, ``score`` and ``ok``).
     """
 
     frame: np.ndarray
@@ -76,6 +78,7 @@ class FrameState(NamedTuple):
     learnt: bool = False
     rescued: bool = False
     lost_for: int = 0
+    reported: Any = None
 
     def evolve(self, **changes: Any) -> FrameState:
         """A copy with the fields named in ``changes`` replaced (``_replace``, at half its
@@ -93,7 +96,7 @@ class FrameState(NamedTuple):
         s = self
         return _new_tuple(FrameState, (s[0], s[1], s[2], s[3], origin, box, raw, s[7], s[8],
                                        s[9], s[10], s[11], s[12], searched, s[14], learnt,
-                                       s[16], s[17]))
+                                       *s[16:]))
 
     def scored(self, conf: float, score: float) -> FrameState:
         """The record with the score stage's findings."""
@@ -115,4 +118,5 @@ def new_frame(frame: np.ndarray, last: FrameState, integral: Any) -> FrameState:
     nothing found yet."""
     box, lost = last.box, last.verdict is _LOST
     return _new_tuple(FrameState, (frame, box, lost, integral, box, box, _NAN, _NAN, _NAN, None,
-                                   False, False, False, (), (), False, False, last.lost_for))
+                                   False, False, False, (), (), False, False, last.lost_for,
+                                   None))

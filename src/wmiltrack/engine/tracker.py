@@ -7,7 +7,8 @@ locate (the motion model's origin, the cues' maps, the appearance model's coarse
 candidate scoring in C++) -> rescale (the scale estimator) -> score (the confidence, the policy's
 reported score) -> recover (a lost target looked for over the whole frame) -> judge (the
 verdict: tracked, doubtful, lost or found, and what learns) -> learn (the appearance model's
-bags in C++, the cues, the scale estimator, the recovery part) -> follow (the motion model).
+bags in C++, the cues, the scale estimator, the recovery part) -> follow (the motion model)
+-> consult (a second expert and the judge of the two make the frame's result: rcwmil-nano).
 A tracked target's frame, a lost target's frame and a paper preset's frame take the same
 stages; a preset made of the appearance model alone locates and learns in one core call. A
 preset is a composition plus values (:func:`compose`).
@@ -486,22 +487,20 @@ class Tracker:
         finally:
             model.ii = own_table  # a shared integral image is only borrowed for the frame
         self._last = state  # (copies and pickles leave its pixels out: __getstate__)
-        x, y, w, h = state.box
-        result = TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
-        if self._parts.experts is not None:  # the second expert, and the judge of the two
-            return self._parts.experts.step(img, result, self.recentre)
-        return result
+        if state.reported is not None:  # a second expert's and their judge's (_consult)
+            return state.reported
+        return _result(state)
 
     def _stages_walked(self) -> tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...]:
         """:attr:`stages` less those of the parts this tracker lacks (rescale without a scale
-        estimator, recover without re-detection, follow without a motion model: each would
-        hand the record back unchanged: a call a frame saved), worked out again when
-        ``stages`` changes."""
+        estimator, recover without re-detection, follow without a motion model, consult
+        without a second expert: each would hand the record back unchanged: a call a frame
+        saved), worked out again when ``stages`` changes."""
         stages, walk = self.stages, self._walk
         if walk is None or walk[0] is not stages:
             parts = self._parts
             needs: dict[Any, Any] = {Tracker._rescale: parts.scale, Tracker._recover: parts.recovery,
-                     Tracker._follow: parts.motion}
+                                     Tracker._follow: parts.motion, Tracker._consult: parts.experts}
             walk = self._walk = (stages, tuple(s for s in stages if needs.get(s, s) is not None))
         return walk[1]
 
@@ -511,15 +510,19 @@ class Tracker:
         another expert hands the target over (:mod:`wmiltrack.engine.experts`). Unlike
         :meth:`init`, nothing is relearnt."""
         self._require_init()
+        self._last = self._recentred(self._last, box)
+
+    def _recentred(self, state: FrameState, box: Any) -> FrameState:
+        """The record with the target moved to the centre of ``box`` at the record's size
+        (clipped to the frame; a lost state ends)."""
         x, y, w, h = (float(v) for v in box)
-        last = self._last
-        _, _, bw, bh = last.box
+        _, _, bw, bh = state.box
         fw, fh = self._frame_wh
         nx = min(max(int(round(x + w / 2 - bw / 2)), 0), max(fw - bw, 0))
         ny = min(max(int(round(y + h / 2 - bh / 2)), 0), max(fh - bh, 0))
-        if last.verdict is Verdict.LOST:
-            last = last.evolve(verdict=Verdict.TRACKED, lost_for=0)
-        self._last = last.evolve(box=(nx, ny, bw, bh))
+        if state.verdict is Verdict.LOST:
+            state = state.evolve(verdict=Verdict.TRACKED, lost_for=0)
+        return state.evolve(box=(nx, ny, bw, bh))
 
     def _locate(self, state: FrameState) -> Steps:
         """Locate: the search with the cues merged, from the motion model's origin (a lost
@@ -639,12 +642,26 @@ class Tracker:
                 motion.follow(state.previous, state.box, state.steady)
         return state
 
+    def _consult(self, state: FrameState) -> FrameState:
+        """Consult: a second expert and the judge of the two (rcwmil-nano's network,
+        :class:`~wmiltrack.engine.experts.TwoExperts`) make the frame's result from the
+        tracker's; where they hand the target over, the tracker's box moves to theirs at its
+        own size (:meth:`recentre`), everything learnt kept."""
+        experts = self._parts.experts
+        if experts is None:
+            return state
+        handed: list[Any] = []
+        reported = experts.step(state.frame, _result(state), handed.append)
+        for box in handed:
+            state = self._recentred(state, box)
+        return state.evolve(reported=reported)
+
     #: The stages every frame walks through, in order: each takes the tracker and the frame's
     #: record and returns the next record, or a generator of core requests that returns it
     #: (:meth:`_update_steps`). A stage of one's own goes into an instance's or a subclass's
     #: copy of this tuple.
     stages: tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...] = (
-        _locate, _rescale, _score, _recover, _judge, _learn, _follow)
+        _locate, _rescale, _score, _recover, _judge, _learn, _follow, _consult)
 
     def _witnesses(self) -> tuple[float, ...]:
         """The cues' own confidences of this frame (those that give one; see
@@ -738,6 +755,12 @@ class Tracker:
     def _require_init(self) -> None:
         if not self._initialized:
             raise NotInitializedError("call init(frame, box) before update(frame)")
+
+
+def _result(state: FrameState) -> TrackResult:
+    """The tracker's own result of a frame, from its record."""
+    x, y, w, h = state.box
+    return TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
 
 
 def _moved(origin: IntBox, grids: list[tuple[int, int]],
