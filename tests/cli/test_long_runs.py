@@ -38,6 +38,15 @@ def make_frames(n: int, seed: int = 3) -> tuple[list[np.ndarray], tuple[float, .
     return seq.load(), tuple(float(v) for v in seq.groundtruth[0])
 
 
+def frame_folder(tmp_path: Path, frames: list[np.ndarray]) -> Path:
+    """``tmp_path/frames`` holding ``frames`` as 0001.png, 0002.png, ..."""
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(folder / f"{i + 1:04d}.png"), f)
+    return folder
+
+
 def box_arg(box: tuple[float, ...]) -> str:
     return ",".join(repr(v) for v in box)
 
@@ -81,10 +90,7 @@ def test_truncated_image_in_the_middle_is_skipped_and_the_box_held(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("WMILTRACK_NO_PROGRESS", "1")
     frames, box = make_frames(8)
-    folder = tmp_path / "frames"
-    folder.mkdir()
-    for i, f in enumerate(frames):
-        cv2.imwrite(str(folder / f"{i + 1:04d}.png"), f)
+    folder = frame_folder(tmp_path, frames)
     (folder / "0004.png").unlink()
     (folder / "0004.jpg").write_bytes(truncated_jpeg(frames[3]))  # frame 4 of 8
     # cv2.imread gives this file back as a grey-padded image: it must not be tracked as a frame
@@ -130,10 +136,7 @@ def test_strict_stops_at_the_first_bad_frame_after_writing_the_boxes_so_far(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("WMILTRACK_NO_PROGRESS", "1")
     frames, box = make_frames(8)
-    folder = tmp_path / "frames"
-    folder.mkdir()
-    for i, f in enumerate(frames):
-        cv2.imwrite(str(folder / f"{i + 1:04d}.png"), f)
+    folder = frame_folder(tmp_path, frames)
     data = (folder / "0006.png").read_bytes()
     (folder / "0006.png").write_bytes(data[: len(data) // 3])  # truncated PNG
     out = tmp_path / "out.txt"
@@ -330,10 +333,7 @@ def test_a_killed_run_keeps_every_box_written_so_far(tmp_path: Path) -> None:
 @pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
 def test_a_full_disk_is_an_error_message_not_a_traceback(tmp_path: Path) -> None:
     frames, box = make_frames(3)
-    folder = tmp_path / "frames"
-    folder.mkdir()
-    for i, f in enumerate(frames):
-        cv2.imwrite(str(folder / f"{i + 1:04d}.png"), f)
+    folder = frame_folder(tmp_path, frames)
     res = subprocess.run([sys.executable, "-m", "wmiltrack", "track", str(folder), "--box", box_arg(box),
                           "-o", "/dev/full"], capture_output=True, text=True, timeout=120, env=ENV)
     assert res.returncode == 1

@@ -337,10 +337,7 @@ class Tracker:
     def box(self) -> tuple[float, float, float, float]:
         """The current box ``(x, y, w, h)``."""
         self._require_init()
-        if self._parts.experts is not None:
-            return self._parts.experts.box
-        x, y, w, h = self._last.box
-        return float(x), float(y), float(w), float(h)
+        return _result(self._last).box  # (the experts' where they made the last result)
 
     @_one_thread_at_a_time
     def init(self, frame: np.ndarray, box: Any) -> None:
@@ -487,8 +484,6 @@ class Tracker:
         finally:
             model.ii = own_table  # a shared integral image is only borrowed for the frame
         self._last = state  # (copies and pickles leave its pixels out: __getstate__)
-        if state.reported is not None:  # a second expert's and their judge's (_consult)
-            return state.reported
         return _result(state)
 
     def _stages_walked(self) -> tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...]:
@@ -758,7 +753,10 @@ class Tracker:
 
 
 def _result(state: FrameState) -> TrackResult:
-    """The tracker's own result of a frame, from its record."""
+    """A frame's result, from its record: the second expert's where it made one (``reported``),
+    else the tracker's own."""
+    if state.reported is not None:
+        return state.reported  # type: ignore[no-any-return]
     x, y, w, h = state.box
     return TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
 
