@@ -132,6 +132,8 @@ def test_home_figures_come_from_one_run_on_every_root(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     doc = json.loads((out / "eval" / "eval_ope.json").read_text())
     assert sorted(doc["sequences"]) == ["A", "B"] and doc["trackers"] == ["rcwmil", "ct"]
+    # the plots' colours follow the summary's order: the order given, as in any eval run
+    assert list(doc["summary"]) == ["rcwmil", "ct"]
     for name in ("accuracy_speed.png", "success_ope.png", "precision_ope.png"):
         assert (out / "eval" / name).is_file()
     assert (out / "dataset" / "A").is_symlink()
