@@ -1,6 +1,7 @@
 """Figures people read: the accuracy-speed plot's labels never overlap one another, never cover
-a point and never leave the axes, even for 13 trackers whose points collide; every plot is
-written at 150 dpi or more."""
+a point and never leave the axes, even for 13 trackers whose points collide, nor do its speed
+axis's numbers; a tracker has one colour in every plot of a run; every mark has a legend entry;
+every plot is written at 150 dpi or more; counts agree with their nouns."""
 
 from __future__ import annotations
 
@@ -279,3 +280,14 @@ def test_every_mark_of_the_long_term_plots_is_in_a_legend(tmp_path: Path,
     hatches = {bar.get_hatch() or "" for c in ax.containers for bar in c.patches}
     legend_hatches = {h.get_hatch() or "" for h in ax.get_legend().legend_handles}
     assert hatches == legend_hatches == {"", "///"}
+
+
+def test_counts_agree_with_their_nouns() -> None:
+    from wmiltrack.eval.report import format_vot_table
+
+    table = format_vot_table({"results": {}, "summary": {}}, 1, skip=1, burnin=1)
+    assert "re-initialised 1 frame later" in table and "first 1 frame from" in table
+    from wmiltrack.eval.report import plural
+
+    assert (plural(1, "sequence"), plural(0, "sequence"), plural(3, "frame")) == \
+        ("1 sequence", "0 sequences", "3 frames")

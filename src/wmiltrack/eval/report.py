@@ -571,8 +571,9 @@ def format_vot_table(
         (
             "VOT-style supervised protocol (VOT2015's rules on axis-aligned OTB boxes, so "
             "not VOT's own numbers): failure = overlap 0 with the ground truth; the "
-            f"tracker is re-initialised {skip} frames later; accuracy = mean overlap leaving "
-            f"out the {burnin} frames from each (re)initialisation; robustness = "
+            f"tracker is re-initialised {plural(skip, 'frame')} later; accuracy = mean overlap "
+            f"leaving out the first {plural(burnin, 'frame')} from each (re)initialisation; "
+            "robustness = "
             "exp(-100 * failures / frames) (VOT2016 reliability). Summary rows: accuracy = "
             "mean over sequences, failures = total (per sequence in brackets). FPS: "
             "update-only, frames decoded before timing."
