@@ -16,7 +16,9 @@ import pytest
 from conftest import REPO_ROOT, write_generated_otb
 
 from wmiltrack import cli
-from wmiltrack.trackers import MODEL_ENV, TrackerUnavailable, available_opencv_trackers, make_tracker
+from wmiltrack.integrations.opencv_wheels import TrackerUnavailable, available_opencv_trackers
+from wmiltrack.networks.files import MODEL_ENV
+from wmiltrack.trackers import make_tracker
 
 
 @pytest.fixture()
