@@ -22,10 +22,13 @@ from wmiltrack.trackers import make_tracker
 
 
 @pytest.fixture()
-def no_nano_files(monkeypatch: pytest.MonkeyPatch) -> None:
+def no_nano_files(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """No model file in the environment, and an empty models folder (opencv:Nano looks there)."""
     for attrs in MODEL_ENV.values():
         for env in attrs.values():
             monkeypatch.delenv(env, raising=False)
+    (tmp_path / "empty models").mkdir()
+    monkeypatch.setenv("WMILTRACK_MODELS", str(tmp_path / "empty models"))
 
 
 @pytest.fixture()

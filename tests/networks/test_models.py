@@ -422,7 +422,7 @@ def test_cli_fetch_shows_a_progress_bar(server: tuple[str, Served], fake: dict[s
     monkeypatch.setenv(MODELS_URL_ENV, url)
     monkeypatch.delenv(NO_PROGRESS_ENV)
     # (a local fetch ends before the bar's usual half-second delay: draw it from the start)
-    monkeypatch.setattr("wmiltrack.networks.files.progress", functools.partial(progress, delay=0.0))
+    monkeypatch.setattr("wmiltrack.progress.progress", functools.partial(progress, delay=0.0))
     assert main(["models", "fetch", "nanotrack-v2"]) == 0
     err = capsys.readouterr().err
     assert "nanotrack-v2 nanotrack_head_sim.onnx: 100%" in err and err.count("(SHA-1 checked)") == 2

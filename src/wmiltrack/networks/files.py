@@ -30,8 +30,6 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
-from ..progress import progress
-
 __all__ = [
     "DEFAULT_BASE_URL",
     "MODELS",
@@ -517,6 +515,8 @@ def _stage(stream: BinaryIO | _ReadOrFetchError, folder: Path, s: ModelSet, f: M
            quiet: bool, *, total: int | None = None) -> Path:
     """Write ``stream`` to a temporary file in ``folder`` (a progress bar on standard error) and
     return it once its SHA-1 and size are ``f``'s; on any failure the file is removed."""
+    from ..progress import progress  # here: the engine imports this module, a fetch only needs tqdm
+
     fd, name = tempfile.mkstemp(dir=folder, prefix=f".{f.name}.", suffix=".part")
     tmp = Path(name)
     h = hashlib.sha1(usedforsecurity=False)
