@@ -114,7 +114,7 @@ def preset_names() -> list[str]:
 
 def trackers_help(default: str | None = "rcwmil", *, opencv: bool = True) -> str:
     """The help text of a tracker option: the presets, from the registry, and OpenCV's."""
-    from ..trackers import OPENCV_TRACKERS
+    from ..integrations.opencv_wheels import OPENCV_TRACKERS
 
     text = f"a preset: {', '.join(preset_names())}"
     if opencv:
@@ -130,7 +130,8 @@ def check_tracker_spec(spec: str) -> None:
     a parameter the tracker does not have; an OpenCV tracker that is valid but missing from the
     installed ``cv2`` passes (running it is a runtime failure, exit status 1)."""
     from ..engine.params import Params
-    from ..trackers import is_opencv_spec, parse_opencv_name, parse_spec
+    from ..integrations.opencv_wheels import parse_opencv_name
+    from ..trackers import is_opencv_spec, parse_spec
 
     try:
         name, overrides = parse_spec(spec)
@@ -153,12 +154,12 @@ def check_tracker_spec(spec: str) -> None:
 
 def _check_nanotrack_spec(version: str, overrides: dict[str, Any]) -> None:
     """``nanotrack:VERSION[:key=value...]``: a known version and only the keywords
-    :class:`~wmiltrack.engine.siamese.NanoTracker` takes."""
-    from ..engine.siamese import NANO_VERSIONS
+    :class:`~wmiltrack.integrations.nanotrack_peer.NanoTracker` takes."""
+    from ..networks.files import nanotrack_versions
 
-    if version not in NANO_VERSIONS:
+    if version not in nanotrack_versions():
         raise ValueError(f"unknown NanoTrack version {version!r} in nanotrack:{version}; choose "
-                         f"{' or '.join('nanotrack:' + v for v in NANO_VERSIONS)}")
+                         f"{' or '.join('nanotrack:' + v for v in nanotrack_versions())}")
     unknown = sorted(set(overrides) - {"backbone", "head", "runtime", "threads"})
     if unknown:
         raise ValueError(f"nanotrack:{version} has no parameter {', '.join(map(repr, unknown))}; "
@@ -168,7 +169,8 @@ def _check_nanotrack_spec(version: str, overrides: dict[str, Any]) -> None:
 def add_model_options(p: argparse.ArgumentParser) -> None:
     """``--nano-backbone``, ``--nano-head`` and ``--vit-model``: the model files of OpenCV's
     neural-network trackers (``opencv:Nano``, ``opencv:Vit``), which no wheel ships."""
-    from ..trackers import MODEL_ENV, MODEL_FILES
+    from ..integrations.opencv_peers import MODEL_FILES
+    from ..networks.files import MODEL_ENV
 
     for kind, attrs in MODEL_ENV.items():
         for attr, env in attrs.items():
@@ -177,24 +179,24 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
             p.add_argument(option, type=Path, default=None, metavar="FILE",
                            help=f"for {users}: {MODEL_FILES[(kind, attr)]} (default: "
                            f"the environment variable {env}"
-                           + ("; rcwmil-nano and nanotrack:VERSION then look in the models "
-                              "folder, see `wmiltrack models list`)" if kind == "Nano" else ")"))
+                           + ("; then the models folder, see `wmiltrack models list`)"
+                              if kind == "Nano" else ")"))
 
 
 def _model_option(kind: str, attr: str) -> str:
     """``--nano-backbone``, ``--nano-head``, ``--vit-model``: the option of a model file."""
-    from ..trackers import model_option
+    from ..integrations.opencv_peers import model_option
 
     return model_option(kind, attr)
 
 
 def set_model_paths(args: argparse.Namespace) -> None:
     """Put the model files given by :func:`add_model_options` into their environment variables
-    (:data:`wmiltrack.trackers.MODEL_ENV`), where every tracker this run makes, in this process
-    or a worker started from it, finds them. A path that is not a file is a :class:`UsageError`."""
+    (:data:`wmiltrack.networks.files.MODEL_ENV`), where every tracker this run makes, in this
+    process or a worker started from it, finds them. A path that is not a file is a :class:`UsageError`."""
     import os
 
-    from ..trackers import MODEL_ENV
+    from ..networks.files import MODEL_ENV
 
     for kind, attrs in MODEL_ENV.items():
         for attr, env in attrs.items():
@@ -222,7 +224,7 @@ def tracker_from_args(args: argparse.Namespace, *, several: bool = False, ours: 
     ``several``: a :class:`wmiltrack.MultiTracker` (wmiltrack's presets only); ``ours``: a
     :class:`wmiltrack.Tracker` (not an OpenCV tracker). An unknown tracker or parameter, or a
     bad value, is a :class:`UsageError`; an OpenCV tracker missing from the installed ``cv2``
-    stays a :class:`wmiltrack.trackers.TrackerUnavailable` (exit status 1).
+    stays a :class:`wmiltrack.integrations.opencv_wheels.TrackerUnavailable` (exit status 1).
     """
     from ..trackers import make_tracker
 
@@ -257,9 +259,9 @@ def open_frames(path: Any, *, has_box: bool) -> Any:
 
 
 def add_executor_options(p: argparse.ArgumentParser, inputs: str) -> None:
-    """``-j/--jobs``, ``--executor`` and ``--scheduler`` (:func:`wmiltrack.executors.make_executor`),
+    """``-j/--jobs``, ``--executor`` and ``--scheduler`` (:func:`wmiltrack.parallel.executors.make_executor`),
     shared by ``eval`` and ``track --list``; ``inputs`` names what the workers must see."""
-    from ..executors import EXECUTORS
+    from ..parallel.executors import EXECUTORS
 
     p.add_argument("-j", "--jobs", type=int, default=1,
                    help="parallel processes or Dask workers (default 1)")

@@ -23,14 +23,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
+from ..networks.families import load_siamese
+from ..networks.siamese import SiameseStep, as_bgr
 from .geometry import centre, overlap, within
 from .result import TrackResult
 from .settings import ExpertSettings
-from .siamese import EXEMPLAR, INSTANCE, NANO_VERSIONS, SiameseLocator, as_bgr, context_side, load_network
 from .state import Verdict
 
 __all__ = ["ExpertJudge", "TwoExperts", "Verdict"]
@@ -107,14 +107,10 @@ class TwoExperts:
     """
 
     def __init__(self, settings: ExpertSettings) -> None:
-        from ..models import nanotrack_files
-
-        version = settings.network.rsplit("-", 1)[-1]
-        files = nanotrack_files(version, settings.backbone or None, settings.head or None)
-        network = load_network(Path(files[0]), Path(files[1]), settings.network_runtime,
-                               settings.network_threads)
         self.settings = settings
-        self.locator = SiameseLocator(network, NANO_VERSIONS[version])
+        self.locator: SiameseStep = load_siamese(
+            settings.network, backbone=settings.backbone or None, head=settings.head or None,
+            runtime=settings.network_runtime, threads=settings.network_threads)
         self._restart((0.0, 0.0, 0.0, 0.0))
 
     def start(self, frame: np.ndarray, box: FloatBox) -> None:
@@ -202,17 +198,17 @@ class TwoExperts:
         if n <= 0 or self._lost_for < self.settings.redetect_after:
             return places
         if not self._sweep:
-            self._sweep = _sweep(img.shape[1], img.shape[0], self.locator.size, centre(self._held))
+            reach = self.locator.search_side(self.locator.size) * 0.44  # half the answer grid's span
+            self._sweep = _sweep(img.shape[1], img.shape[0], reach, centre(self._held))
         places += self._sweep[:n]
         self._sweep = self._sweep[n:]
         return places
 
 
-def _sweep(fw: int, fh: int, size: tuple[float, float], near: tuple[float, float]
-           ) -> list[tuple[float, float]]:
-    """Search-window centres covering a ``fw x fh`` frame for a target of ``size`` (windows
-    0.8 of the network's reach apart), nearest to ``near`` first."""
-    reach = context_side(*size) * (INSTANCE / EXEMPLAR) * 0.44  # half the answer grid's span
+def _sweep(fw: int, fh: int, reach: float, near: tuple[float, float]) -> list[tuple[float, float]]:
+    """Search-window centres covering a ``fw x fh`` frame for a network that reaches ``reach``
+    frame pixels from a window's centre (windows 0.8 of that reach apart), nearest to ``near``
+    first."""
     step = max(0.8 * 2 * reach, 8.0)
     xs = np.arange(step / 2, fw + step / 2, step).clip(0, fw)
     ys = np.arange(step / 2, fh + step / 2, step).clip(0, fh)

@@ -95,8 +95,8 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from ..executors import Executor, ExecutorName, make_executor
-from ..trackers import TrackerUnavailable
+from ..integrations.opencv_wheels import TrackerUnavailable
+from ..parallel.executors import Executor, ExecutorName, make_executor
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 from .report import (
     box_path,

@@ -664,7 +664,7 @@ def environment(cv_threads: int | None = None) -> dict[str, Any]:
     import cv2
 
     from .. import __version__
-    from ..trackers import installed_opencv
+    from ..integrations.opencv_wheels import installed_opencv
 
     try:
         import matplotlib
