@@ -17,8 +17,7 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.engine.experts import ExpertJudge, Verdict
-from wmiltrack.engine.settings import ExpertSettings
+from wmiltrack.engine.experts import ExpertJudge, ExpertSettings, Verdict
 from wmiltrack.eval.metrics import iou
 
 

@@ -10,8 +10,7 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.engine.judge import Evidence, FrameJudge
-from wmiltrack.engine.settings import JudgeSettings
+from wmiltrack.engine.judge import Evidence, FrameJudge, JudgeSettings
 from wmiltrack.engine.state import FrameState, Verdict, new_frame
 
 _FRAME = np.zeros((4, 4), np.uint8)

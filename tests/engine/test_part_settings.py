@@ -1,5 +1,5 @@
 """Each part reads only its own settings: :func:`~wmiltrack.engine.tracker.compose` hands every
-part the settings class that owns it (``engine/settings.py``), never the whole ``Params``, and
+part the settings class that owns it (in the part's own module), never the whole ``Params``, and
 the user's part factories get their own settings only.
 
 The test records *every* read of a setting while every preset runs (any attribute read of
@@ -22,6 +22,16 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
+from wmiltrack.engine import (
+    AppearanceSettings,
+    ColourSettings,
+    JudgeSettings,
+    MotionSettings,
+    RecoverySettings,
+    ScaleSettings,
+    ScoreSettings,
+    TemplateSettings,
+)
 from wmiltrack.engine.appearance import HaarAppearance
 from wmiltrack.engine.classifier import GaussianPool
 from wmiltrack.engine.colour import ColourModel
@@ -33,16 +43,6 @@ from wmiltrack.engine.policy import ContrastScore, ReportedScore
 from wmiltrack.engine.recovery import Redetector
 from wmiltrack.engine.sampling import BagSampler
 from wmiltrack.engine.scale import DSSTScale, HaarScale
-from wmiltrack.engine.settings import (
-    AppearanceSettings,
-    ColourSettings,
-    JudgeSettings,
-    MotionSettings,
-    RecoverySettings,
-    ScaleSettings,
-    ScoreSettings,
-    TemplateSettings,
-)
 from wmiltrack.engine.template import CorrelationTemplate
 
 #: Each part class, with the settings class it may read.
@@ -240,3 +240,23 @@ def test_recovery_constants_are_settings() -> None:
             s.recover_template_area, s.recover_search_area) == (0.9, 10, 0.05, 1600.0, 256.0)
     with pytest.raises(ValueError, match="recover_memory"):
         wmiltrack.Params(recover_memory=1.0)
+
+
+def test_each_settings_class_lives_beside_its_part() -> None:
+    """Every settings class ``Params`` is made of is defined in a part's own module (not in
+    ``engine/settings.py``, which holds only what they share), is listed in that module's
+    ``__all__``, and is exported by ``wmiltrack.engine`` as the same class."""
+    import importlib
+
+    import wmiltrack.engine as engine
+    from wmiltrack.engine import settings as shared
+
+    for cls in {*PARTS, AppearanceSettings}:
+        module = importlib.import_module(cls.__module__)
+        assert module is not shared, f"{cls.__name__} is in engine/settings.py"
+        assert cls.__name__ in module.__all__, f"{cls.__name__} missing from {cls.__module__}.__all__"
+        assert getattr(engine, cls.__name__) is cls and cls.__name__ in engine.__all__
+    assert not [n for n in shared.__all__ if n.endswith("Settings")]
+    assert engine.Params is Params
+    with pytest.raises(AttributeError, match="NoSuchSettings"):
+        engine.NoSuchSettings  # noqa: B018

@@ -13,16 +13,16 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_preset
-from wmiltrack.engine.appearance import HaarAppearance
-from wmiltrack.engine.judge import Evidence, FrameJudge
-from wmiltrack.engine.motion import VelocityMotion
-from wmiltrack.engine.settings import (
+from wmiltrack.engine import (
     AppearanceSettings,
     JudgeSettings,
     MotionSettings,
     RecoverySettings,
     ScoreSettings,
 )
+from wmiltrack.engine.appearance import HaarAppearance
+from wmiltrack.engine.judge import Evidence, FrameJudge
+from wmiltrack.engine.motion import VelocityMotion
 from wmiltrack.engine.state import FrameState, Verdict
 
 Box = tuple[int, int, int, int]

@@ -12,9 +12,9 @@ import pytest
 import wmiltrack
 from wmiltrack import Params, Tracker
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.engine.judge import Evidence, FrameJudge
-from wmiltrack.engine.recovery import Redetector
-from wmiltrack.engine.settings import JudgeSettings, RecoverySettings, own
+from wmiltrack.engine.judge import Evidence, FrameJudge, JudgeSettings
+from wmiltrack.engine.recovery import RecoverySettings, Redetector
+from wmiltrack.engine.settings import own
 from wmiltrack.engine.state import FrameState, Verdict, new_frame
 from wmiltrack.eval.metrics import iou
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wmiltrack.engine.settings import NETWORKS
+from wmiltrack.engine.experts import NETWORKS
 from wmiltrack.networks.backends import DnnBackend, OrtBackend, choose_runtime, load_backend
 from wmiltrack.networks.families import load_siamese, siamese_networks
 from wmiltrack.networks.files import MODELS, nanotrack_versions

@@ -33,7 +33,7 @@ from wmiltrack.networks.files import (
     ModelFilesMissing,
     fetch,
     find_files,
-    locate,
+    look_up_files,
     models_dir,
     nanotrack_files,
 )
@@ -211,7 +211,7 @@ def test_lookup_order_given_paths_then_variables_then_models_folder(
     given = write_set(tmp_path / "given", "nanotrack-v3", fake["nanotrack-v3"])
     assert nanotrack_files(backbone=str(given["backbone"])) == (given["backbone"], folder["head"])
     assert nanotrack_files(head=given["head"]) == (env["backbone"], given["head"])
-    assert [p.origin for p in locate("nanotrack-v3", {"head": given["head"]})] == [
+    assert [p.origin for p in look_up_files("nanotrack-v3", {"head": given["head"]})] == [
         "$WMILTRACK_NANO_BACKBONE", "head="]
 
 
@@ -255,9 +255,9 @@ def test_bad_versions_and_roles_are_refused() -> None:
     with pytest.raises(ValueError, match="'v4'.*'v2', 'v3'"):
         nanotrack_files("v4")
     with pytest.raises(ValueError, match="no model set 'nanotrack'; the sets are nanotrack-v2, nanotrack-v3"):
-        locate("nanotrack")
+        look_up_files("nanotrack")
     with pytest.raises(ValueError, match=r"no file \['neck'\]"):
-        locate("nanotrack-v3", {"neck": "x.onnx"})
+        look_up_files("nanotrack-v3", {"neck": "x.onnx"})
 
 
 def test_another_sets_or_roles_file_is_an_error(

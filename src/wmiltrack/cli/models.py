@@ -11,12 +11,12 @@ from .options import EXIT_CODES_EPILOG, EXIT_ERROR, EXIT_OK, EXIT_USAGE, Subpars
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
-    from ..networks.files import MODELS, locate, models_dir, models_dir_origin
+    from ..networks.files import MODELS, look_up_files, models_dir, models_dir_origin
 
     print(f"models folder: {models_dir()} ({models_dir_origin()})")
     for s in MODELS.values():
         print(f"\n{s.name}  {s.title}: {s.repository} at {s.commit[:12]} ({s.license})")
-        for found in locate(s.name):
+        for found in look_up_files(s.name):
             f = s.files[found.role]
             print(f"  {found.role:<9} {f.name:<28} sha1 {f.sha1}")
             if found.problem is None:

@@ -10,16 +10,18 @@ made of nothing but this model runs all of that in one call to the core
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .. import _core
-from .classifier import GaussianPool
+from .classifier import ClassifierSettings, GaussianPool
 from .features import (
     CHANNEL_IDS,
     EDGE_CHANNELS,
     BankArrays,
+    FeatureSettings,
     available_channels,
     check_box_size,
     make_bank,
@@ -44,13 +46,67 @@ from .requests import (
     search_request,
     step_request,
 )
-from .sampling import BagSampler
+from .sampling import BagSampler, BagSettings
 from .selection import milboost_select
+from .settings import MAX_SEARCH_RADIUS, check_ints, need
 
-if TYPE_CHECKING:
-    from .settings import AppearanceSettings
+__all__ = ["AppearanceSettings", "HaarAppearance", "SearchSettings"]
 
-__all__ = ["HaarAppearance"]
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """The translation search: a coarse grid, then an optional fine one around its winner.
+
+    Attributes
+    ----------
+    coarse_radius, coarse_step : int
+        Search grid: offsets (i, j) * step with |offset| < radius.
+    fine_radius, fine_step : int
+        Second, finer search around the coarse winner (``fine_radius=0``: none).
+    """
+
+    coarse_radius: int = 25
+    coarse_step: int = 4
+    fine_radius: int = 10
+    fine_step: int = 1
+
+    def __post_init__(self) -> None:
+        SearchSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_ints(self, "coarse_radius", "coarse_step", "fine_radius", "fine_step")
+        need(self.coarse_radius >= 1 and self.coarse_step >= 1,
+             f"coarse_radius and coarse_step must be >= 1, got {self.coarse_radius}, {self.coarse_step}")
+        need(self.coarse_radius <= MAX_SEARCH_RADIUS and self.fine_radius <= MAX_SEARCH_RADIUS,
+             f"coarse_radius and fine_radius must be <= {MAX_SEARCH_RADIUS}, got "
+             f"{self.coarse_radius}, {self.fine_radius}")
+        need(self.fine_radius >= 0 and self.fine_step >= 1,
+             f"fine_radius must be >= 0 and fine_step >= 1, got {self.fine_radius}, {self.fine_step}")
+
+    @property
+    def stage_reach(self) -> int:
+        """Largest distance in pixels that the coarse and fine grids move the box."""
+        reach = self.coarse_radius - 1
+        if self.fine_radius > 0:
+            reach += self.fine_radius - 1
+        return reach
+
+
+@dataclass(frozen=True)
+class AppearanceSettings(SearchSettings, ClassifierSettings, BagSettings, FeatureSettings):
+    """The appearance model's settings (:class:`~wmiltrack.engine.appearance.HaarAppearance`):
+    the feature bank, the bags, the weak classifiers and their selection, and the search; the
+    four classes above at once (no field of its own)."""
+
+    def __post_init__(self) -> None:
+        AppearanceSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        for part in (FeatureSettings, BagSettings, ClassifierSettings, SearchSettings):
+            part.check(self)
+
 
 _NO_CORNERS = np.zeros((0, 2), dtype=np.int32)  # a learning request whose boxes the core samples
 _NO_CORNERS.setflags(write=False)

@@ -2,9 +2,87 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Literal, Protocol
+
 import numpy as np
 
-from .settings import AppearanceSettings
+from .settings import check_choices, check_numbers, need
+
+__all__ = ["CONFIDENCE_OFFSET", "ClassifierSettings", "GaussianPool"]
+
+#: Default of ``confidence_offset``: the mean weak-classifier log ratio at which a frame is as
+#: likely tracked (IoU > 0) as lost. A class-balanced logistic fit of "IoU > 0" on the mean log
+#: ratio over 17 OTB sequences and 6 generated full-occlusion/vanishing sequences gave offsets
+#: 1.25-1.63 and gains 0.8-1.1 for five variants (``scripts/score_study.py``).
+CONFIDENCE_OFFSET = 1.4
+
+
+@dataclass(frozen=True)
+class ClassifierSettings:
+    """The online Gaussian weak classifiers and how the strong classifier's features are chosen.
+
+    Attributes
+    ----------
+    learning_rate : float
+        lambda in [0, 1): weight of the old model in the Gaussian update.
+    classifier : {"gaussian", "mil"}
+        ``gaussian``: std-based update of CT/FCT/WMIL (spec 1.1); ``mil``: MILTrack's
+        variance-based update (spec 1.2).
+    first_update : {"direct", "blend"}
+        ``direct``: the first frame sets mu and sigma from the samples; ``blend``: the
+        references' quirk of blending them into (0, 1).
+    sigma_floor : float
+        Lower bound of every sigma.
+    guard : float
+        The epsilon added to each likelihood before the log (1e-30 CT family, 1e-5 MIL).
+    selection : {"wmil", "milboost", "none"}
+        Weighted-MIL gradient selection, MILBoost's Noisy-OR likelihood selection, or all
+        features (CT, FCT; then ``num_selected`` must equal ``num_features``).
+    instance_weights : {"exp", "exp_sq", "uniform"}
+        Positive-bag weights: exp(-d) normalised (paper), exp(-d^2) unnormalised (WMIL
+        reference code), or equal weights (OSIL).
+    gradient : {"paper", "code"}
+        WMIL selection gradient w s (1 - s) / sum(w s) (paper) or the reference code's
+        w s (1 - w s) / sum(w s).
+    confidence_offset : float
+        Offset of the confidence ``logistic(raw / K - offset)`` (see
+        :func:`wmiltrack.engine.policy.confidence`).
+    """
+
+    learning_rate: float = 0.9
+    classifier: Literal["gaussian", "mil"] = "gaussian"
+    first_update: Literal["direct", "blend"] = "direct"
+    sigma_floor: float = 1e-6
+    guard: float = 1e-30
+    selection: Literal["wmil", "milboost", "none"] = "wmil"
+    instance_weights: Literal["exp", "exp_sq", "uniform"] = "exp"
+    gradient: Literal["paper", "code"] = "paper"
+    confidence_offset: float = CONFIDENCE_OFFSET
+
+    def __post_init__(self) -> None:
+        ClassifierSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_choices(self, {"classifier": ("gaussian", "mil"), "first_update": ("direct", "blend"),
+                              "selection": ("wmil", "milboost", "none"),
+                              "instance_weights": ("exp", "exp_sq", "uniform"),
+                              "gradient": ("paper", "code")})
+        check_numbers(self, "learning_rate", "sigma_floor", "guard", "confidence_offset")
+        need(0.0 <= self.learning_rate < 1.0,
+             f"learning_rate (lambda) must be in [0, 1), got {self.learning_rate}")
+        need(self.sigma_floor > 0, f"sigma_floor must be > 0, got {self.sigma_floor}")
+        need(self.guard > 0, f"guard must be > 0, got {self.guard}")
+
+
+class _PoolSettings(Protocol):
+    """What a pool reads of the appearance model's settings
+    (:class:`~wmiltrack.engine.appearance.AppearanceSettings`, which holds these): the number
+    of features."""
+
+    @property
+    def num_features(self) -> int: ...
 
 
 class GaussianPool:
@@ -16,7 +94,7 @@ class GaussianPool:
     :meth:`assign`.
     """
 
-    def __init__(self, params: AppearanceSettings | int) -> None:
+    def __init__(self, params: _PoolSettings | int) -> None:
         """``params``: the appearance model's parameters (kept as :attr:`params`), or just a
         number of features (a model outside the appearance model's learning rules)."""
         m = params if isinstance(params, int) else params.num_features

@@ -20,13 +20,83 @@ alone.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _core
+from .settings import check_numbers, is_int, is_number, need
 
-__all__ = ["ColourModel", "box_contrast", "is_colour"]
+__all__ = ["ColourModel", "ColourSettings", "box_contrast", "check_colour_model", "is_colour"]
+
+
+def check_colour_model(obj: Any) -> None:
+    """``colour_learning_rate`` and ``colour_sample``, which the colour cue's and the reported
+    score's settings share, checked."""
+    check_numbers(obj, "colour_learning_rate")
+    need(0.0 < obj.colour_learning_rate <= 1.0,
+         f"colour_learning_rate must be in (0, 1], got {obj.colour_learning_rate!r}")
+    need(is_int(obj.colour_sample) and obj.colour_sample >= 0,
+         f"colour_sample must be an integer >= 0, got {obj.colour_sample!r}")
+
+
+@dataclass(frozen=True)
+class ColourSettings:
+    """The colour cue (:class:`wmiltrack.engine.cues.ColourCue`): a likelihood of the target's
+    colours merged into every translation search stage (Staple-style).
+
+    Attributes
+    ----------
+    colour_weight : float
+        Weight ``w`` of the cue in the merge: ``(1 - w) * confidence + w * colour`` per
+        candidate (0: no colour cue; also off for gray frames and BGR frames whose three
+        channels are equal, unless ``gray_colour``).
+    colour_relative : float or None
+        How the classifier's side of the merge is read (for every cue merged into the
+        search). None: its absolute confidence ``logistic(raw / K - confidence_offset)``. A
+        number ``c``: its confidence relative to the search grid's best candidate,
+        ``logistic((raw - best raw) / K + c)``, so that the best candidate of every frame
+        scores ``logistic(c)``. After a sudden change of appearance the absolute confidence
+        can fall to ~0 over the whole grid (a classifier learnt from a few frames is narrow),
+        and the cue alone then picks the box; measured from the grid's best, the classifier
+        keeps its say.
+    colour_learning_rate : float
+        Weight of each new frame's histograms in the search's colour model, in (0, 1]
+        (Staple: 0.04). The first frame's copies that the reported score reads never change.
+    colour_sample : int
+        The colour and intensity histograms' learning and the reported score's contrasts read
+        about this many pixels of a region at most (``engine.colour.ColourModel``'s
+        ``sample``: a region of ``A`` pixels at every ``ceil(sqrt(A / colour_sample))``-th
+        frame row and column; 0: every pixel). The search's cue always reads every pixel.
+    gray_colour : bool
+        On frames without colour, the colour cue (``colour_weight``, ``scale_contrast``,
+        ``score_colour``) reads histograms of the pixels' luma instead of being off: how
+        bright the target is against its surroundings is the colour cue that a gray video
+        has. Decided on the first frame.
+    """
+
+    colour_weight: float = 0.0
+    colour_relative: float | None = None
+    colour_learning_rate: float = 0.04
+    colour_sample: int = 0
+    gray_colour: bool = False
+
+    def __post_init__(self) -> None:
+        ColourSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_numbers(self, "colour_weight")
+        need(self.colour_relative is None or is_number(self.colour_relative),
+             f"colour_relative must be None or a finite number, got {self.colour_relative!r}")
+        need(0.0 <= self.colour_weight <= 1.0,
+             f"colour_weight must be in [0, 1], got {self.colour_weight}")
+        check_colour_model(self)
+        need(isinstance(self.gray_colour, bool),
+             f"gray_colour must be True or False, got {self.gray_colour!r}")
+
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -16,24 +16,69 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, Protocol, TypeVar
 
 import numpy as np
 import numpy.typing as npt
 
 from .. import _core
 from .frames import as_frame
+from .settings import is_int, need
 
 __all__ = [
     "CorrelationFilter",
     "CorrelationSettings",
+    "FilterLearning",
+    "FilterSchedule",
     "Location",
+    "NO_GATE",
     "ScaleEstimate",
     "ScaleFilter",
     "ScaleFilterSettings",
     "smooth_size",
     "SparseUpdates",
 ]
+
+
+class FilterSchedule(Protocol):
+    """The settings a :class:`FilterLearning` is made from: the template's
+    (:class:`~wmiltrack.engine.template.TemplateSettings`), or the scale estimator's
+    (:class:`~wmiltrack.engine.scale.ScaleSettings`), which share them."""
+
+    @property
+    def template_every(self) -> int: ...
+
+    @property
+    def template_gate(self) -> float: ...
+
+    @property
+    def template_reuse(self) -> bool: ...
+
+
+@dataclass(frozen=True)
+class FilterLearning:
+    """When the correlation filters learn, the one rule the translation template
+    (:class:`~wmiltrack.engine.template.CorrelationTemplate`) and the DSST scale filters
+    (:class:`~wmiltrack.engine.scale.DSSTScale`, the Haar scale search's vote) share: every
+    ``every``-th frame, among frames whose reported score is at least ``above``; with
+    ``reuse``, from the sample the frame's search already took. Made from the template's
+    settings by :meth:`of` (``template_every``, ``template_gate``, ``template_reuse``)."""
+
+    every: int = 1
+    above: float = 0.0
+    reuse: bool = False
+
+    @classmethod
+    def of(cls, template: FilterSchedule) -> FilterLearning:
+        """The rule that the ``template_*`` settings give (the template's, or those the
+        scale settings share)."""
+        return cls(every=template.template_every, above=template.template_gate,
+                   reuse=template.template_reuse)
+
+
+#: The filters' learning rule of the default settings: every frame, whatever its score.
+NO_GATE = FilterLearning()
+
 
 Box = tuple[float, float, float, float]
 
@@ -80,22 +125,13 @@ class SparseUpdates:
         return False
 
 
-def _need(ok: bool, message: str) -> None:
-    if not ok:
-        raise ValueError(message)
-
-
-def _is_int(v: Any) -> bool:
-    return isinstance(v, int) and not isinstance(v, bool)
-
-
 def _check_box(box: Any) -> Box:
     try:
         x, y, w, h = (float(v) for v in box)
     except (TypeError, ValueError):
         raise TypeError(f"box must be four numbers (x, y, w, h), got {box!r}") from None
-    _need(all(math.isfinite(v) for v in (x, y, w, h)), f"box must be finite, got {box!r}")
-    _need(w > 0 and h > 0, f"box must have a positive width and height, got {box!r}")
+    need(all(math.isfinite(v) for v in (x, y, w, h)), f"box must be finite, got {box!r}")
+    need(w > 0 and h > 0, f"box must have a positive width and height, got {box!r}")
     return x, y, w, h
 
 
@@ -104,7 +140,7 @@ def _check_point(name: str, value: Any) -> tuple[float, float]:
         a, b = (float(v) for v in value)
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be two numbers, got {value!r}") from None
-    _need(math.isfinite(a) and math.isfinite(b), f"{name} must be finite, got {value!r}")
+    need(math.isfinite(a) and math.isfinite(b), f"{name} must be finite, got {value!r}")
     return a, b
 
 
@@ -112,13 +148,13 @@ def _check_target(centre: Any, size: Any) -> tuple[tuple[float, float], tuple[fl
     """``centre`` and ``size`` as checked pairs (a positive size)."""
     c = _check_point("centre", centre)
     sz = _check_point("size", size)
-    _need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
+    need(sz[0] > 0 and sz[1] > 0, f"size must be positive, got {size!r}")
     return c, sz
 
 
 def _check_rate(rate: float) -> float:
-    _need(isinstance(rate, (int, float)) and not isinstance(rate, bool) and 0.0 < float(rate) <= 1.0,
-          f"rate must be in (0, 1], got {rate!r}")
+    need(isinstance(rate, (int, float)) and not isinstance(rate, bool) and 0.0 < float(rate) <= 1.0,
+         f"rate must be in (0, 1], got {rate!r}")
     return float(rate)
 
 
@@ -158,20 +194,20 @@ class CorrelationSettings:
 
     def __post_init__(self) -> None:
         """Check every value (ValueError naming the setting)."""
-        _need(_is_int(self.cell) and 1 <= self.cell <= 16, f"cell must be an int in 1..16, got {self.cell!r}")
-        _need(_is_int(self.exclusion) and self.exclusion >= 0,
-              f"exclusion must be an int >= 0, got {self.exclusion!r}")
-        _need(_is_int(self.compressed) and 0 <= self.compressed <= _core.FHOG_CHANNELS,
-              f"compressed must be an int in 0..{_core.FHOG_CHANNELS}, got {self.compressed!r}")
-        _need(math.isfinite(self.template_area) and self.template_area >= (4 * self.cell) ** 2,
-              f"template_area must be at least (4 cell)**2 = {(4 * self.cell) ** 2}, "
-              f"got {self.template_area!r}")
-        _need(math.isfinite(self.padding) and self.padding >= 0.0,
-              f"padding must be >= 0, got {self.padding!r}")
-        _need(math.isfinite(self.sigma_factor) and self.sigma_factor > 0.0,
-              f"sigma_factor must be > 0, got {self.sigma_factor!r}")
-        _need(math.isfinite(self.lam) and self.lam >= 0.0, f"lam must be >= 0, got {self.lam!r}")
-        _need(0.0 < self.learning_rate <= 1.0, f"learning_rate must be in (0, 1], got {self.learning_rate!r}")
+        need(is_int(self.cell) and 1 <= self.cell <= 16, f"cell must be an int in 1..16, got {self.cell!r}")
+        need(is_int(self.exclusion) and self.exclusion >= 0,
+             f"exclusion must be an int >= 0, got {self.exclusion!r}")
+        need(is_int(self.compressed) and 0 <= self.compressed <= _core.FHOG_CHANNELS,
+             f"compressed must be an int in 0..{_core.FHOG_CHANNELS}, got {self.compressed!r}")
+        need(math.isfinite(self.template_area) and self.template_area >= (4 * self.cell) ** 2,
+             f"template_area must be at least (4 cell)**2 = {(4 * self.cell) ** 2}, "
+             f"got {self.template_area!r}")
+        need(math.isfinite(self.padding) and self.padding >= 0.0,
+             f"padding must be >= 0, got {self.padding!r}")
+        need(math.isfinite(self.sigma_factor) and self.sigma_factor > 0.0,
+             f"sigma_factor must be > 0, got {self.sigma_factor!r}")
+        need(math.isfinite(self.lam) and self.lam >= 0.0, f"lam must be >= 0, got {self.lam!r}")
+        need(0.0 < self.learning_rate <= 1.0, f"learning_rate must be in (0, 1], got {self.learning_rate!r}")
 
 
 @dataclass(frozen=True)
@@ -206,24 +242,24 @@ class ScaleFilterSettings:
 
     def __post_init__(self) -> None:
         """Check every value (ValueError naming the setting)."""
-        _need(_is_int(self.num_scales) and self.num_scales >= 3 and self.num_scales % 2 == 1,
-              f"num_scales must be an odd int >= 3, got {self.num_scales!r}")
-        _need(math.isfinite(self.step) and self.step > 1.0, f"step must be > 1, got {self.step!r}")
-        _need(math.isfinite(self.sigma_factor) and self.sigma_factor > 0.0,
-              f"sigma_factor must be > 0, got {self.sigma_factor!r}")
-        _need(math.isfinite(self.lam) and self.lam >= 0.0, f"lam must be >= 0, got {self.lam!r}")
-        _need(0.0 < self.learning_rate <= 1.0, f"learning_rate must be in (0, 1], got {self.learning_rate!r}")
-        _need(_is_int(self.cell) and 1 <= self.cell <= 16, f"cell must be an int in 1..16, got {self.cell!r}")
-        _need(math.isfinite(self.max_area) and self.max_area >= self.cell**2,
-              f"max_area must be at least cell**2, got {self.max_area!r}")
+        need(is_int(self.num_scales) and self.num_scales >= 3 and self.num_scales % 2 == 1,
+             f"num_scales must be an odd int >= 3, got {self.num_scales!r}")
+        need(math.isfinite(self.step) and self.step > 1.0, f"step must be > 1, got {self.step!r}")
+        need(math.isfinite(self.sigma_factor) and self.sigma_factor > 0.0,
+             f"sigma_factor must be > 0, got {self.sigma_factor!r}")
+        need(math.isfinite(self.lam) and self.lam >= 0.0, f"lam must be >= 0, got {self.lam!r}")
+        need(0.0 < self.learning_rate <= 1.0, f"learning_rate must be in (0, 1], got {self.learning_rate!r}")
+        need(is_int(self.cell) and 1 <= self.cell <= 16, f"cell must be an int in 1..16, got {self.cell!r}")
+        need(math.isfinite(self.max_area) and self.max_area >= self.cell**2,
+             f"max_area must be at least cell**2, got {self.max_area!r}")
 
     @classmethod
     def spanning(cls, num_scales: int, learning_rate: float = 0.025) -> ScaleFilterSettings:
         """Settings with ``num_scales`` samples over DSST's range (33 samples 1.02 apart:
         sizes 1.02**-16 .. 1.02**16) and a label as wide in log-size as DSST's, so that
         fewer samples (fDSST's 17) cost less and answer about the same."""
-        _need(_is_int(num_scales) and num_scales >= 3 and num_scales % 2 == 1,
-              f"num_scales must be an odd int >= 3, got {num_scales!r}")
+        need(is_int(num_scales) and num_scales >= 3 and num_scales % 2 == 1,
+             f"num_scales must be an odd int >= 3, got {num_scales!r}")
         base = cls(learning_rate=learning_rate)
         if num_scales == base.num_scales:
             return base

@@ -16,9 +16,8 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 import numpy.typing as npt
 
-from .colour import ColourModel, box_contrast
+from .colour import ColourModel, ColourSettings, box_contrast
 from .frames import IntBox
-from .settings import ColourSettings
 
 __all__ = ["ColourCue", "Cue", "CueTable", "check_cue_weights"]
 

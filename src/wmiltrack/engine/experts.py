@@ -7,7 +7,7 @@ score says when it is wrong (the network's best score is close to 1 on almost ev
 :class:`TwoExperts` runs both each frame and :class:`ExpertJudge` decides, from a memory of the
 target that neither expert's search changes (the network's first-frame template, compared with
 the network's choice: the *likeness*), whether the target is tracked, doubtful, lost or found
-again; see :class:`~wmiltrack.engine.settings.ExpertSettings` for the rules and their values.
+again; see :class:`ExpertSettings` for the rules and their values.
 
 One frame::
 
@@ -23,17 +23,133 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..networks.families import load_siamese
+from ..networks.backends import RUNTIMES
+from ..networks.families import load_siamese, siamese_networks
 from ..networks.siamese import SiameseStep, as_bgr
 from .geometry import centre, overlap, within
 from .result import TrackResult
-from .settings import ExpertSettings
+from .settings import check_choices, check_ints, check_numbers, need
 from .state import Verdict
 
-__all__ = ["ExpertJudge", "TwoExperts", "Verdict"]
+__all__ = ["NETWORKS", "ExpertJudge", "ExpertSettings", "TwoExperts", "Verdict"]
+
+
+NETWORKS: tuple[str, ...] = ("", *siamese_networks())
+"""The Siamese networks :class:`ExpertSettings` can add ("" for none): the model sets of
+:func:`wmiltrack.networks.families.siamese_networks`."""
+
+
+@dataclass(frozen=True)
+class ExpertSettings:
+    """A Siamese network as a second expert beside the tracker, and the judge between the two
+    (:class:`wmiltrack.engine.experts.TwoExperts`; rcwmil-nano).
+
+    The network (NanoTrack, :mod:`wmiltrack.networks.nanotrack`) leads: it is the more accurate
+    locator on the development set, and its first-frame template is a memory of the target
+    that never learns. Each frame the judge compares the two experts' boxes and asks the
+    network's backbone how alike the network's box is to the first frame's target (the cosine
+    of their feature maps, the *likeness*). Where the boxes agree (IoU >= ``expert_agree``) the
+    box is their mix, the filter's share ``expert_blend``; where they do not, the network's box
+    is taken and the filter is moved there (keeping what it learnt). ``ok`` comes from the
+    likeness with hysteresis: lost after ``lost_frames`` frames in a row below ``like_low``,
+    found again after ``found_frames`` frames in a row above ``like_high``. While lost, the
+    network searches, after ``redetect_after`` lost frames, ``redetect_windows`` more windows a
+    frame over the whole frame (nearest first, then sweeping) besides its own and the
+    tracker's box, and moves to one that is alike the target and more alike than its own.
+
+    Attributes
+    ----------
+    network : str
+        ``"nanotrack-v3"`` or ``"nanotrack-v2"``; ``""`` leaves the network out.
+    backbone, head : str
+        The model files' paths; ``""`` finds them (:func:`wmiltrack.networks.files.nanotrack_files`:
+        ``WMILTRACK_NANO_BACKBONE`` / ``WMILTRACK_NANO_HEAD``, then the models folder).
+    network_runtime : str
+        ``"auto"`` (onnxruntime when installed, else OpenCV's dnn), ``"onnxruntime"`` or
+        ``"opencv"``.
+    network_threads : int
+        Threads of the network's runtime.
+    expert_agree : float
+        The two boxes' IoU at which the experts agree.
+    expert_blend : float
+        The filter's share of the box where they agree, in [0, 1].
+    like_low, like_high : float
+        The likeness below which a frame counts against the target and above which it counts
+        for it.
+    like_drop : float
+        The share of the running mean below which a frame counts against the target (0: never).
+    like_found : float
+        The share of the running mean above which a lost frame counts for the target (with
+        ``like_high``), at least ``like_drop``.
+    like_rate : float
+        The running mean's learning rate, in (0, 1].
+    lost_frames, found_frames : int
+        Frames in a row that start and end the lost state.
+    redetect_windows : int
+        Whole-frame search windows a lost frame tries besides the network's own (0: none).
+    redetect_after : int
+        Lost frames before the whole-frame windows start: a short spell (a turn, a brief
+        occlusion) is better left to the network's own search than risked on a far place that
+        looks like the target's surroundings.
+    likeness_every : int
+        On frames where the experts agree and the tracker says ``ok`` (which never count
+        against the target), the likeness is measured only every ``likeness_every``-th such
+        frame (it costs one more pass of the backbone); the reported score repeats the last
+        measured one in between. 1: every frame.
+    """
+
+    network: str = ""
+    backbone: str = ""
+    head: str = ""
+    network_runtime: str = "auto"
+    network_threads: int = 1
+    expert_agree: float = 0.3
+    expert_blend: float = 0.2
+    like_low: float = 0.45
+    like_high: float = 0.6
+    like_drop: float = 0.8
+    like_found: float = 0.9
+    like_rate: float = 0.05
+    lost_frames: int = 3
+    found_frames: int = 2
+    redetect_windows: int = 4
+    redetect_after: int = 10
+    likeness_every: int = 1
+
+    def __post_init__(self) -> None:
+        ExpertSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_choices(self, {"network": NETWORKS,
+                              "network_runtime": RUNTIMES})
+        need(isinstance(self.backbone, str) and isinstance(self.head, str),
+             "backbone and head must be paths as strings ('' to find them)")
+        check_ints(self, "network_threads", "lost_frames", "found_frames", "redetect_windows",
+                   "redetect_after", "likeness_every")
+        need(self.redetect_after >= 0, f"redetect_after must be >= 0, got {self.redetect_after}")
+        need(self.likeness_every >= 1, f"likeness_every must be >= 1, got {self.likeness_every}")
+        check_numbers(self, "expert_agree", "expert_blend", "like_low", "like_high", "like_drop",
+                      "like_found", "like_rate")
+        need(0.0 <= self.like_drop <= self.like_found <= 1.0,
+             f"like_drop and like_found must satisfy 0 <= like_drop <= like_found <= 1, got "
+             f"{self.like_drop} and {self.like_found}")
+        need(0.0 < self.like_rate <= 1.0, f"like_rate must be in (0, 1], got {self.like_rate}")
+        need(self.network_threads >= 1, f"network_threads must be >= 1, got {self.network_threads}")
+        need(0.0 <= self.expert_agree <= 1.0, f"expert_agree must be in [0, 1], got {self.expert_agree}")
+        need(0.0 <= self.expert_blend <= 1.0, f"expert_blend must be in [0, 1], got {self.expert_blend}")
+        need(-1.0 <= self.like_low <= self.like_high <= 1.0,
+             f"like_low and like_high must satisfy -1 <= like_low <= like_high <= 1, got "
+             f"{self.like_low} and {self.like_high}")
+        need(self.lost_frames >= 1, f"lost_frames must be >= 1, got {self.lost_frames}")
+        need(self.found_frames >= 1, f"found_frames must be >= 1, got {self.found_frames}")
+        need(self.redetect_windows >= 0,
+             f"redetect_windows must be >= 0, got {self.redetect_windows}")
+
 
 FloatBox = tuple[float, float, float, float]
 

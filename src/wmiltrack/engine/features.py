@@ -8,11 +8,120 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
 from .. import _core
-from .settings import FeatureSettings
+from .settings import check_choices, check_ints, is_int, need
+
+__all__ = ["CHANNELS", "CHANNEL_IDS", "COLOUR_CHANNELS", "EDGE_CHANNELS", "BankArrays", "FeatureSettings",
+           "available_channels", "box_area_ok", "check_box_size", "make_bank", "min_box_size",
+           "rect_planes", "scale_bank"]
+
+#: The image channels a feature may read (``FeatureSettings.channels``).
+CHANNELS = ("luma", "grad", "opp_rg", "opp_yb")
+
+
+@dataclass(frozen=True)
+class FeatureSettings:
+    """The Haar-like feature bank and its classifier's size (the appearance model).
+
+    Attributes
+    ----------
+    feature_kind : {"subregion", "random"}
+        ``subregion``: rectangles drawn inside a grid of sub-regions of the box with size
+        limits (rcwmil, OSIL). ``random``: rectangles anywhere in the box (CT, FCT, MIL, WMIL).
+    num_features : int
+        M, the size of the feature pool.
+    num_selected : int
+        K, how many features the strong classifier uses (== M when ``selection="none"``).
+    rects_min, rects_max : int
+        Rectangles per feature, drawn uniformly in ``rects_min..rects_max`` (inclusive).
+    num_subregions : int
+        Sub-regions for ``subregion`` features: 4 = 2x2 grid (``subregion_mode="grid"``).
+    subregion_mode : {"grid", "random"}
+        ``grid``: quadrant ``i mod 4`` for feature i; ``random``: a W/2 x H/2 window at a
+        random place per feature (spec section 8 #3).
+    positive_prob : float
+        Probability of a +1 entry of the measurement matrix (0.78; -1 otherwise).
+    rect_min_size : int
+        Smallest rectangle side in pixels (w_min = h_min = 2).
+    beta_min, beta_max : float
+        Rectangle side limits as fractions of the sub-region side (0.2, 0.8).
+    rect_bounds : tuple of 4 int
+        For ``random`` features: ``(x_lo, x_hi_off, w_lo, w_end_off)``: a rectangle's x is
+        drawn in ``x_lo .. W - x_hi_off`` and its width in ``w_lo .. W - x - w_end_off``
+        (same for y and h), matching each reference implementation's ranges.
+    weight_mode : {"sign", "sign_sqrt", "uniform"}
+        Rectangle weights of ``random`` features: fair +-1, +-1/sqrt(#rects) (CT), U[-1, 1].
+    area_normalize : bool
+        Divide each rectangle's sum by its area (FCT eq. 8; rcwmil) or use raw sums.
+    min_box_size : int
+        Smallest box side accepted (after clipping to the frame).
+    channels : tuple of str
+        Image channels the features are drawn on, each feature on one: any of ``"luma"``,
+        ``"grad"`` (gradient magnitude), ``"opp_rg"``, ``"opp_yb"`` (colour opponents; they
+        drop out for gray frames). Empty (the paper): luma only, one integral image.
+    """
+
+    feature_kind: Literal["subregion", "random"] = "subregion"
+    num_features: int = 100
+    num_selected: int = 20
+    rects_min: int = 2
+    rects_max: int = 4
+    num_subregions: int = 4
+    subregion_mode: Literal["grid", "random"] = "grid"
+    positive_prob: float = 0.78
+    rect_min_size: int = 2
+    beta_min: float = 0.2
+    beta_max: float = 0.8
+    rect_bounds: tuple[int, int, int, int] = (1, 6, 2, 3)
+    weight_mode: Literal["sign", "sign_sqrt", "uniform"] = "sign"
+    area_normalize: bool = True
+    min_box_size: int = 4
+    channels: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        FeatureSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_choices(self, {"feature_kind": ("subregion", "random"),
+                              "subregion_mode": ("grid", "random"),
+                              "weight_mode": ("sign", "sign_sqrt", "uniform")})
+        check_ints(self, "num_features", "num_selected", "rects_min", "rects_max",
+                   "num_subregions", "rect_min_size", "min_box_size")
+        need(self.num_features >= 1, f"num_features must be >= 1, got {self.num_features}")
+        need(1 <= self.num_selected <= self.num_features,
+             f"num_selected (K) must be in 1..num_features ({self.num_features}), got {self.num_selected}")
+        need(1 <= self.rects_min <= self.rects_max,
+             f"need 1 <= rects_min <= rects_max, got {self.rects_min}, {self.rects_max}")
+        need(self.num_subregions in (1, 4, 9, 16) if self.subregion_mode == "grid"
+             else self.num_subregions >= 1,
+             f"num_subregions for a grid must be a square (1, 4, 9, 16), got {self.num_subregions}")
+        need(0.0 <= self.positive_prob <= 1.0,
+             f"positive_prob must be in [0, 1], got {self.positive_prob}")
+        need(self.rect_min_size >= 1, f"rect_min_size must be >= 1, got {self.rect_min_size}")
+        need(0.0 < self.beta_min <= self.beta_max <= 1.0,
+             f"need 0 < beta_min <= beta_max <= 1, got {self.beta_min}, {self.beta_max}")
+        need(len(self.rect_bounds) == 4 and all(is_int(v) and v >= 0 for v in self.rect_bounds),
+             f"rect_bounds must be four ints >= 0, got {self.rect_bounds}")
+        need(self.rect_bounds[2] >= 1, "rect_bounds[2] (smallest rectangle side) must be >= 1")
+        # A rectangle starts at most rect_bounds[1] pixels before the box's far edge and is at
+        # least rect_bounds[2] wide: it only stays inside the box if the latter fits.
+        need(self.rect_bounds[2] <= self.rect_bounds[1],
+             f"rect_bounds[2] (smallest rectangle side, {self.rect_bounds[2]}) must be <= "
+             f"rect_bounds[1] (room left after a rectangle's start, {self.rect_bounds[1]})")
+        need(self.min_box_size >= 2, f"min_box_size must be >= 2, got {self.min_box_size}")
+        need(isinstance(self.channels, tuple) and all(c in CHANNELS for c in self.channels)
+             and len(set(self.channels)) == len(self.channels),
+             f"channels must be a tuple of distinct names from {', '.join(CHANNELS)}; "
+             f"got {self.channels!r}")
+        need(self.channels == () or any(c not in ("opp_rg", "opp_yb") for c in self.channels),
+             "channels needs a gray channel: luma or grad (the colour channels drop out for "
+             "gray frames)")
+
 
 #: Channel names (``Params.channels``) and their ids in ``_core.IntegralImage.compute_channels``.
 CHANNEL_IDS = {"luma": _core.CH_LUMA, "grad": _core.CH_GRAD, "opp_rg": _core.CH_OPP_RG,

@@ -4,14 +4,49 @@ on the last box (the paper)."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
 from .frames import IntBox
 from .geometry import centred
-from .settings import MotionSettings
+from .settings import MAX_SEARCH_RADIUS, check_choices, check_numbers, need
 
-__all__ = ["VelocityMotion"]
+__all__ = ["MotionSettings", "VelocityMotion"]
+
+
+@dataclass(frozen=True)
+class MotionSettings:
+    """The motion model (:mod:`wmiltrack.engine.motion`): where the search is centred.
+
+    Attributes
+    ----------
+    motion : {"none", "velocity"}
+        Centre the search on the last box (``none``: no motion model) or on a
+        constant-velocity prediction of the box centre (``velocity``; falls back to the last
+        box when the last frame's confidence was below ``lost_threshold``).
+    motion_smoothing : float
+        Weight of the old velocity in the exponential velocity estimate, in [0, 1).
+    motion_max : float
+        The predicted displacement is clipped to this many pixels per frame.
+    """
+
+    motion: Literal["none", "velocity"] = "none"
+    motion_smoothing: float = 0.5
+    motion_max: float = 30.0
+
+    def __post_init__(self) -> None:
+        MotionSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_choices(self, {"motion": ("none", "velocity")})
+        check_numbers(self, "motion_smoothing", "motion_max")
+        need(0.0 <= self.motion_smoothing < 1.0,
+             f"motion_smoothing must be in [0, 1), got {self.motion_smoothing}")
+        need(0.0 <= self.motion_max <= MAX_SEARCH_RADIUS,
+             f"motion_max must be in [0, {MAX_SEARCH_RADIUS}], got {self.motion_max}")
 
 
 class VelocityMotion:

@@ -1,7 +1,7 @@
 """Tracker parameters: the public face of every part's settings, one frozen object per variant.
 
-A :class:`Params` is all the part settings of :mod:`wmiltrack.engine.settings` at once, in one
-flat namespace (``Tracker("fct", num_features=200)``, ``--set key=value``,
+A :class:`Params` is every part's settings class at once (:data:`PARTS`, each in its part's
+module), in one flat namespace (``Tracker("fct", num_features=200)``, ``--set key=value``,
 ``rcwmil:key=value``); each setting is documented and checked by the part class that owns it.
 The defaults follow the project's spec of the six paper presets and, for rcwmil, the paper;
 :data:`VARIANTS` holds every preset's values.
@@ -14,26 +14,20 @@ import difflib
 from dataclasses import dataclass, field
 from typing import Any
 
+from .appearance import AppearanceSettings, SearchSettings
+from .classifier import CONFIDENCE_OFFSET, ClassifierSettings
+from .colour import ColourSettings
 from .cues import check_cue_weights
-from .settings import (
-    CONFIDENCE_OFFSET,
-    MAX_NEG_RADIUS,
-    MAX_POS_RADIUS,
-    MAX_SEARCH_RADIUS,
-    AppearanceSettings,
-    BagSettings,
-    ClassifierSettings,
-    ColourSettings,
-    ExpertSettings,
-    FeatureSettings,
-    JudgeSettings,
-    MotionSettings,
-    RecoverySettings,
-    ScaleSettings,
-    ScoreSettings,
-    SearchSettings,
-    TemplateSettings,
-)
+from .experts import ExpertSettings
+from .features import FeatureSettings
+from .judge import JudgeSettings
+from .motion import MotionSettings
+from .policy import ScoreSettings
+from .recovery import RecoverySettings
+from .sampling import MAX_NEG_RADIUS, MAX_POS_RADIUS, BagSettings
+from .scale import ScaleSettings
+from .settings import MAX_SEARCH_RADIUS
+from .template import TemplateSettings
 
 __all__ = ["CONFIDENCE_OFFSET", "MAX_NEG_RADIUS", "MAX_POS_RADIUS", "MAX_SEARCH_RADIUS", "PARTS",
            "Params", "VARIANTS", "variants"]
@@ -55,18 +49,18 @@ class Params(ExpertSettings, JudgeSettings, RecoverySettings, TemplateSettings, 
     """All settings of one tracker variant (defaults: rcwmil, the paper's tracker).
 
     Every field belongs to one part, which documents and checks it:
-    :class:`~wmiltrack.engine.settings.FeatureSettings` (the Haar feature bank),
-    :class:`~wmiltrack.engine.settings.BagSettings` (the bags learnt from),
-    :class:`~wmiltrack.engine.settings.ClassifierSettings` (weak classifiers and selection),
-    :class:`~wmiltrack.engine.settings.SearchSettings` (the translation search),
-    :class:`~wmiltrack.engine.settings.ScaleSettings` (the scale estimator),
-    :class:`~wmiltrack.engine.settings.MotionSettings` (the motion model),
-    :class:`~wmiltrack.engine.settings.ColourSettings` (the colour cue),
-    :class:`~wmiltrack.engine.settings.ScoreSettings` (the reported score and lost state),
-    :class:`~wmiltrack.engine.settings.TemplateSettings` (the correlation-filter template),
-    :class:`~wmiltrack.engine.settings.RecoverySettings` (the lost state and re-detection) and
-    :class:`~wmiltrack.engine.settings.JudgeSettings` (the judge of ``ok``) and
-    :class:`~wmiltrack.engine.settings.ExpertSettings` (a Siamese network as a second expert).
+    :class:`~wmiltrack.engine.features.FeatureSettings` (the Haar feature bank),
+    :class:`~wmiltrack.engine.sampling.BagSettings` (the bags learnt from),
+    :class:`~wmiltrack.engine.classifier.ClassifierSettings` (weak classifiers and selection),
+    :class:`~wmiltrack.engine.appearance.SearchSettings` (the translation search),
+    :class:`~wmiltrack.engine.scale.ScaleSettings` (the scale estimator),
+    :class:`~wmiltrack.engine.motion.MotionSettings` (the motion model),
+    :class:`~wmiltrack.engine.colour.ColourSettings` (the colour cue),
+    :class:`~wmiltrack.engine.policy.ScoreSettings` (the reported score),
+    :class:`~wmiltrack.engine.template.TemplateSettings` (the correlation-filter template),
+    :class:`~wmiltrack.engine.recovery.RecoverySettings` (the lost state and re-detection),
+    :class:`~wmiltrack.engine.judge.JudgeSettings` (the judge of ``ok``) and
+    :class:`~wmiltrack.engine.experts.ExpertSettings` (a Siamese network as a second expert).
     The defaults of the last seven leave their part out, so the paper presets run the paper's
     code path.
 

@@ -16,19 +16,15 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from .appearance import HaarAppearance
+from .appearance import AppearanceSettings, HaarAppearance
 from .frames import IntBox
-from .settings import (
-    AppearanceSettings,
-    JudgeSettings,
-    MotionSettings,
-    RecoverySettings,
-    ScaleSettings,
-    ScoreSettings,
-)
+from .judge import Evidence, JudgeSettings
+from .motion import MotionSettings
+from .policy import ScoreSettings
+from .recovery import RecoverySettings
+from .scale import ScaleSettings
 
 if TYPE_CHECKING:
-    from .judge import Evidence
     from .state import FrameState
 
 __all__ = ["PART_KINDS", "PART_SETTINGS", "Judge", "MotionModel", "PartFactory", "Recovery",

@@ -4,14 +4,70 @@ score means for ``ok``, the lost state and learning is the judge's: :mod:`.judge
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
-from .colour import ColourModel
+from .classifier import CONFIDENCE_OFFSET
+from .colour import ColourModel, check_colour_model
 from .frames import IntBox
-from .settings import CONFIDENCE_OFFSET, ScoreSettings
+from .settings import check_choices, is_number, need
 
-__all__ = ["ContrastScore", "ReportedScore", "confidence", "logistic"]
+__all__ = ["ContrastScore", "ReportedScore", "ScoreSettings", "confidence", "logistic"]
+
+
+@dataclass(frozen=True)
+class ScoreSettings:
+    """The reported score (:mod:`wmiltrack.engine.policy`).
+
+    Attributes
+    ----------
+    score_colour : float
+        Weight ``w`` of the box's colour contrast in the reported confidence
+        (``TrackResult.score``): ``(1 - w) * logistic(raw / K - offset) + w * clip(0.5 +
+        contrast, 0, 1)``, ``contrast`` being the mean ``P(target | colour)`` inside the box
+        minus that over a ring around it (:func:`wmiltrack.engine.colour.colour_contrast`):
+        a box on the target holds its colours and its surroundings do not, while a lost box
+        sees background on both sides. Needs the colour cue. Only the report changes. 0: off.
+    score_colour_model : {"current", "first"}
+        Which colour histograms ``score_colour``'s contrast reads: ``current``, the ones the
+        search uses (updated every frame, so they follow the box wherever it goes), or
+        ``first``, the histograms learnt on the first frame and never updated (a memory of
+        what the target looked like: a box that drifted onto background keeps a high
+        classifier confidence, since the classifier learns the background it sits on, but
+        its colours no longer stand out under the first frame's model).
+    score_luma : float
+        Weight ``v`` of a second contrast in the reported confidence: the box's contrast under
+        a histogram of the first frame's intensities (luma, 32 levels), learnt once and never
+        updated, on colour and gray frames alike. The score becomes ``(1 - w - v) * conf +
+        w * clip(0.5 + colour contrast, 0, 1) + v * clip(0.5 + luma contrast, 0, 1)``; on
+        frames without colour the colour term reads the luma contrast. 0: off.
+    colour_learning_rate, colour_sample : float, int
+        The colour cue's (:class:`~wmiltrack.engine.colour.ColourSettings`, which documents them), shared: the
+        reported score keeps histograms of its own, learnt as the cue's are (with
+        ``score_colour_model="current"``, learnt on the same frames as the cue's, so equal to
+        them).
+    """
+
+    score_colour: float = 0.0
+    score_colour_model: Literal["current", "first"] = "current"
+    score_luma: float = 0.0
+    colour_learning_rate: float = 0.04
+    colour_sample: int = 0
+
+    def __post_init__(self) -> None:
+        ScoreSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_colour_model(self)
+        check_choices(self, {"score_colour_model": ("current", "first")})
+        need(is_number(self.score_colour) and 0.0 <= self.score_colour <= 1.0,
+             f"score_colour must be in [0, 1], got {self.score_colour!r}")
+        need(is_number(self.score_luma) and 0.0 <= self.score_luma <= 1.0
+             and self.score_colour + self.score_luma <= 1.0,
+             f"score_luma must be in [0, 1 - score_colour], got {self.score_luma!r}")
 
 
 def logistic(z: float) -> float:
@@ -26,7 +82,7 @@ def confidence(raw: float, k: int, offset: float = CONFIDENCE_OFFSET) -> float:
     """Confidence in [0, 1] of a frame from its best candidate's summed log ratio ``raw``.
 
     ``logistic(raw / k - offset)`` (``offset``: ``Params.confidence_offset``, by default
-    :data:`~wmiltrack.engine.settings.CONFIDENCE_OFFSET`): 0.5 at the point where, on the
+    :data:`~wmiltrack.engine.classifier.CONFIDENCE_OFFSET`): 0.5 at the point where, on the
     benchmark sequences, tracked and lost frames were equally likely; 0 when no candidate
     was scored. This is ``TrackResult.score`` of the six paper variants.
     """

@@ -20,14 +20,98 @@ which runs over a whole frame in a few milliseconds) is indifferent to gain and 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
 
 from .frames import IntBox
-from .settings import RecoverySettings
+from .settings import check_numbers, need
 
-__all__ = ["Redetector"]
+__all__ = ["Redetector", "RecoverySettings", "check_recover_memory"]
+
+
+def check_recover_memory(obj: Any) -> None:
+    """``recover_memory``, which the judge's and the recovery's settings share, checked."""
+    check_numbers(obj, "recover_memory")
+    need(0.0 <= obj.recover_memory < 1.0,
+         f"recover_memory must be in [0, 1), got {obj.recover_memory}")
+
+
+@dataclass(frozen=True)
+class RecoverySettings:
+    """The re-detection of a lost target (:class:`wmiltrack.engine.recovery.Redetector`; the
+    judge's ``redetect``, ``lost_drop`` and ``recover_warmup`` start the lost state).
+
+    A target that is hidden (a full occlusion) or gone (out of view) must not be learnt: the
+    classifier, the cues and the scale model would adopt the occluder or the background, and the
+    score would climb back as if the target were there. With ``redetect``, a frame whose
+    classifier confidence drops below ``lost_drop`` times its running mean over tracked frames
+    starts the lost state: the box is held at the last confident one, ``ok`` is False and
+    nothing learns. Each lost frame searches the whole frame for the target's grey template
+    (kept from the tracked frames) by normalised cross-correlation, and takes the best place
+    back once its correlation reaches both ``recover_floor`` and ``recover_ratio`` times the
+    tracked boxes' running correlation (the latter lowered by ``recover_decay`` per lost
+    frame); a fine search there gives the box. A lost frame whose usual search around the
+    held box finds the classifier's confidence back above ``lost_drop`` times its running mean
+    ends the lost state there.
+
+    Attributes
+    ----------
+    recover_ratio : float
+        A re-detected place is taken when its correlation with the template is at least this
+        fraction of the tracked boxes' running correlation.
+    recover_decay : float
+        ``recover_ratio`` is multiplied by this for every frame lost so far (1: never lowered).
+    recover_floor : float
+        The least correlation a re-detected place needs in any case: people, cars and textures
+        of one kind reach 0.7-0.77 at the wrong place on the shared sequences.
+    recover_memory : float
+        Weight of the old value in the running mean of the tracked boxes' correlation with the
+        template, in [0, 1) (the judge's running means take the same weight:
+        :class:`~wmiltrack.engine.judge.JudgeSettings`).
+    recover_template_rate : float
+        Weight of each tracked frame's patch in the grey template, in (0, 1].
+    recover_template_area : float
+        The template holds at most this many pixels (the box's aspect): a larger target is
+        matched on frames shrunk by the same factor, and the fine search after a re-detection
+        places the box to the pixel. Keeps a large target's per-frame cost and whole-frame
+        search small.
+    recover_search_area : float
+        The whole-frame pass of the re-detection matches a template of at most this many
+        pixels (the frame shrunk alike); the place it finds is checked at the template's
+        resolution.
+    """
+
+    recover_ratio: float = 0.9
+    recover_decay: float = 1.0
+    recover_floor: float = 0.9
+    recover_memory: float = 0.9
+    recover_template_rate: float = 0.05
+    recover_template_area: float = 1600.0
+    recover_search_area: float = 256.0
+
+    def __post_init__(self) -> None:
+        RecoverySettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_numbers(self, "recover_ratio", "recover_decay", "recover_floor")
+        need(0.0 < self.recover_ratio <= 1.0,
+             f"recover_ratio must be in (0, 1], got {self.recover_ratio}")
+        need(0.0 < self.recover_decay <= 1.0,
+             f"recover_decay must be in (0, 1], got {self.recover_decay}")
+        need(-1.0 <= self.recover_floor <= 1.0,
+             f"recover_floor must be in [-1, 1], got {self.recover_floor}")
+        check_numbers(self, "recover_memory", "recover_template_rate", "recover_template_area",
+                      "recover_search_area")
+        check_recover_memory(self)
+        need(0.0 < self.recover_template_rate <= 1.0,
+             f"recover_template_rate must be in (0, 1], got {self.recover_template_rate}")
+        need(self.recover_template_area >= 1.0 and self.recover_search_area >= 1.0,
+             "recover_template_area and recover_search_area must be >= 1")
+
 
 def _grey(frame: np.ndarray) -> np.ndarray:
     if frame.ndim == 2:
@@ -51,7 +135,7 @@ def _match(a: np.ndarray, b: np.ndarray) -> float:
 
 class Redetector:
     """The re-detection of one tracker (``Params.redetect``; see
-    :class:`~wmiltrack.engine.settings.RecoverySettings`).
+    :class:`RecoverySettings`).
 
     ``picture`` is the grey picture of the target, ``match`` the running mean of the tracked
     boxes' correlation with it (both frozen while the target is lost: nothing learns then).

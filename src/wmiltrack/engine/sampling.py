@@ -8,12 +8,82 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Literal
 
 import numpy as np
 
 from .. import _core
-from .settings import BagSettings
+from .settings import check_choices, check_ints, check_numbers, is_int, is_number, need
+
+__all__ = ["MAX_NEG_RADIUS", "MAX_POS_RADIUS", "BagSampler", "BagSettings", "annulus_offsets",
+           "core_draws_match_numpy", "disc_offsets", "instance_weights"]
+
+MAX_POS_RADIUS = 100
+"""Largest positive-bag radius (``pos_radius``, ``init_pos_radius``): ~31 000 positives."""
+MAX_NEG_RADIUS = 500
+"""Largest outer negative radius (``neg_outer``, ``init_neg_outer``)."""
+
+
+@dataclass(frozen=True)
+class BagSettings:
+    """Where the positive and negative bags are sampled around the box (spec section 0).
+
+    Attributes
+    ----------
+    pos_radius : float
+        alpha: positives are every offset with d < alpha (45 for 4).
+    neg_inner, neg_outer : float
+        zeta, beta: negatives come from the annulus zeta <= d < beta.
+    neg_count : int
+        Number of negatives (exact draw without replacement, or the Bernoulli maximum).
+    neg_sampling : {"exact", "bernoulli"}
+        ``exact``: exactly ``neg_count`` distinct offsets; ``bernoulli``: the references'
+        thinning with keep probability ``neg_count / (2 floor(beta) + 1)^2``, truncated.
+    init_pos_radius, init_neg_inner, init_neg_outer, init_neg_count : float or None
+        The first frame's bags when they differ from tracking (MIL, WMIL); ``None`` = same.
+    """
+
+    pos_radius: float = 4.0
+    neg_inner: float = 8.0
+    neg_outer: float = 22.0
+    neg_count: int = 50
+    neg_sampling: Literal["exact", "bernoulli"] = "exact"
+    init_pos_radius: float | None = None
+    init_neg_inner: float | None = None
+    init_neg_outer: float | None = None
+    init_neg_count: int | None = None
+
+    def __post_init__(self) -> None:
+        BagSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_choices(self, {"neg_sampling": ("exact", "bernoulli")})
+        check_ints(self, "neg_count")
+        check_numbers(self, "pos_radius", "neg_inner", "neg_outer")
+        need(self.pos_radius > 0, f"pos_radius must be > 0, got {self.pos_radius}")
+        need(0 <= self.neg_inner < self.neg_outer,
+             f"need 0 <= neg_inner < neg_outer, got {self.neg_inner}, {self.neg_outer}")
+        need(self.neg_count >= 0, f"neg_count must be >= 0, got {self.neg_count}")
+        for name in ("init_pos_radius", "init_neg_inner", "init_neg_outer"):
+            v = getattr(self, name)
+            need(v is None or is_number(v), f"{name} must be None or a finite number, got {v!r}")
+        if self.init_pos_radius is not None:
+            need(self.init_pos_radius > 0, "init_pos_radius must be > 0")
+        # Upper limits keep the enumerated offsets (and the memory they take) bounded.
+        for name in ("pos_radius", "init_pos_radius"):
+            v = getattr(self, name)
+            need(v is None or v <= MAX_POS_RADIUS, f"{name} must be <= {MAX_POS_RADIUS}, got {v}")
+        for name in ("neg_outer", "init_neg_outer"):
+            v = getattr(self, name)
+            need(v is None or v <= MAX_NEG_RADIUS, f"{name} must be <= {MAX_NEG_RADIUS}, got {v}")
+        inner = self.neg_inner if self.init_neg_inner is None else self.init_neg_inner
+        outer = self.neg_outer if self.init_neg_outer is None else self.init_neg_outer
+        need(0 <= inner < outer, f"need 0 <= init_neg_inner < init_neg_outer, got {inner}, {outer}")
+        if self.init_neg_count is not None:
+            need(is_int(self.init_neg_count) and self.init_neg_count >= 0,
+                 "init_neg_count must be an int >= 0")
 
 
 @functools.cache

@@ -7,21 +7,139 @@ costs; :class:`DSSTScale` is DSST's 1-D correlation filter over the sizes.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, Literal
 
 import numpy as np
 
 from .classifier import GaussianPool
-from .correlation import ScaleFilter, ScaleFilterSettings, SparseUpdates
+from .correlation import FilterLearning, ScaleFilter, ScaleFilterSettings, SparseUpdates
 from .features import box_area_ok
 from .frames import IntBox
 from .geometry import centre, centred
-from .settings import FilterLearning, ScaleSettings
+from .settings import check_choices, check_ints, check_numbers, is_int, is_number, need
 
 if TYPE_CHECKING:
     from .appearance import HaarAppearance
 
-__all__ = ["DSSTScale", "HaarScale", "dsst_filter", "dsst_min_side"]
+__all__ = ["DSSTScale", "HaarScale", "ScaleSettings", "dsst_filter", "dsst_min_side"]
+
+
+@dataclass(frozen=True)
+class ScaleSettings:
+    """The scale estimator (:mod:`wmiltrack.engine.scale`): Haar rectangles scaled, not the image.
+
+    Attributes
+    ----------
+    scale_steps : int
+        After the translation search, also try the box scaled by ``scale_factor ** j`` for
+        ``j = -scale_steps..scale_steps`` (0: no scale estimator; the box keeps its first size).
+    scale_factor : float
+        Ratio between neighbouring scales (> 1).
+    scale_model : {"ratio", "likelihood", "both", "dsst"}
+        ``dsst``: a separate 1-D correlation filter along 33 scales 1.02 apart on fHOG
+        (DSST; :class:`wmiltrack.engine.scale.DSSTScale`), run after the translation
+        search; ``scale_steps`` must be > 0 to switch it on, and the other ``scale_*``
+        settings but ``scale_min``/``scale_max`` do not apply. Otherwise scales are compared
+        by Haar features: ``ratio``, the strong classifier's mean log ratio (best of a
+        ``scale_radius`` translation search at each scale); ``likelihood``, how well all M
+        features of the box at each scale fit the target's Gaussians: minus the mean of
+        ``log(1 + z^2)`` with ``z = (value - mu1) / sigma1`` (a generative template over the
+        whole pool, which the background model cannot bias), with a target model of its
+        own updated at ``scale_learning_rate``; ``both``: the sum of the two, the
+        likelihood weighted by ``scale_mix`` (the classifier alone favours smaller boxes,
+        the likelihood alone larger ones).
+    scale_mix : float
+        Weight of the likelihood term for ``scale_model="both"``.
+    scale_learning_rate : float
+        lambda of the ``likelihood`` scale model (slow, as DSST's 0.025 update: 0.975).
+    scale_penalty : float
+        Subtracted from a scale's mean weak-classifier log ratio per step away from the
+        current scale (favours the current scale, as KCF's 0.95 factor does).
+    scale_radius : int
+        Translation search radius (step 1) at each tried scale other than the current one.
+    scale_min, scale_max : float
+        Limits of the scale relative to the first box.
+    scale_negatives : int
+        Also learn, as negatives, the box centred on the target but scaled by
+        ``scale_factor ** +-scale_negatives`` (so the classifier learns what a wrong size
+        looks like; 0: none).
+    scale_contrast : float
+        With a colour cue (``colour_weight > 0``) and ``scale_model`` ``"ratio"`` or
+        ``"both"``: add this weight times each tried box's colour contrast
+        (:func:`wmiltrack.engine.colour.colour_contrast`: the mean ``P(target | colour)``
+        inside the box minus that over a ring around it, read from the search's likelihood
+        table) to that scale's value (0: off). The classifier prefers smaller boxes and the
+        target likelihood larger ones; the contrast is largest for the box that holds the
+        target's colours and no more. A contrast changes by about 0.01 between neighbouring
+        scales, so a weight of 20 makes it count about as much as one step's
+        ``scale_penalty`` (0.2).
+    scale_samples : int
+        DSST's scale samples (``scale_model="dsst"`` and ``scale_dsst``), odd, always over
+        DSST's range of sizes (33 samples 1.02 apart) with a label as wide: fewer cost less
+        (fDSST uses 17).
+    scale_veto : bool
+        With ``scale_model="dsst"`` and a colour cue: the size DSST prefers is taken only if
+        its box's colour contrast (as for ``scale_contrast``) is at least the current box's,
+        else the size is kept. DSST's fHOG scale samples cannot tell a low-textured or
+        deforming target from its surroundings and let the box grow into them (a bag on a
+        street: 0.70 -> 0.24 AUC); the colour contrast falls as soon as background enters.
+    template_gate, template_every, template_reuse
+        Shared with :class:`~wmiltrack.engine.template.TemplateSettings`: the DSST scale
+        filters (``scale_model="dsst"`` and ``scale_dsst``'s vote) learn on the translation
+        filter's schedule.
+    min_box_size
+        Shared with :class:`~wmiltrack.engine.features.FeatureSettings`: DSST gives no box
+        side below it (nor below 4).
+    """
+
+    scale_steps: int = 0
+    scale_factor: float = 1.03
+    scale_model: Literal["ratio", "likelihood", "both", "dsst"] = "ratio"
+    scale_learning_rate: float = 0.975
+    scale_mix: float = 1.0
+    scale_penalty: float = 0.0
+    scale_radius: int = 2
+    scale_min: float = 0.2
+    scale_max: float = 5.0
+    scale_negatives: int = 0
+    scale_contrast: float = 0.0
+    scale_dsst: float = 0.0
+    scale_samples: int = 33
+    scale_veto: bool = False
+    template_gate: float = 0.0
+    template_every: int = 1
+    template_reuse: bool = False
+    min_box_size: int = 4
+
+    def __post_init__(self) -> None:
+        ScaleSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_choices(self, {"scale_model": ("ratio", "likelihood", "both", "dsst")})
+        check_ints(self, "scale_steps", "scale_radius", "scale_negatives")
+        check_numbers(self, "scale_factor", "scale_penalty", "scale_min", "scale_max", "scale_mix",
+                      "scale_contrast", "scale_dsst")
+        need(self.scale_dsst >= 0, f"scale_dsst must be >= 0, got {self.scale_dsst}")
+        need(is_int(self.scale_samples) and 3 <= self.scale_samples <= 65
+             and self.scale_samples % 2 == 1,
+             f"scale_samples must be an odd int in 3..65, got {self.scale_samples!r}")
+        need(isinstance(self.scale_veto, bool),
+             f"scale_veto must be True or False, got {self.scale_veto!r}")
+        need(0 <= self.scale_steps <= 10, f"scale_steps must be in 0..10, got {self.scale_steps}")
+        need(is_number(self.scale_learning_rate) and 0.0 <= self.scale_learning_rate < 1.0,
+             f"scale_learning_rate must be in [0, 1), got {self.scale_learning_rate}")
+        need(0 <= self.scale_negatives <= 20,
+             f"scale_negatives must be in 0..20, got {self.scale_negatives}")
+        need(self.scale_negatives == 0 or self.scale_steps > 0,
+             "scale_negatives needs the scale search (scale_steps > 0)")
+        need(1.0 < self.scale_factor <= 2.0, f"scale_factor must be in (1, 2], got {self.scale_factor}")
+        need(self.scale_penalty >= 0, f"scale_penalty must be >= 0, got {self.scale_penalty}")
+        need(self.scale_contrast >= 0, f"scale_contrast must be >= 0, got {self.scale_contrast}")
+        need(1 <= self.scale_radius <= 50, f"scale_radius must be in 1..50, got {self.scale_radius}")
+        need(0 < self.scale_min <= 1.0 <= self.scale_max <= 100.0,
+             f"need 0 < scale_min <= 1 <= scale_max <= 100, got {self.scale_min}, {self.scale_max}")
 
 
 def dsst_filter(samples: int, learning: FilterLearning) -> tuple[SparseUpdates, ScaleFilter]:
@@ -254,7 +372,7 @@ class HaarScale:
 
 def dsst_min_side(min_box_size: int) -> int:
     """The smallest side of a box DSST's scale filter gives, for the features' ``min_box_size``
-    (:class:`~wmiltrack.engine.settings.FeatureSettings`)."""
+    (:class:`~wmiltrack.engine.features.FeatureSettings`)."""
     return max(min_box_size, 4)
 
 
@@ -263,7 +381,7 @@ class DSSTScale:
     search, the best of 33 sizes 1.02 apart by a 1-D correlation filter on fHOG, within
     ``scale_min``..``scale_max`` of the first box and the frame, no side below
     :func:`dsst_min_side`. It learns as the translation filter does (the ``template_*``
-    learning settings it shares: :class:`~wmiltrack.engine.settings.FilterLearning`)."""
+    learning settings it shares: :class:`~wmiltrack.engine.correlation.FilterLearning`)."""
 
     def __init__(self, settings: ScaleSettings, base_wh: tuple[int, int],
                  frame_wh: tuple[int, int]) -> None:

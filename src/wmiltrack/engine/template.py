@@ -11,19 +11,109 @@ these classes fit it into the engine of parts.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .correlation import CorrelationFilter, CorrelationSettings, Location, SparseUpdates
+from .correlation import CorrelationFilter, CorrelationSettings, FilterLearning, Location, SparseUpdates
 from .frames import IntBox
 from .geometry import centre, centred
-from .settings import FilterLearning, TemplateSettings
+from .settings import check_numbers, is_int, need
 
 if TYPE_CHECKING:
     pass
 
-__all__ = ["CorrelationTemplate"]
+__all__ = ["CorrelationTemplate", "TemplateSettings"]
+
+
+@dataclass(frozen=True)
+class TemplateSettings:
+    """The correlation-filter template (:class:`wmiltrack.engine.template.CorrelationTemplate`):
+    a translation filter on fHOG over a fixed-size template (Staple), merged into the search as
+    a cue read at each candidate's centre, and optionally the motion model.
+
+    Attributes
+    ----------
+    template_weight : float
+        Weight of the filter's response (divided by its peak, clipped to [0, 1]) in the
+        search's merge, beside the colour cue's (0: no template).
+    template_motion : bool
+        Centre the search on the filter's peak (searched over the target plus twice its mean
+        side around the last box) instead of the motion model's prediction.
+    template_area : float
+        Template pixels the search region is resampled to (Staple: 150**2).
+    template_learning_rate : float
+        Weight of each new frame in the filter (Staple: 0.01).
+    template_gate : float
+        The correlation filters (the template and DSST's scale filter) learn only from frames
+        whose reported score is at least this (0: every frame), so that an occluder or a drift
+        the score notices stays out of them.
+    template_every : int
+        The correlation filters (the template and DSST's scale filter) learn from every
+        ``template_every``-th frame they may learn from (ECO's sparse updates: each learning
+        step costs a feature extraction and a transform per channel), their rates raised to
+        keep the same memory.
+    template_channels : int
+        The template's 31 fHOG channels projected onto this many (ECO's compression: the
+        principal axes of the first frame's features, fixed from then on), so that each
+        frame transforms fewer planes; 0 keeps all 31.
+    template_cell : int
+        fHOG cell side in template pixels (Staple: 4); with ``template_area`` it sets the
+        filter's grid, ``sqrt(template_area) / template_cell`` cells a side.
+    template_reuse : bool
+        The template learns from the frame's search sample, moved to the frame's final box
+        (ECO: one feature extraction and one transform a frame instead of two), when that box
+        is near the searched centre and of about the searched size; otherwise, and without
+        this, from a new sample around the final box.
+    template_pool_psr : float
+        On frames where the filter's response has a peak-to-sidelobe ratio of at least this,
+        a coarse search grid (step s) reads the filter's map at its best within s / 2 pixels
+        of each candidate's centre instead of at the centre alone: the peak of a filter on
+        2-pixel cells is narrower than the grid's step, and read at the grid's points a wide
+        secondary hill can outscore it (0: never). A response without a clear peak (the
+        target gone) is read at the centres, where its noise counts least.
+    """
+
+    template_weight: float = 0.0
+    template_motion: bool = False
+    template_area: float = 150.0**2
+    template_learning_rate: float = 0.01
+    template_gate: float = 0.0
+    template_every: int = 1
+    template_channels: int = 0
+    template_cell: int = 4
+    template_reuse: bool = False
+    template_pool_psr: float = 0.0
+
+    def __post_init__(self) -> None:
+        TemplateSettings.check(self)
+
+    def check(self) -> None:
+        """``ValueError`` naming the first setting out of range."""
+        check_numbers(self, "template_weight", "template_area", "template_learning_rate",
+                      "template_gate", "template_pool_psr")
+        need(0.0 <= self.template_weight <= 1.0,
+             f"template_weight must be in [0, 1], got {self.template_weight}")
+        need(isinstance(self.template_motion, bool),
+             f"template_motion must be True or False, got {self.template_motion!r}")
+        need(self.template_area >= 32.0**2, f"template_area must be >= 1024, got {self.template_area}")
+        need(0.0 < self.template_learning_rate <= 1.0,
+             f"template_learning_rate must be in (0, 1], got {self.template_learning_rate}")
+        need(0.0 <= self.template_gate <= 1.0,
+             f"template_gate must be in [0, 1], got {self.template_gate}")
+        need(is_int(self.template_every) and 1 <= self.template_every <= 100,
+             f"template_every must be an int in 1..100, got {self.template_every!r}")
+        need(self.template_pool_psr >= 0.0,
+             f"template_pool_psr must be >= 0, got {self.template_pool_psr}")
+        need(is_int(self.template_channels) and 0 <= self.template_channels <= 31,
+             f"template_channels must be an int in 0..31, got {self.template_channels!r}")
+        need(is_int(self.template_cell) and 1 <= self.template_cell <= 16
+             and self.template_area >= (4 * self.template_cell) ** 2,
+             f"template_cell must be an int in 1..16 with template_area >= (4 cell)**2, "
+             f"got {self.template_cell!r}")
+        need(isinstance(self.template_reuse, bool),
+             f"template_reuse must be True or False, got {self.template_reuse!r}")
 
 
 class CorrelationTemplate:

@@ -27,14 +27,14 @@ import numpy as np
 
 from .. import _core
 from . import copying as _copying  # noqa: F401 (installs deepcopy for the core's objects)
-from .appearance import HaarAppearance
-from .colour import ColourModel
+from .appearance import AppearanceSettings, HaarAppearance
+from .colour import ColourModel, ColourSettings
 from .cues import ColourCue, Cue, check_cue_weights
-from .experts import TwoExperts
+from .experts import ExpertSettings, TwoExperts
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .geometry import roi_around
-from .judge import NO_EVIDENCE, Evidence, FrameJudge
-from .motion import VelocityMotion
+from .judge import NO_EVIDENCE, Evidence, FrameJudge, JudgeSettings
+from .motion import MotionSettings, VelocityMotion
 from .params import Params
 from .parts import (
     PART_KINDS,
@@ -46,25 +46,14 @@ from .parts import (
     ScaleEstimator,
     ScorePolicy,
 )
-from .policy import ContrastScore, ReportedScore, confidence
-from .recovery import Redetector
+from .policy import ContrastScore, ReportedScore, ScoreSettings, confidence
+from .recovery import RecoverySettings, Redetector
 from .requests import Search, Steps, drive, run_batches
 from .result import TrackResult
-from .scale import DSSTScale, HaarScale
-from .settings import (
-    AppearanceSettings,
-    ColourSettings,
-    ExpertSettings,
-    JudgeSettings,
-    MotionSettings,
-    RecoverySettings,
-    ScaleSettings,
-    ScoreSettings,
-    TemplateSettings,
-    own,
-)
+from .scale import DSSTScale, HaarScale, ScaleSettings
+from .settings import own
 from .state import FrameState, SearchStage, Verdict, new_frame
-from .template import CorrelationTemplate
+from .template import CorrelationTemplate, TemplateSettings
 
 __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "compose", "confidence",
            "update_many"]
@@ -413,7 +402,7 @@ class Tracker:
             ``lost_threshold``; False suggests the target is lost or hidden). With
             ``redetect`` (rcwmil-plus), a frame in the lost state has score 0, ``ok``
             False and the last confident box (see
-            :class:`~wmiltrack.engine.settings.RecoverySettings`).
+            :class:`~wmiltrack.engine.recovery.RecoverySettings`).
         """
         self._require_init()
         img = as_frame(frame)

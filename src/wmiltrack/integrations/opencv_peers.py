@@ -3,7 +3,7 @@
 
 Nano (NanoTrack v2) and Vit are neural-network trackers: they need model files, which are
 not part of any wheel. Nano's are NanoTrack v2's model set, found as every network's files are
-(:func:`wmiltrack.networks.files.locate`: the parameters ``opencv:Nano:backbone=FILE:neckhead=FILE``,
+(:func:`wmiltrack.networks.files.look_up_files`: the parameters ``opencv:Nano:backbone=FILE:neckhead=FILE``,
 then ``WMILTRACK_NANO_BACKBONE`` and ``WMILTRACK_NANO_HEAD``, then the models folder, where
 ``wmiltrack models fetch nanotrack-v2`` puts them; each checked against its pinned SHA-1). Vit's
 is given by ``opencv:Vit:net=FILE`` or ``WMILTRACK_VIT_MODEL``. Without them the tracker raises
@@ -23,7 +23,7 @@ import numpy.typing as npt
 
 from ..engine.frames import clip_box
 from ..engine.result import Box, Frame, TrackResult
-from ..networks.files import MODEL_ENV, locate
+from ..networks.files import MODEL_ENV, look_up_files
 from ..networks.siamese import as_bgr
 from .opencv_wheels import (
     TrackerUnavailable,
@@ -99,10 +99,10 @@ def _raise_missing(kind: str, problems: list[str]) -> None:
 
 def _nano_paths(params: dict[str, Any]) -> dict[str, str]:
     """``opencv:Nano``'s ``backbone`` and ``neckhead``: NanoTrack v2's files, found as
-    :func:`wmiltrack.networks.files.locate` finds every network's (given, else in the
+    :func:`wmiltrack.networks.files.look_up_files` finds every network's (given, else in the
     environment, else in the models folder)."""
     attrs = {"backbone": "backbone", "head": "neckhead"}  # the set's role -> TrackerNano's
-    found = locate(NANO_MODELS, {role: params.get(attr) or None for role, attr in attrs.items()})
+    found = look_up_files(NANO_MODELS, {role: params.get(attr) or None for role, attr in attrs.items()})
     problems = []
     for p in found:
         attr, env = attrs[p.role], MODEL_ENV["Nano"][attrs[p.role]]

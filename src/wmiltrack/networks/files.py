@@ -37,14 +37,14 @@ __all__ = [
     "MODEL_ENV",
     "MODELS_URL_ENV",
     "FetchError",
-    "Located",
+    "FileLookup",
     "ModelFile",
     "ModelFileMismatch",
     "ModelFilesMissing",
     "ModelSet",
     "fetch",
-    "locate",
     "find_files",
+    "look_up_files",
     "models_dir",
     "models_dir_origin",
     "nanotrack_files",
@@ -78,10 +78,10 @@ class ModelFilesMissing(FileNotFoundError):
     """A set's model files cannot be used: each missing (or wrong) file with where it was looked
     for, and in the same message every way to give or fetch them.
 
-    ``problems`` holds the :class:`Located` entries that are not usable (empty after
+    ``problems`` holds the :class:`FileLookup` entries that are not usable (empty after
     unpickling a message made elsewhere, where only the message travels)."""
 
-    def __init__(self, message: str, problems: tuple[Located, ...] = ()) -> None:
+    def __init__(self, message: str, problems: tuple[FileLookup, ...] = ()) -> None:
         super().__init__(message)
         self.problems = problems
 
@@ -238,7 +238,7 @@ def _known_file(path: Path) -> tuple[ModelSet, ModelFile] | None:
 
 
 @dataclass(frozen=True)
-class Located:
+class FileLookup:
     """Where a set's file of ``role`` was looked for: ``path``, ``origin`` (``"backbone="``,
     ``"$WMILTRACK_NANO_BACKBONE"`` or ``"models folder"``) and ``problem``, None when the file
     is there and usable, else what is wrong with it."""
@@ -280,11 +280,11 @@ def _check_stored(s: ModelSet, role: str, path: Path) -> str | None:
     return None
 
 
-def locate(name: str, paths: Mapping[str, str | Path | None] | None = None) -> tuple[Located, ...]:
+def look_up_files(name: str, paths: Mapping[str, str | Path | None] | None = None) -> tuple[FileLookup, ...]:
     """Find each file of set ``name``, in the order of its roles: the path in ``paths[role]``
     if given, else the one in the role's environment variable, else the models folder's.
 
-    Nothing is raised for a missing file: each :class:`Located` says what is wrong, so that
+    Nothing is raised for a missing file: each :class:`FileLookup` says what is wrong, so that
     ``wmiltrack models list`` can show every file and :func:`nanotrack_files` can name them all.
     """
     s = _model_set(name)
@@ -298,18 +298,18 @@ def locate(name: str, paths: Mapping[str, str | Path | None] | None = None) -> t
         env_value = os.environ.get(s.env[role], "").strip()
         if value is not None:
             path = Path(value).expanduser()
-            out.append(Located(role, path, f"{role}=", _check_given(s, role, path, f"{role}=")))
+            out.append(FileLookup(role, path, f"{role}=", _check_given(s, role, path, f"{role}=")))
         elif env_value:
             path = Path(env_value).expanduser()
             label = f"{s.env[role]}="
-            out.append(Located(role, path, f"${s.env[role]}", _check_given(s, role, path, label)))
+            out.append(FileLookup(role, path, f"${s.env[role]}", _check_given(s, role, path, label)))
         else:
             path = s.folder() / f.name
-            out.append(Located(role, path, "models folder", _check_stored(s, role, path)))
+            out.append(FileLookup(role, path, "models folder", _check_stored(s, role, path)))
     return tuple(out)
 
 
-def _missing_message(s: ModelSet, problems: tuple[Located, ...]) -> str:
+def _missing_message(s: ModelSet, problems: tuple[FileLookup, ...]) -> str:
     """One message: every unusable file, where wmiltrack looked, and how to give or fetch them."""
     roles = list(s.files)
     what = "; ".join(f"the {p.role}: {p.problem}" for p in problems)
@@ -325,7 +325,7 @@ def _missing_message(s: ModelSet, problems: tuple[Located, ...]) -> str:
 
 
 def find_files(name: str, paths: Mapping[str, str | Path | None] | None = None) -> tuple[Path, ...]:
-    """The paths of set ``name``'s files, in the order of its roles, found as :func:`locate`
+    """The paths of set ``name``'s files, in the order of its roles, found as :func:`look_up_files`
     says.
 
     Raises
@@ -335,7 +335,7 @@ def find_files(name: str, paths: Mapping[str, str | Path | None] | None = None) 
         message names every such file and how to give or fetch them.
     """
     s = _model_set(name)
-    found = locate(s.name, paths)
+    found = look_up_files(s.name, paths)
     problems = tuple(p for p in found if p.problem is not None)
     if problems:
         raise ModelFilesMissing(_missing_message(s, problems), problems)
