@@ -32,7 +32,7 @@ from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
 from .progress import progress
-from .trackers import MODEL_ENV
+from .trackers import MODEL_ENV, TrackerUnavailable
 
 __all__ = [
     "DEFAULT_BASE_URL",
@@ -67,9 +67,11 @@ commit, byte for byte."""
 _CHUNK = 1 << 16
 
 
-class ModelFilesMissing(FileNotFoundError):
+class ModelFilesMissing(FileNotFoundError, TrackerUnavailable):
     """A set's model files cannot be used: each missing (or wrong) file with where it was looked
-    for, and in the same message every way to give or fetch them.
+    for, and in the same message every way to give or fetch them. A tracker that cannot start
+    (:class:`~wmiltrack.trackers.TrackerUnavailable`), as one not installed is: ``eval`` and
+    ``demo`` skip it with this message.
 
     ``problems`` holds the :class:`Located` entries that are not usable (empty after
     unpickling a message made elsewhere, where only the message travels)."""

@@ -33,7 +33,7 @@ from .settings import ExpertSettings
 from .siamese import EXEMPLAR, INSTANCE, NANO_VERSIONS, SiameseLocator, as_bgr, context_side, load_network
 from .state import Verdict
 
-__all__ = ["ExpertJudge", "TwoExperts", "Verdict"]
+__all__ = ["ExpertJudge", "TwoExperts", "Verdict", "network_files"]
 
 FloatBox = tuple[float, float, float, float]
 
@@ -99,6 +99,23 @@ class ExpertJudge:
         return 1.0 / (1.0 + math.exp(-z)) if math.isfinite(z) else 0.0
 
 
+def network_files(settings: ExpertSettings) -> tuple[Path, Path]:
+    """The backbone and head of ``settings.network``: the paths in ``settings`` if given, else
+    found as :func:`wmiltrack.models.nanotrack_files` finds them. The one check of a network's
+    files, made when a tracker is built (so that a missing file is said at once, not at its
+    first frame) and again when its network is loaded.
+
+    Raises
+    ------
+    ModelFilesMissing
+        A file is missing or is another set's or role's; the message says how to give them.
+    """
+    from ..models import nanotrack_files
+
+    version = settings.network.rsplit("-", 1)[-1]
+    return nanotrack_files(version, settings.backbone or None, settings.head or None)
+
+
 class TwoExperts:
     """The network expert and the judge beside a tracker (see the module's docstring).
 
@@ -107,10 +124,8 @@ class TwoExperts:
     """
 
     def __init__(self, settings: ExpertSettings) -> None:
-        from ..models import nanotrack_files
-
         version = settings.network.rsplit("-", 1)[-1]
-        files = nanotrack_files(version, settings.backbone or None, settings.head or None)
+        files = network_files(settings)
         network = load_network(Path(files[0]), Path(files[1]), settings.network_runtime,
                                settings.network_threads)
         self.settings = settings
