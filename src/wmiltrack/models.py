@@ -46,6 +46,7 @@ __all__ = [
     "ModelFilesMissing",
     "ModelSet",
     "fetch",
+    "identify",
     "locate",
     "find_files",
     "models_dir",
@@ -215,6 +216,14 @@ def _known_file(path: Path) -> tuple[ModelSet, ModelFile] | None:
     return next(((s, f) for s, f in candidates if f.sha1 == digest), None)
 
 
+def identify(path: str | Path) -> tuple[str, str] | None:
+    """The (set name, role) whose pinned bytes the file at ``path`` holds, or None (another
+    file, or no file): so that a file given for one network is not given to another."""
+    p = Path(path).expanduser()
+    known = _known_file(p) if p.is_file() else None
+    return None if known is None else (known[0].name, known[1].role)
+
+
 @dataclass(frozen=True)
 class Located:
     """Where a set's file of ``role`` was looked for: ``path``, ``origin`` (``"backbone="``,
@@ -242,7 +251,10 @@ def _check_given(s: ModelSet, role: str, path: Path, label: str) -> str | None:
     known = _known_file(path)
     if known is not None and known[1] != s.files[role]:
         other_set, other = known
-        return f"{label}{path} is {other_set.title}'s {other.role}, not {s.title}'s {role}"
+        fix = "" if other_set == s else (
+            f" (to run {other_set.title}, choose it: network='{other_set.name}' for a preset, "
+            f"--set network={other_set.name} on the command line, or nanotrack:{other_set.version})")
+        return f"{label}{path} is {other_set.title}'s {other.role}, not {s.title}'s {role}{fix}"
     return None
 
 

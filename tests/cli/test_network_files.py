@@ -98,3 +98,87 @@ def test_fps_compare_skips_a_tracker_without_its_files(no_models: Path) -> None:
     for name in ("rcwmil-nano", "nanotrack:v3"):
         assert re.search(rf"^note: {name} skipped \(NanoTrack v3's model files", r.stderr, re.M)
     assert re.search(r"^\| rcwmil \| \d+", r.stdout, re.M)
+
+
+# -- each tracker its own files -----------------------------------------------------------------
+def test_labels_leave_the_model_files_out() -> None:
+    from wmiltrack.trackers import tracker_labels
+
+    specs = ["rcwmil-nano:backbone=/a/b.onnx:head=/a/h.onnx:like_low=0.4",
+             "opencv:Nano:backbone=/m/x.onnx:neckhead=/m/y.onnx", "nanotrack:v2",
+             "rcwmil-nano:backbone=/c/d.onnx", "rcwmil-nano:backbone=/e/d.onnx"]
+    assert tracker_labels(specs) == {
+        specs[0]: "rcwmil-nano:like_low=0.4", specs[1]: "opencv:Nano", specs[2]: "nanotrack:v2",
+        specs[3]: specs[3], specs[4]: specs[4]}  # the same file names: the whole specs
+
+
+def test_a_file_goes_to_the_trackers_of_its_version(
+        nanotrack_models: dict[str, tuple[Path, Path]], no_models: Path, data: Path, tmp_path: Path,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """v2's files by option go to nanotrack:v2 only; rcwmil-nano (v3) takes its own by its spec;
+    nanotrack:v3, given none, is skipped with its reason; labels and box folders are short."""
+    (b2, h2), (b3, h3) = nanotrack_models["v2"], nanotrack_models["v3"]
+    out = tmp_path / "out"
+    status = cli.main(["eval", str(data), "--trackers",
+                       f"rcwmil-nano:backbone={b3}:head={h3},nanotrack:v2,nanotrack:v3",
+                       "--nano-backbone", str(b2), "--nano-head", str(h2), "--out", str(out),
+                       "--no-progress"])
+    text = capsys.readouterr()
+    assert status == 0, text.err
+    table = (out / "eval_ope.md").read_text()
+    assert re.search(r"^\| \*\*mean \(1 seq\)\*\* \| rcwmil-nano \| 8 \|", table, re.M), table
+    assert "| nanotrack:v2 |" in table and "- skipped nanotrack:v3: NanoTrack v3's" in table
+    assert sorted(p.name for p in (out / "boxes").iterdir()) == ["nanotrack_v2", "rcwmil-nano"]
+    assert (out / "eval_ope.json").is_file() and (out / "success_ope.png").is_file()
+
+
+@pytest.mark.parametrize(("tracker", "fix"), [
+    ("rcwmil-nano", "add --set network=nanotrack-v2"), ("nanotrack:v3", "use -t nanotrack:v2")])
+def test_another_versions_file_names_the_fix(
+        nanotrack_models: dict[str, tuple[Path, Path]], no_models: Path, data: Path, tracker: str,
+        fix: str, capsys: pytest.CaptureFixture[str]) -> None:
+    b2, h2 = nanotrack_models["v2"]
+    status = cli.main(["track", str(data / "Seq"), "-t", tracker, "--nano-backbone", str(b2),
+                       "--nano-head", str(h2), "-q"])
+    err = capsys.readouterr().err
+    assert status == 2 and len(err.splitlines()) == 1
+    assert f"--nano-backbone {b2} is NanoTrack v2's backbone, but {tracker} runs NanoTrack v3" in err
+    assert fix in err and "WMILTRACK_NANO" not in err
+
+
+def test_v2_files_run_rcwmil_nano_with_its_network_set(
+        nanotrack_models: dict[str, tuple[Path, Path]], no_models: Path, data: Path,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    b2, h2 = nanotrack_models["v2"]
+    status = cli.main(["track", str(data / "Seq"), "-t", "rcwmil-nano", "--set",
+                       "network=nanotrack-v2", "--nano-backbone", str(b2), "--nano-head", str(h2), "-q"])
+    assert status == 0 and len(capsys.readouterr().out.splitlines()) == 8
+
+
+def test_python_names_the_network_that_fits(nanotrack_models: dict[str, tuple[Path, Path]],
+                                            no_models: Path) -> None:
+    b2, h2 = nanotrack_models["v2"]
+    with pytest.raises(ModelFilesMissing, match="network='nanotrack-v2' for a preset"):
+        Tracker("rcwmil-nano", backbone=str(b2), head=str(h2))
+
+
+# -- no output touched before the tracker starts -------------------------------------------------
+def test_track_video_example_leaves_an_existing_output(no_models: Path, tmp_path: Path) -> None:
+    existing = tmp_path / "existing.mp4"
+    existing.write_bytes(b"my video")
+    env = {k: v for k, v in os.environ.items() if k not in NANO_ENV}
+    r = subprocess.run([sys.executable, str(REPO_ROOT / "examples" / "track_video.py"), "-t",
+                        "rcwmil-nano", "-o", str(existing)], capture_output=True, text=True,
+                       timeout=120, check=False, cwd=tmp_path, env=env)
+    assert r.returncode != 0 and "Traceback" not in r.stderr
+    assert "NanoTrack v3's model files are missing" in r.stderr
+    assert existing.read_bytes() == b"my video"
+
+
+def test_eval_makes_no_output_folder_when_no_tracker_can_start(
+        no_models: Path, data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "out"
+    assert cli.main(["eval", str(data), "--trackers", "rcwmil-nano", "--out", str(out),
+                     "--no-progress"]) == 1
+    assert "no tracker left to run" in capsys.readouterr().err
+    assert not out.exists()

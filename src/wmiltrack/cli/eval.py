@@ -16,7 +16,7 @@ from .options import (
     add_executor_options,
     add_model_options,
     check_tracker_spec,
-    set_model_paths,
+    specs_with_model_files,
     trackers_help,
 )
 from .outputs import check_output_folder
@@ -36,7 +36,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     if args.results is None:
         for spec in trackers:
             check_tracker_spec(spec)  # an unknown tracker or parameter: exit status 2
-    set_model_paths(args)
+        trackers = specs_with_model_files(trackers, args)
     from ..eval.pipeline import EvalArgumentError, EvalConfig, run_eval
 
     try:
