@@ -506,7 +506,6 @@ def _stage(stream: BinaryIO | _ReadOrFetchError, folder: Path, s: ModelSet, f: M
     bar = progress(range(0), total=total or f.size, desc=f"{s.name} {f.name}",
                    enabled=False if quiet else None)
     bar.unit, bar.unit_scale, bar.unit_divisor = "B", True, 1024  # bytes, as 1.4M
-    bar.refresh()
     try:
         with os.fdopen(fd, "wb") as out, bar:
             while chunk := stream.read(_CHUNK):

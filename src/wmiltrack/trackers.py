@@ -584,11 +584,15 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     if s.lower() not in presets:
         import difflib
 
-        close = difflib.get_close_matches(s.lower(), presets + [f"opencv:{n}" for n in OPENCV_TRACKERS],
-                                          n=2)
+        from .engine.siamese import NANO_VERSIONS
+
+        nano = [f"{NANOTRACK_PREFIX}{v}" for v in NANO_VERSIONS]
+        close = difflib.get_close_matches(
+            s.lower(), presets + nano + [f"opencv:{n}" for n in OPENCV_TRACKERS], n=2)
         hint = f"did you mean {' or '.join(close)}? " if close else ""
         raise ValueError(f"unknown tracker {s!r}; {hint}choose one of {', '.join(presets)}, "
-                         f"or opencv:NAME with NAME one of {', '.join(OPENCV_TRACKERS)}")
+                         f"{' or '.join(nano)} (NanoTrack alone), or opencv:NAME with NAME one "
+                         f"of {', '.join(OPENCV_TRACKERS)}")
     from .engine.tracker import Tracker  # the compiled core is loaded only now
 
     tracker: TrackerLike = Tracker(s, seed=seed, **kw)

@@ -182,3 +182,57 @@ def test_eval_makes_no_output_folder_when_no_tracker_can_start(
                      "--no-progress"]) == 1
     assert "no tracker left to run" in capsys.readouterr().err
     assert not out.exists()
+
+
+# -- smaller points --------------------------------------------------------------------------------
+def test_an_unknown_network_lists_the_choices() -> None:
+    with pytest.raises(ValueError, match=r"network must be one of '', 'nanotrack-v2', 'nanotrack-v3'; "
+                                         r"got 'nanotrack-v4'"):
+        Tracker("rcwmil-nano", network="nanotrack-v4")
+
+
+def test_rcwmil_nano_reports_plain_floats(nanotrack_models: dict[str, tuple[Path, Path]]) -> None:
+    from wmiltrack.data.synthetic import make_sequence
+
+    seq = make_sequence(4, seed=2)
+    frames, gt = seq.load(), seq.groundtruth
+    assert gt is not None
+    b3, h3 = nanotrack_models["v3"]
+    for tracker in (Tracker("rcwmil-nano", backbone=str(b3), head=str(h3)),
+                    make_tracker("nanotrack:v3", backbone=str(b3), head=str(h3))):
+        tracker.init(frames[0], gt[0])
+        for frame in frames[1:]:
+            box = tracker.update(frame).box
+            assert all(type(v) is float for v in box), [type(v) for v in box]
+
+
+def test_inspect_takes_the_model_options(nanotrack_models: dict[str, tuple[Path, Path]],
+                                         no_models: Path, data: Path, tmp_path: Path) -> None:
+    b3, h3 = nanotrack_models["v3"]
+    out = tmp_path / "s.png"
+    assert cli.main(["inspect", str(data / "Seq"), "-t", "rcwmil-nano", "--nano-backbone", str(b3),
+                     "--nano-head", str(h3), "-o", str(out)]) == 0
+    assert out.is_file()
+
+
+def test_the_model_options_help_names_each_versions_files(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        cli.main(["eval", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for name in ("nanotrack_backbone_sim.onnx", "nanotrack_backbone.onnx", "nanotrack_head_sim.onnx",
+                 "nanotrack_head.onnx"):
+        assert name in text
+    assert not re.search(r"rcwmil-nano[^.;]*\(nanotrack_backbone_sim\.onnx\)", text)
+    assert "nanotrack:v2 or nanotrack:v3" in text  # --trackers lists them
+
+
+def test_nanotrack_is_named_where_trackers_are_listed(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(ValueError, match=r"nanotrack:v2 or nanotrack:v3"):
+        make_tracker("nanotrak:v3")
+    assert cli.main(["variants"]) == 0
+    out = capsys.readouterr().out
+    assert "nanotrack:v2, nanotrack:v3" in out
+    rows = {line.split("|")[1].strip(): line.split("|")[2:] for line in out.splitlines()
+            if line.startswith("| **")}
+    assert rows["**rcwmil-nano**"] != rows["**rcwmil-cf**"]
+    assert "NanoTrack v3's network" in rows["**rcwmil-nano**"][-2]

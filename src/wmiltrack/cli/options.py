@@ -118,7 +118,11 @@ def trackers_help(default: str | None = "rcwmil", *, opencv: bool = True) -> str
 
     text = f"a preset: {', '.join(preset_names())}"
     if opencv:
-        text += f"; or opencv:NAME, NAME one of {', '.join(OPENCV_TRACKERS)}"
+        from ..engine.siamese import NANO_VERSIONS
+
+        nano = " or ".join(f"nanotrack:{v}" for v in NANO_VERSIONS)
+        text += (f"; {nano} (NanoTrack alone); or opencv:NAME, NAME one of "
+                 f"{', '.join(OPENCV_TRACKERS)}")
     text += " (`wmiltrack variants` lists the presets and their parameters)"
     if default is not None:
         text += f"; default {default}"

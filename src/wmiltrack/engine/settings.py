@@ -86,7 +86,7 @@ def _is_number(v: Any) -> bool:
 def _check_choices(obj: Any, choices: dict[str, tuple[str, ...]]) -> None:
     for name, allowed in choices.items():
         value = getattr(obj, name)
-        _need(value in allowed, f"{name} must be one of {', '.join(allowed)}; got {value!r}")
+        _need(value in allowed, f"{name} must be one of {', '.join(map(repr, allowed))}; got {value!r}")
 
 
 def _check_ints(obj: Any, *names: str) -> None:
