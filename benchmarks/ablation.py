@@ -167,8 +167,8 @@ def _fps(paths: list[Path], timed: dict[str, str], args: argparse.Namespace) -> 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ablation; print the markdown table; return the exit status."""
     from wmiltrack.data.sequences import default_otb_root, list_otb_sequences
-    from wmiltrack.executors import set_cv_threads
-    from wmiltrack.trackers import available_opencv_trackers
+    from wmiltrack.integrations.opencv_wheels import available_opencv_trackers
+    from wmiltrack.parallel.executors import set_cv_threads
 
     args = _parser().parse_args(argv)
     root = args.otb or default_otb_root()

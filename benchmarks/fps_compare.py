@@ -54,13 +54,12 @@ try:
 except ImportError:  # a checkout that was not installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-from wmiltrack.trackers import (
+from wmiltrack.integrations.opencv_wheels import (
     OPENCV_TRACKERS,
     available_opencv_trackers,
     installed_opencv,
-    parse_spec,
-    split_specs,
 )
+from wmiltrack.trackers import parse_spec, split_specs
 
 VARIANTS = ("rcwmil", "ct", "fct", "mil", "wmil", "osil", "rcwmil-plus", "rcwmil-cf", "rcwmil-nano")
 REFERENCE = "opencv:MIL"
@@ -127,7 +126,8 @@ def _parser() -> argparse.ArgumentParser:
 def _can_make(spec: str) -> bool:
     """Whether the tracker can be made here; if not (TrackerNano, NanoTrack or rcwmil-nano
     without their model files, a tracker missing from cv2), a note with the reason."""
-    from wmiltrack.trackers import TrackerUnavailable, make_tracker
+    from wmiltrack.integrations.opencv_wheels import TrackerUnavailable
+    from wmiltrack.trackers import make_tracker
 
     try:
         make_tracker(spec)  # a preset's model files are checked as it is made
@@ -281,7 +281,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import cv2
 
     from wmiltrack.eval.report import cpu_model
-    from wmiltrack.executors import set_cv_threads
+    from wmiltrack.parallel.executors import set_cv_threads
 
     set_cv_threads(args.cv_threads)
     n_frames = args.frames or (120 if args.otb is not None else 30 if args.quick else 60)

@@ -1,20 +1,27 @@
-"""The home page's figures from one run on the 34 development sequences (both halves).
+"""The home page's figures from one run on the development sequences.
 
 The accuracy-speed figure of the documentation's home page, and the success and precision plots
 beside it on the performance page, must come from one run, on the sequences the development
 figures are measured on: this runs ``wmiltrack eval`` once on every OTB-layout sequence under
-the roots given (the 17 shared sequences and the 17 of the pool: 34), with every tracker of the
-README's table, and leaves in ``OUT/eval`` the table, the JSON and the three plots of that run
-(``accuracy_speed.png``, ``success_ope.png``, ``precision_ope.png``)::
+the roots given, with every tracker of the README's table, and leaves in ``OUT/eval`` the
+table, the JSON and the three plots of that run (``accuracy_speed.png``, ``success_ope.png``,
+``precision_ope.png``)::
 
     python benchmarks/home_figures.py --roots ../shared/data/otb,$POOL_DIR --out results/home
 
 ``eval`` reads one dataset folder, so the sequences of the roots are linked into
 ``OUT/dataset`` first (symbolic links, nothing copied; a name found under two roots is an
-error). OpenCV's TrackerNano reads its model files from ``WMILTRACK_NANO_BACKBONE`` and
-``WMILTRACK_NANO_HEAD``; a tracker that is not installed is skipped with a note in the table.
-Copy the three plots into ``docs/images`` together and caption them with the run's date,
-command and code (printed at the end).
+error). Each tracker has one colour (and marker) in all three plots, fixed by its place in
+``--trackers`` (default: the README table's order), as in every ``eval`` run.
+
+Model files: rcwmil-nano and ``nanotrack:v3`` find NanoTrack v3's files in the models folder
+(``wmiltrack models fetch nanotrack-v3``), ``nanotrack:v2`` v2's (``... fetch nanotrack-v2``).
+OpenCV's TrackerNano runs v2's files; give them in its own spec
+(``opencv:Nano:backbone=FILE:neckhead=FILE`` in ``--trackers``), not through
+``WMILTRACK_NANO_BACKBONE``/``WMILTRACK_NANO_HEAD``, which rcwmil-nano would read too. CSRT, KCF
+and MOSSE need the contrib wheel; a tracker that is not installed is skipped with a note in
+the table. Copy the three plots into ``docs/images`` together and caption them with the run's
+date, command and code (printed at the end).
 """
 
 from __future__ import annotations
@@ -28,9 +35,9 @@ from pathlib import Path
 from wmiltrack.data.sequences import list_otb_sequences
 from wmiltrack.eval.pipeline import EvalConfig, run_eval
 
-#: The README table's trackers, in its order.
-TRACKERS = ("rcwmil-cf,rcwmil-plus,rcwmil,mil,fct,osil,wmil,ct,opencv:Nano,opencv:CSRT,"
-            "opencv:MIL,opencv:KCF,opencv:MOSSE")
+#: The README table's trackers, in its order (which fixes their colours in the plots).
+TRACKERS = ("rcwmil-nano,nanotrack:v3,nanotrack:v2,rcwmil-cf,rcwmil-plus,rcwmil,mil,fct,osil,wmil,"
+            "ct,opencv:Nano,opencv:CSRT,opencv:MIL,opencv:KCF,opencv:MOSSE")
 
 
 def link_sequences(roots: list[Path], folder: Path) -> list[str]:
@@ -64,7 +71,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--roots", required=True,
                     help="comma-separated folders of OTB-layout sequences (the development set)")
     ap.add_argument("--out", type=Path, required=True, help="folder for the links and the run")
-    ap.add_argument("--trackers", default=TRACKERS, help=f"default: {TRACKERS}")
+    ap.add_argument("--trackers", default=TRACKERS,
+                    help=f"in the order that fixes their colours (default: {TRACKERS})")
     ap.add_argument("--repeats", type=int, default=3, help="seeds 0.. (default 3)")
     ap.add_argument("-j", "--jobs", type=int, default=2, help="parallel sequences (default 2)")
     args = ap.parse_args(argv)

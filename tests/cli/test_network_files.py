@@ -16,8 +16,9 @@ from conftest import REPO_ROOT, write_generated_otb
 
 from wmiltrack import Tracker, cli
 from wmiltrack.compat import TrackerRCWMILNano
-from wmiltrack.models import ModelFilesMissing
-from wmiltrack.trackers import TrackerUnavailable, make_tracker
+from wmiltrack.integrations.opencv_wheels import TrackerUnavailable
+from wmiltrack.networks.files import ModelFilesMissing
+from wmiltrack.trackers import make_tracker
 
 NANO_ENV = ("WMILTRACK_NANO_BACKBONE", "WMILTRACK_NANO_HEAD")
 

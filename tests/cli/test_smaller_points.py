@@ -16,14 +16,19 @@ import pytest
 from conftest import REPO_ROOT, write_generated_otb
 
 from wmiltrack import cli
-from wmiltrack.trackers import MODEL_ENV, TrackerUnavailable, available_opencv_trackers, make_tracker
+from wmiltrack.integrations.opencv_wheels import TrackerUnavailable, available_opencv_trackers
+from wmiltrack.networks.files import MODEL_ENV
+from wmiltrack.trackers import make_tracker
 
 
 @pytest.fixture()
-def no_nano_files(monkeypatch: pytest.MonkeyPatch) -> None:
+def no_nano_files(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """No model file in the environment, and an empty models folder (opencv:Nano looks there)."""
     for attrs in MODEL_ENV.values():
         for env in attrs.values():
             monkeypatch.delenv(env, raising=False)
+    (tmp_path / "empty models").mkdir()
+    monkeypatch.setenv("WMILTRACK_MODELS", str(tmp_path / "empty models"))
 
 
 @pytest.fixture()

@@ -1,5 +1,5 @@
-"""rcwmil-nano's parts: NanoTrack's network and step (engine/siamese.py), and the two experts
-under one judge (engine/experts.py).
+"""rcwmil-nano's two experts under one judge (engine/experts.py); NanoTrack's network and
+step alone are tested in tests/networks.
 
 The judge's rules are checked without the network; everything that runs the network reads
 NanoTrack's model files from ``nanotrack_models`` (conftest: ``../shared/models/nanotrack``
@@ -78,40 +78,6 @@ def test_missing_model_files_are_one_clear_error(tmp_path: Path,
     text = str(info.value)
     assert "nanotrack_backbone.onnx" in text and "backbone" in text
     assert "wmiltrack models fetch nanotrack-v3" in text
-
-
-@pytest.mark.extras("onnxruntime", "onnx")
-def test_both_runtimes_give_the_same_features(nanotrack_models: dict[str, tuple[Path, Path]]
-                                              ) -> None:
-    """onnxruntime (its backbone made size-free on load) and OpenCV's dnn give the same
-    feature maps for the 127 px exemplar and the 255 px search crop, and the same head."""
-    from wmiltrack.engine.siamese import load_network
-
-    rng = np.random.default_rng(0)
-    for version, files in nanotrack_models.items():
-        ort, dnn = load_network(*files, "onnxruntime"), load_network(*files, "opencv")
-        z, x = (rng.integers(0, 256, (n, n, 3), dtype=np.uint8) for n in (127, 255))
-        fz, fx = ort.features(z), ort.features(x)
-        assert fz.shape[-2:] == (8, 8) and fx.shape[-2:] == (16, 16)
-        np.testing.assert_allclose(fz, dnn.features(z), atol=1e-3, rtol=1e-4)
-        np.testing.assert_allclose(fx, dnn.features(x), atol=1e-3, rtol=1e-4)
-        for a, b in zip(ort.head(fz, fx), dnn.head(fz, fx)):
-            np.testing.assert_allclose(a, b, atol=1e-3, rtol=1e-4)
-        assert ort.head(fz, fx)[0].shape[-1] == (16 if version == "v2" else 15)
-
-
-@pytest.mark.parametrize("version", ["v2", "v3"])
-def test_nanotrack_alone_follows_a_generated_target(
-        version: str, nanotrack_models: dict[str, tuple[Path, Path]]) -> None:
-    """The published step with either version keeps the box on a moving generated target."""
-    tracker = wmiltrack.trackers.make_tracker(f"nanotrack:{version}",
-                                              backbone=str(nanotrack_models[version][0]),
-                                              head=str(nanotrack_models[version][1]))
-    seq = make_sequence(60, seed=1, occlusion=False)
-    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
-    tracker.init(frames[0], tuple(gt[0]))
-    boxes = np.array([tracker.update(f).box for f in frames[1:]])
-    assert np.nanmean(iou(boxes, gt[1:])) > 0.5
 
 
 def _run(tracker: wmiltrack.Tracker, frames: list[np.ndarray], box: tuple[float, ...]

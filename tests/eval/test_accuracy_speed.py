@@ -42,6 +42,8 @@ def test_eval_plots_each_tracker_at_its_auc_and_fps(data: Path, tmp_path: Path, 
     doc = json.loads((out / "eval_ope.json").read_text())
     names = trackers.split(",")
     assert sorted(seen["aucs"]) == sorted(names)
+    # the summary keeps the order given, which fixes each tracker's colour in every plot
+    assert list(doc["summary"]) == names
     for name in names:  # the figure's point is the run's own summary
         assert seen["aucs"][name] == pytest.approx(doc["summary"][name]["auc"])
         assert seen["fps"][name] == pytest.approx(doc["summary"][name]["fps"])

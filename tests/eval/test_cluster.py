@@ -462,7 +462,7 @@ def test_first_frame_only_sequences_are_run_not_scored(tmp_path: Path) -> None:
     doc = json.loads((out / "eval_ope.json").read_text())
     assert doc["layout"] == "got10k" and doc["sequences"] == [] and doc["results"] == {}
     assert doc["unscored_sequences"] == ["GOT-10k_Test_000001"]
-    assert "not scored: 1 sequence(s) annotated on the first frame only" in (out / "eval_ope.md").read_text()
+    assert "not scored: 1 sequence annotated on the first frame only" in (out / "eval_ope.md").read_text()
 
 
 def test_executor_arguments(otb: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

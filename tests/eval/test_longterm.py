@@ -206,3 +206,23 @@ def test_a_sequence_without_the_target_after_the_first_frame_is_left_out_and_sai
                         {"A": GT, "Gone": gone})
     assert s["left_out"] == ["Gone"] and list(s["results"]["t"]) == ["A"]
     assert s["summary"]["t"]["f_score"] == pytest.approx(1.6 / 3)
+
+
+def test_the_table_prints_a_threshold_a_reader_understands() -> None:
+    """With more confidences than thresholds the lowest kept threshold is above the lowest
+    confidence, so reporting every frame with a box (threshold -inf) can give the best F; the
+    table says "any" there, never "-inf"."""
+    from wmiltrack.eval.report import format_longterm_table
+
+    n = 200
+    gt = np.tile([0.0, 0.0, 10.0, 10.0], (n, 1))
+    scores = np.linspace(1.0, 0.01, n)  # perfect boxes: the more frames reported, the better
+    scored = longterm_scores([run("t", "S", gt.copy(), scores, np.ones(n, bool))], {"S": gt})
+    assert scored["summary"]["t"]["threshold"] == -math.inf  # the case the table must word
+    table = format_longterm_table(scored, title="caption")
+    row = next(line for line in table.splitlines() if line.startswith("| t |"))
+    assert row.split(" | ")[4] == "any" and "inf" not in table
+    from wmiltrack.eval.report import threshold_text
+
+    assert (threshold_text(math.inf), threshold_text(0.53251), threshold_text(None)) == \
+        ("none", "0.533", "-")

@@ -15,16 +15,22 @@ import numpy as np
 import pytest
 
 from wmiltrack.cli import main
-from wmiltrack.trackers import MODEL_ENV, OpenCVTracker, TrackerUnavailable, make_tracker
+from wmiltrack.integrations.opencv_peers import OpenCVTracker
+from wmiltrack.integrations.opencv_wheels import TrackerUnavailable
+from wmiltrack.networks.files import MODEL_ENV
+from wmiltrack.trackers import make_tracker
 
 NANO_ENV = MODEL_ENV["Nano"]
 
 
 @pytest.fixture(autouse=True)
-def no_model_env(monkeypatch: pytest.MonkeyPatch) -> None:
+def no_model_env(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """No model file in the environment, and an empty models folder."""
     for attrs in MODEL_ENV.values():
         for env in attrs.values():
             monkeypatch.delenv(env, raising=False)
+    (tmp_path / "empty models").mkdir()
+    monkeypatch.setenv("WMILTRACK_MODELS", str(tmp_path / "empty models"))
 
 
 class FakeNano:
@@ -98,6 +104,27 @@ def test_model_paths_reach_opencv(fake_nano: type[FakeNano], tmp_path: Path, sou
     assert (made.params.backbone, made.params.neckhead) == (str(backbone), str(head))
     assert made.frames == [(60, 80, 3), (60, 80, 3)]  # gray frames given as 3 channels
     assert r.ok and r.box == (10.0, 10.0, 20.0, 20.0) and r.score == 0.75  # OpenCV's own score
+
+
+def test_nano_finds_nanotrack_v2_in_the_models_folder_and_refuses_v3(
+        fake_nano: type[FakeNano], tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        nanotrack_models: dict[str, tuple[Path, Path]]) -> None:
+    """opencv:Nano finds its files as every network does: in the models folder, where
+    ``wmiltrack models fetch nanotrack-v2`` puts them; a file of NanoTrack v3 given for it is
+    refused by its SHA-1, with the fetch command when none is there."""
+    with pytest.raises(TrackerUnavailable, match="wmiltrack models fetch nanotrack-v2"):
+        make_tracker("opencv:Nano")
+    folder = tmp_path / "models" / "nanotrack-v2"
+    folder.mkdir(parents=True)
+    for f in nanotrack_models["v2"]:
+        (folder / f.name).symlink_to(f)
+    monkeypatch.setenv("WMILTRACK_MODELS", str(tmp_path / "models"))
+    make_tracker("opencv:Nano").init(np.zeros((60, 80), np.uint8), (10, 10, 20, 20))
+    made = fake_nano.made[-1]
+    assert (made.params.backbone, made.params.neckhead) == tuple(str(folder / f.name)
+                                                                 for f in nanotrack_models["v2"])
+    with pytest.raises(TrackerUnavailable, match="neckhead=.* is NanoTrack v3's head, not NanoTrack v2's"):
+        make_tracker(f"opencv:Nano:neckhead={nanotrack_models['v3'][1]}")
 
 
 def test_track_takes_the_model_options(fake_nano: type[FakeNano], tmp_path: Path,

@@ -9,18 +9,17 @@ import pytest
 
 cv2 = pytest.importorskip("cv2")
 
-from wmiltrack.engine.result import TrackResult
+from wmiltrack.engine.result import TrackerLike, TrackResult
 from wmiltrack.eval.metrics import iou
-from wmiltrack.trackers import (
-    MODEL_ENV,
+from wmiltrack.integrations.opencv_peers import OpenCVTracker
+from wmiltrack.integrations.opencv_wheels import (
     OPENCV_TRACKERS,
-    OpenCVTracker,
-    TrackerLike,
     TrackerUnavailable,
     available_opencv_trackers,
-    make_tracker,
     parse_opencv_name,
 )
+from wmiltrack.networks.files import MODEL_ENV
+from wmiltrack.trackers import make_tracker
 
 
 def _frames(n: int = 4) -> tuple[list[np.ndarray], list[tuple[int, int, int, int]]]:
@@ -83,7 +82,7 @@ def test_contrib_tracker_absent_raises_with_swap_hint(
 ) -> None:
     _hide_contrib(monkeypatch, name)
     monkeypatch.setattr(
-        "wmiltrack.trackers.installed_opencv", lambda: ("opencv-python-headless", "5.0.0.93")
+        "wmiltrack.integrations.opencv_wheels.installed_opencv", lambda: ("opencv-python-headless", "5.0.0.93")
     )
     assert name not in available_opencv_trackers()
     with pytest.raises(TrackerUnavailable) as info:
@@ -99,7 +98,7 @@ def test_contrib_tracker_absent_raises_with_swap_hint(
 
 def test_swap_hint_uses_installed_version(monkeypatch: pytest.MonkeyPatch) -> None:
     _hide_contrib(monkeypatch, "CSRT")
-    from wmiltrack.trackers import installed_opencv
+    from wmiltrack.integrations.opencv_wheels import installed_opencv
 
     dist, ver = installed_opencv()
     with pytest.raises(TrackerUnavailable) as info:

@@ -90,7 +90,7 @@ def score_runs(trackers: list[str], frames: list[Any], gt: Any, seed: int
     from ..eval.metrics import ope_metrics
     from ..eval.runner import run_sequence
     from ..eval.scoring import scored_boxes
-    from ..trackers import TrackerUnavailable
+    from ..integrations.opencv_wheels import TrackerUnavailable
 
     for name in (t.strip() for t in trackers):
         try:

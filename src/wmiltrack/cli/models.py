@@ -11,7 +11,7 @@ from .options import EXIT_CODES_EPILOG, EXIT_ERROR, EXIT_OK, EXIT_USAGE, Subpars
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
-    from ..models import MODELS, locate, models_dir, models_dir_origin
+    from ..networks.files import MODELS, locate, models_dir, models_dir_origin
 
     print(f"models folder: {models_dir()} ({models_dir_origin()})")
     for s in MODELS.values():
@@ -28,7 +28,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
 
 
 def _cmd_fetch(args: argparse.Namespace) -> int:
-    from ..models import fetch, models_dir
+    from ..networks.files import fetch, models_dir
 
     if args.source is not None and not args.source.is_dir():
         raise UsageError(f"--from {args.source} is not a folder")
@@ -49,7 +49,7 @@ def _cmd_fetch(args: argparse.Namespace) -> int:
 
 
 def _cmd_path(args: argparse.Namespace) -> int:
-    from ..models import find_files
+    from ..networks.files import find_files
 
     for path in find_files(args.name):
         print(path)
@@ -63,7 +63,7 @@ def _cmd_models_help(args: argparse.Namespace) -> int:
 
 def add_models(sub: Subparsers) -> None:
     """Add the ``models`` subcommand (``list``, ``fetch``, ``path``) to ``sub``."""
-    from ..models import DEFAULT_BASE_URL, MODELS, MODELS_ENV, MODELS_URL_ENV
+    from ..networks.files import DEFAULT_BASE_URL, MODELS, MODELS_ENV, MODELS_URL_ENV
 
     names = list(MODELS)
     p = sub.add_parser(

@@ -114,13 +114,13 @@ def preset_names() -> list[str]:
 
 def trackers_help(default: str | None = "rcwmil", *, opencv: bool = True) -> str:
     """The help text of a tracker option: the presets, from the registry, and OpenCV's."""
-    from ..trackers import OPENCV_TRACKERS
+    from ..integrations.opencv_wheels import OPENCV_TRACKERS
 
     text = f"a preset: {', '.join(preset_names())}"
     if opencv:
-        from ..engine.siamese import NANO_VERSIONS
+        from ..networks.files import nanotrack_versions
 
-        nano = " or ".join(f"nanotrack:{v}" for v in NANO_VERSIONS)
+        nano = " or ".join(f"nanotrack:{v}" for v in nanotrack_versions())
         text += (f"; {nano} (NanoTrack alone); or opencv:NAME, NAME one of "
                  f"{', '.join(OPENCV_TRACKERS)}")
     text += " (`wmiltrack variants` lists the presets and their parameters)"
@@ -134,7 +134,8 @@ def check_tracker_spec(spec: str) -> None:
     a parameter the tracker does not have; an OpenCV tracker that is valid but missing from the
     installed ``cv2`` passes (running it is a runtime failure, exit status 1)."""
     from ..engine.params import Params
-    from ..trackers import is_opencv_spec, parse_opencv_name, parse_spec
+    from ..integrations.opencv_wheels import parse_opencv_name
+    from ..trackers import is_opencv_spec, parse_spec
 
     try:
         name, overrides = parse_spec(spec)
@@ -157,12 +158,12 @@ def check_tracker_spec(spec: str) -> None:
 
 def _check_nanotrack_spec(version: str, overrides: dict[str, Any]) -> None:
     """``nanotrack:VERSION[:key=value...]``: a known version and only the keywords
-    :class:`~wmiltrack.engine.siamese.NanoTracker` takes."""
-    from ..engine.siamese import NANO_VERSIONS
+    :class:`~wmiltrack.integrations.nanotrack_peer.NanoTracker` takes."""
+    from ..networks.files import nanotrack_versions
 
-    if version not in NANO_VERSIONS:
+    if version not in nanotrack_versions():
         raise ValueError(f"unknown NanoTrack version {version!r} in nanotrack:{version}; choose "
-                         f"{' or '.join('nanotrack:' + v for v in NANO_VERSIONS)}")
+                         f"{' or '.join('nanotrack:' + v for v in nanotrack_versions())}")
     unknown = sorted(set(overrides) - {"backbone", "head", "runtime", "threads"})
     if unknown:
         raise ValueError(f"nanotrack:{version} has no parameter {', '.join(map(repr, unknown))}; "
@@ -173,23 +174,26 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     """``--nano-backbone``, ``--nano-head`` and ``--vit-model``: the model files of the network
     trackers (``opencv:Nano``, ``opencv:Vit``, ``nanotrack:VERSION`` and rcwmil-nano), which no
     wheel ships; each goes to the trackers that run its network (:func:`model_keywords`)."""
+    from ..networks.files import MODEL_ENV, MODELS
+
+    v2, v3 = MODELS["nanotrack-v2"].files, MODELS["nanotrack-v3"].files
     p.add_argument("--nano-backbone", type=Path, default=None, metavar="FILE",
                    help="NanoTrack's backbone, for the trackers of its version: v2's "
-                   "(nanotrack_backbone_sim.onnx) for opencv:Nano, nanotrack:v2 and rcwmil-nano "
-                   "with network=nanotrack-v2, v3's (nanotrack_backbone.onnx) for nanotrack:v3 "
-                   "and rcwmil-nano (default: WMILTRACK_NANO_BACKBONE, then the models folder, "
-                   "see `wmiltrack models list`; in eval, TRACKER:backbone=FILE gives one "
+                   f"({v2['backbone'].name}) for opencv:Nano, nanotrack:v2 and rcwmil-nano "
+                   f"with network=nanotrack-v2, v3's ({v3['backbone'].name}) for nanotrack:v3 "
+                   f"and rcwmil-nano (default: {MODEL_ENV['Nano']['backbone']}, then the models "
+                   "folder, see `wmiltrack models list`; in eval, TRACKER:backbone=FILE gives one "
                    "tracker its own)")
     p.add_argument("--nano-head", type=Path, default=None, metavar="FILE",
-                   help="NanoTrack's head, as --nano-backbone: v2's (nanotrack_head_sim.onnx) or "
-                   "v3's (nanotrack_head.onnx); opencv:Nano calls it neckhead")
+                   help=f"NanoTrack's head, as --nano-backbone: v2's ({v2['head'].name}) or "
+                   f"v3's ({v3['head'].name}); opencv:Nano calls it neckhead")
     p.add_argument("--vit-model", type=Path, default=None, metavar="FILE",
                    help="for opencv:Vit: " + _vit_file() + " (default: the environment "
                    "variable WMILTRACK_VIT_MODEL)")
 
 
 def _vit_file() -> str:
-    from ..trackers import MODEL_FILES
+    from ..integrations.opencv_peers import MODEL_FILES
 
     return MODEL_FILES[("Vit", "net")]
 
@@ -223,13 +227,15 @@ def _network_of(spec: str, extra: dict[str, Any]) -> tuple[str, str, dict[str, s
     """What the tracker of ``spec`` (with the overrides ``extra``) runs: (its name, the model
     set, {option: its keyword}), or None for a tracker without model files."""
     from ..engine.params import Params
-    from ..trackers import NANOTRACK_PREFIX, is_opencv_spec, parse_opencv_name, parse_spec
+    from ..integrations.opencv_peers import NANO_MODELS
+    from ..integrations.opencv_wheels import parse_opencv_name
+    from ..trackers import NANOTRACK_PREFIX, is_opencv_spec, parse_spec
 
     name, overrides = parse_spec(spec)
     overrides = {**overrides, **extra}
     if is_opencv_spec(name):
         kind = f"opencv:{parse_opencv_name(name)}"
-        return (kind, "nanotrack-v2", _KEYWORDS[kind]) if kind in _KEYWORDS else None
+        return (kind, NANO_MODELS, _KEYWORDS[kind]) if kind in _KEYWORDS else None
     if name.lower().startswith(NANOTRACK_PREFIX):
         version = name[len(NANOTRACK_PREFIX):].lower() or "v3"
         return name, f"nanotrack-{version}", _KEYWORDS["nanotrack"]
@@ -246,7 +252,7 @@ def model_keywords(spec: str, given: dict[str, Path], extra: dict[str, Any] | No
     know), unless the tracker is given its own (in ``spec`` or ``extra``). A file of another
     set is left out; ``alone`` (one tracker in the run) makes that a :class:`UsageError`
     naming the fix."""
-    from ..models import identify
+    from ..networks.files import identify
 
     extra = extra or {}
     found = _network_of(spec, extra)
@@ -275,7 +281,7 @@ def _spec_keys(spec: str) -> list[str]:
 
 def _wrong_file(option: str, path: Path, known: tuple[str, str], name: str, model_set: str) -> str:
     """The message for a file of another set or role given to the tracker ``name``."""
-    from ..models import MODELS
+    from ..networks.files import MODELS
 
     theirs, mine = MODELS[known[0]], MODELS[model_set]
     role = _ROLES[option]
@@ -297,7 +303,7 @@ def specs_with_model_files(specs: list[str], args: argparse.Namespace) -> list[s
     ``--nano-head`` and ``--vit-model`` that are its network's (:func:`model_keywords`: a
     file of NanoTrack v2 goes to the trackers of v2 only). A file that no tracker takes is a
     :class:`UsageError`."""
-    from ..models import MODELS, identify
+    from ..networks.files import MODELS, identify
 
     given = given_model_files(args)
     out, taken = [], set()
@@ -343,7 +349,7 @@ def tracker_from_args(args: argparse.Namespace, *, several: bool = False, ours: 
     ``several``: a :class:`wmiltrack.MultiTracker` (wmiltrack's presets only); ``ours``: a
     :class:`wmiltrack.Tracker` (not an OpenCV tracker). An unknown tracker or parameter, or a
     bad value, is a :class:`UsageError`; an OpenCV tracker missing from the installed ``cv2``
-    stays a :class:`wmiltrack.trackers.TrackerUnavailable` (exit status 1).
+    stays a :class:`wmiltrack.integrations.opencv_wheels.TrackerUnavailable` (exit status 1).
     """
     from ..trackers import make_tracker
 
@@ -378,9 +384,9 @@ def open_frames(path: Any, *, has_box: bool) -> Any:
 
 
 def add_executor_options(p: argparse.ArgumentParser, inputs: str) -> None:
-    """``-j/--jobs``, ``--executor`` and ``--scheduler`` (:func:`wmiltrack.executors.make_executor`),
+    """``-j/--jobs``, ``--executor`` and ``--scheduler`` (:func:`wmiltrack.parallel.executors.make_executor`),
     shared by ``eval`` and ``track --list``; ``inputs`` names what the workers must see."""
-    from ..executors import EXECUTORS
+    from ..parallel.executors import EXECUTORS
 
     p.add_argument("-j", "--jobs", type=int, default=1,
                    help="parallel processes or Dask workers (default 1)")

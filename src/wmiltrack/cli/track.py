@@ -183,8 +183,8 @@ def _check_list_args(args: argparse.Namespace) -> None:
 def _track_list(args: argparse.Namespace) -> int:
     """``track --list FILE -o DIR``: every clip of the list on the chosen executor; each box
     file written as its clip finishes; clips whose box file exists are skipped (resume)."""
-    from ..batch import ClipResult, describe_clip, failed_clip, read_clip_list, track_clips
-    from ..executors import make_executor
+    from ..parallel.batch import ClipResult, describe_clip, failed_clip, read_clip_list, track_clips
+    from ..parallel.executors import make_executor
     from ..progress import progress
 
     _check_list_args(args)

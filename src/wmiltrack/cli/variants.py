@@ -130,10 +130,10 @@ def variant_table() -> str:
 
 def peers_note() -> str:
     """The trackers ``eval``, ``demo`` and ``track`` take besides the presets."""
-    from ..engine.siamese import NANO_VERSIONS
-    from ..trackers import OPENCV_TRACKERS
+    from ..integrations.opencv_wheels import OPENCV_TRACKERS
+    from ..networks.files import nanotrack_versions
 
-    nano = ", ".join(f"nanotrack:{v}" for v in NANO_VERSIONS)
+    nano = ", ".join(f"nanotrack:{v}" for v in nanotrack_versions())
     return (f"Besides the presets: {nano} (NanoTrack alone, by its published tracking step; "
             "its model files: `wmiltrack models list`) and opencv:NAME, NAME one of "
             f"{', '.join(OPENCV_TRACKERS)}.")

@@ -27,10 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..networks.families import load_siamese
+from ..networks.files import find_files
+from ..networks.siamese import SiameseStep, as_bgr
 from .geometry import centre, overlap, within
 from .result import TrackResult
 from .settings import ExpertSettings
-from .siamese import EXEMPLAR, INSTANCE, NANO_VERSIONS, SiameseLocator, as_bgr, context_side, load_network
 from .state import Verdict
 
 __all__ = ["ExpertJudge", "TwoExperts", "Verdict", "network_files"]
@@ -101,19 +103,18 @@ class ExpertJudge:
 
 def network_files(settings: ExpertSettings) -> tuple[Path, Path]:
     """The backbone and head of ``settings.network``: the paths in ``settings`` if given, else
-    found as :func:`wmiltrack.models.nanotrack_files` finds them. The one check of a network's
-    files, made when a tracker is built (so that a missing file is said at once, not at its
-    first frame) and again when its network is loaded.
+    found as :func:`wmiltrack.networks.files.find_files` finds them. The one check of a
+    network's files, made when a tracker is built (so that a missing file is said at once, not
+    at its first frame) and again when its network is loaded.
 
     Raises
     ------
     ModelFilesMissing
         A file is missing or is another set's or role's; the message says how to give them.
     """
-    from ..models import nanotrack_files
-
-    version = settings.network.rsplit("-", 1)[-1]
-    return nanotrack_files(version, settings.backbone or None, settings.head or None)
+    found = find_files(settings.network, {"backbone": settings.backbone or None,
+                                          "head": settings.head or None})
+    return found[0], found[1]
 
 
 class TwoExperts:
@@ -124,12 +125,11 @@ class TwoExperts:
     """
 
     def __init__(self, settings: ExpertSettings) -> None:
-        version = settings.network.rsplit("-", 1)[-1]
-        files = network_files(settings)
-        network = load_network(Path(files[0]), Path(files[1]), settings.network_runtime,
-                               settings.network_threads)
+        backbone, head = network_files(settings)
         self.settings = settings
-        self.locator = SiameseLocator(network, NANO_VERSIONS[version])
+        self.locator: SiameseStep = load_siamese(
+            settings.network, backbone=backbone, head=head,
+            runtime=settings.network_runtime, threads=settings.network_threads)
         self._restart((0.0, 0.0, 0.0, 0.0))
 
     def start(self, frame: np.ndarray, box: FloatBox) -> None:
@@ -217,17 +217,17 @@ class TwoExperts:
         if n <= 0 or self._lost_for < self.settings.redetect_after:
             return places
         if not self._sweep:
-            self._sweep = _sweep(img.shape[1], img.shape[0], self.locator.size, centre(self._held))
+            reach = self.locator.search_side(self.locator.size) * 0.44  # half the answer grid's span
+            self._sweep = _sweep(img.shape[1], img.shape[0], reach, centre(self._held))
         places += self._sweep[:n]
         self._sweep = self._sweep[n:]
         return places
 
 
-def _sweep(fw: int, fh: int, size: tuple[float, float], near: tuple[float, float]
-           ) -> list[tuple[float, float]]:
-    """Search-window centres covering a ``fw x fh`` frame for a target of ``size`` (windows
-    0.8 of the network's reach apart), nearest to ``near`` first."""
-    reach = context_side(*size) * (INSTANCE / EXEMPLAR) * 0.44  # half the answer grid's span
+def _sweep(fw: int, fh: int, reach: float, near: tuple[float, float]) -> list[tuple[float, float]]:
+    """Search-window centres covering a ``fw x fh`` frame for a network that reaches ``reach``
+    frame pixels from a window's centre (windows 0.8 of that reach apart), nearest to ``near``
+    first."""
     step = max(0.8 * 2 * reach, 8.0)
     xs = np.arange(step / 2, fw + step / 2, step).clip(0, fw)
     ys = np.arange(step / 2, fh + step / 2, step).clip(0, fh)

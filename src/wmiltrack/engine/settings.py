@@ -20,6 +20,9 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal, TypeVar
 
+from ..networks.backends import RUNTIMES
+from ..networks.families import siamese_networks
+
 __all__ = ["AppearanceSettings", "BagSettings", "ClassifierSettings", "ColourSettings", "FeatureSettings",
            "FilterLearning", "JudgeSettings", "NO_GATE", "RecoverySettings", "own",
            "MotionSettings", "ScaleSettings", "ScoreSettings", "SearchSettings",
@@ -933,8 +936,9 @@ class FilterLearning:
 NO_GATE = FilterLearning()
 
 
-NETWORKS: tuple[str, ...] = ("", "nanotrack-v2", "nanotrack-v3")
-"""The Siamese networks :class:`ExpertSettings` can add ("" for none)."""
+NETWORKS: tuple[str, ...] = ("", *siamese_networks())
+"""The Siamese networks :class:`ExpertSettings` can add ("" for none): the model sets of
+:func:`wmiltrack.networks.families.siamese_networks`."""
 
 
 @dataclass(frozen=True)
@@ -942,7 +946,7 @@ class ExpertSettings:
     """A Siamese network as a second expert beside the tracker, and the judge between the two
     (:class:`wmiltrack.engine.experts.TwoExperts`; rcwmil-nano).
 
-    The network (NanoTrack, :mod:`wmiltrack.engine.siamese`) leads: it is the more accurate
+    The network (NanoTrack, :mod:`wmiltrack.networks.nanotrack`) leads: it is the more accurate
     locator on the development set, and its first-frame template is a memory of the target
     that never learns. Each frame the judge compares the two experts' boxes and asks the
     network's backbone how alike the network's box is to the first frame's target (the cosine
@@ -960,7 +964,7 @@ class ExpertSettings:
     network : str
         ``"nanotrack-v3"`` or ``"nanotrack-v2"``; ``""`` leaves the network out.
     backbone, head : str
-        The model files' paths; ``""`` finds them (:func:`wmiltrack.models.nanotrack_files`:
+        The model files' paths; ``""`` finds them (:func:`wmiltrack.networks.files.nanotrack_files`:
         ``WMILTRACK_NANO_BACKBONE`` / ``WMILTRACK_NANO_HEAD``, then the models folder).
     network_runtime : str
         ``"auto"`` (onnxruntime when installed, else OpenCV's dnn), ``"onnxruntime"`` or
@@ -1020,7 +1024,7 @@ class ExpertSettings:
     def check(self) -> None:
         """``ValueError`` naming the first setting out of range."""
         _check_choices(self, {"network": NETWORKS,
-                              "network_runtime": ("auto", "onnxruntime", "opencv")})
+                              "network_runtime": RUNTIMES})
         _need(isinstance(self.backbone, str) and isinstance(self.head, str),
               "backbone and head must be paths as strings ('' to find them)")
         _check_ints(self, "network_threads", "lost_frames", "found_frames", "redetect_windows",

@@ -1,10 +1,10 @@
-"""Run evaluation tasks on Dask: :class:`wmiltrack.executors.DaskExecutor` set up for
+"""Run evaluation tasks on Dask: :class:`wmiltrack.parallel.executors.DaskExecutor` set up for
 :class:`~wmiltrack.eval.runner.Task` and :class:`~wmiltrack.eval.runner.RunOutcome`.
 
 A task whose outcome has an error, or whose future failed (a worker died, the task could not
 be unpickled...), is submitted once more; its final outcome is yielded either way, a failure
 as an outcome with ``error`` set (:func:`failed_outcome`), never dropped. See
-:mod:`wmiltrack.executors` for the cluster itself (a ``LocalCluster``, or an existing one by
+:mod:`wmiltrack.parallel.executors` for the cluster itself (a ``LocalCluster``, or an existing one by
 its scheduler's address).
 """
 
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import executors
+from ..parallel import executors
 from .runner import RunOutcome, Task
 
 __all__ = ["DaskExecutor", "describe_task", "failed_outcome"]
@@ -55,14 +55,14 @@ def describe_task(task: Task) -> str:
 
 
 class DaskExecutor(executors.DaskExecutor):
-    """:class:`wmiltrack.executors.DaskExecutor` whose failed task becomes a
+    """:class:`wmiltrack.parallel.executors.DaskExecutor` whose failed task becomes a
     :class:`RunOutcome` with ``error`` set, and whose retry lines name the tracker, sequence
     and seed.
 
     Parameters
     ----------
     jobs, cv_threads, scheduler, retries, log:
-        As for :class:`wmiltrack.executors.DaskExecutor`.
+        As for :class:`wmiltrack.parallel.executors.DaskExecutor`.
     """
 
     def __init__(

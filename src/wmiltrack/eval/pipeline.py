@@ -95,8 +95,9 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from ..executors import Executor, ExecutorName, make_executor
-from ..trackers import TrackerUnavailable, tracker_labels
+from ..integrations.opencv_wheels import TrackerUnavailable
+from ..parallel.executors import Executor, ExecutorName, make_executor
+from ..trackers import tracker_labels
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 from .report import (
     box_path,
@@ -106,6 +107,7 @@ from .report import (
     format_ope_table,
     format_vot_table,
     json_safe,
+    plural,
     read_results,
     safe_name,
     write_longterm_plots,
@@ -221,7 +223,8 @@ def _sequence_paths(dataset: Path, names: Sequence[str] | None) -> list[Path]:
         missing = [n for n in names if n not in by_name]
         if missing:  # a bad --sequences: a command line that cannot run as given
             raise EvalArgumentError(
-                f"sequence(s) not found: {', '.join(missing)}; available: "
+                f"{'sequence' if len(missing) == 1 else 'sequences'} not found: "
+                f"{', '.join(missing)}; available: "
                 f"{', '.join(sorted(by_name))}"
             )
         paths = [by_name[n] for n in names]
@@ -506,8 +509,8 @@ def _score(runs: Sequence[RunOutcome], gts: dict[str, FloatArray], protocol: Pro
         )
         if fail:
             notes.append(
-                f"{len(fail)} sequence(s) ({ds.layout}) count frames where the target is absent "
-                "as failures, as the benchmark's toolkit does"
+                f"{plural(len(fail), 'sequence')} ({ds.layout}): as the benchmark's toolkit does, "
+                "count frames where the target is absent as failures"
             )
         if ds.layout == "got10k":
             got10k, section = _got10k_section(runs, gts, ds.metas, missing)
@@ -611,7 +614,7 @@ def _run_trackers(ds: Any, tracker_names: list[str], cfg: EvalConfig, ex: Execut
     skipped = {r.sequence: r.skipped_frames for r in runs if r.skipped_frames}
     for seq, problems in skipped.items():
         more = f" and {len(problems) - 3} more" if len(problems) > 3 else ""
-        notes.append(f"{seq}: {len(problems)} frame(s) could not be decoded and were skipped, "
+        notes.append(f"{seq}: {plural(len(problems), 'frame')} could not be decoded (skipped), "
                      f"every tracker keeping its last box there ({'; '.join(problems[:3])}{more})")
         say(notes[-1])
     unscored_errors = 0
@@ -726,7 +729,7 @@ def _scored_truths(ds: _Dataset, notes: list[str]) -> tuple[dict[str, FloatArray
     gts = {n: g for n, g in ds.gts.items() if n not in first_only}
     if first_only:
         notes.append(
-            f"not scored: {len(first_only)} sequence(s) annotated on the first frame only "
+            f"not scored: {plural(len(first_only), 'sequence')} annotated on the first frame only "
             "(the benchmark's server scores them); their boxes are written"
         )
     return gts, first_only

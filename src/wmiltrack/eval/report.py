@@ -28,8 +28,10 @@ __all__ = [
     "format_ope_table",
     "format_vot_table",
     "json_safe",
+    "plural",
     "read_results",
     "safe_name",
+    "threshold_text",
     "write_plots",
     "write_run_boxes",
 ]
@@ -54,6 +56,12 @@ def safe_name(name: str) -> str:
     """
     out = _UNSAFE.sub("_", name.strip())
     return out if out not in ("", ".", "..") else "_" + out
+
+
+def plural(n: int, word: str, words: str | None = None) -> str:
+    """``n`` and the noun that agrees with it: ``plural(1, "sequence")`` is ``"1 sequence"``,
+    ``plural(2, "sequence")`` ``"2 sequences"`` (``words``: an irregular plural)."""
+    return f"{n} {word if n == 1 else (words if words is not None else word + 's')}"
 
 
 def caption(env: Mapping[str, Any], settings: Mapping[str, Any]) -> str:
@@ -200,6 +208,9 @@ def write_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, s
     n_seq:
         Number of sequences (for the titles).
 
+    Every plot gives a tracker the same colour, fixed by the order of the summary (the order
+    the trackers were given: :func:`wmiltrack.eval.plots.tracker_styles`).
+
     Returns
     -------
     dict
@@ -209,33 +220,38 @@ def write_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, s
     from .plots import plot_accuracy_speed, plot_precision, plot_success
 
     summ = scored["summary"]
+    order = list(summ)
+    seqs = plural(n_seq, "sequence")
     succ = out / "success_ope.png"
     prec = out / "precision_ope.png"
     plot_success(
         {t: s["success_curve"] for t, s in summ.items()},
         {t: s["auc"] for t, s in summ.items()},
         succ,
-        title=f"Success plots of OPE ({n_seq} sequences)",
+        title=f"Success plots of OPE ({seqs})",
+        order=order,
     )
     plot_precision(
         {t: s["precision_curve"] for t, s in summ.items()},
         {t: s["precision_20"] for t, s in summ.items()},
         prec,
-        title=f"Precision plots of OPE ({n_seq} sequences)",
+        title=f"Precision plots of OPE ({seqs})",
+        order=order,
     )
     files = {"success_plot": str(succ), "precision_plot": str(prec)}
     speeds = {t: float(s.get("fps", float("nan"))) for t, s in summ.items()}
     if any(np.isfinite(v) and v > 0 for v in speeds.values()):
         both = out / "accuracy_speed.png"
         plot_accuracy_speed({t: s["auc"] for t, s in summ.items()}, speeds, both,
-                            title=f"Accuracy and speed ({n_seq} sequences, same run)")
+                            title=f"Accuracy and speed ({seqs}, same run)", order=order)
         files["accuracy_speed_plot"] = str(both)
     return files
 
 
 def write_longterm_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> dict[str, str]:
     """Write ``precision_recall_longterm.png`` and ``fscore_longterm.png`` of
-    :func:`wmiltrack.eval.longterm.longterm_scores`'s summary.
+    :func:`wmiltrack.eval.longterm.longterm_scores`'s summary, each tracker in the colour the
+    order of the summary gives it (as :func:`write_plots`).
 
     Returns
     -------
@@ -245,19 +261,22 @@ def write_longterm_plots(scored: Mapping[str, Any], out: Path, n_seq: int) -> di
     from .plots import plot_fscore_bars, plot_precision_recall
 
     summ = scored["summary"]
+    seqs = plural(n_seq, "sequence")
     pr_path = out / "precision_recall_longterm.png"
     f_path = out / "fscore_longterm.png"
     plot_precision_recall(
         {t: (s["curve"]["precision"], s["curve"]["recall"]) for t, s in summ.items()},
         {t: s["f_score"] for t, s in summ.items()},
         pr_path,
-        title=f"Tracking precision-recall ({n_seq} sequences)",
+        title=f"Tracking precision-recall ({seqs})",
+        order=list(summ),
     )
     plot_fscore_bars(
         {t: s["f_score"] for t, s in summ.items()},
         {t: s["ok_f_score"] for t, s in summ.items()},
         f_path,
-        title=f"Tracking F-score ({n_seq} sequences)",
+        title=f"Tracking F-score ({seqs})",
+        order=list(summ),
     )
     return {"precision_recall_plot": str(pr_path), "fscore_plot": str(f_path)}
 
@@ -282,7 +301,8 @@ def format_longterm_table(scored: Mapping[str, Any], *, title: str) -> str:
         "F = 2 Pr Re / (Pr + Re); per sequence, then averaged over sequences at each confidence "
         "threshold, F at the threshold that maximises it (as the VOT toolkit); 'lost flag': "
         "the frames the tracker says it has the target. Frames where the target is absent "
-        "count against precision.",
+        "count against precision. Threshold 'any': every frame with a box is reported, "
+        "whatever its confidence; 'none': no frame is.",
         "",
         title,
         "",
@@ -291,7 +311,7 @@ def format_longterm_table(scored: Mapping[str, Any], *, title: str) -> str:
     for t in order:
         s = summ[t]
         rows.append([t, _f(s["f_score"], ".3f"), _f(s["precision"], ".3f"),
-                     _f(s["recall"], ".3f"), _f(s["threshold"], ".3g"), _f(s["ok_f_score"], ".3f"),
+                     _f(s["recall"], ".3f"), threshold_text(s["threshold"]), _f(s["ok_f_score"], ".3f"),
                      _f(s["ok_precision"], ".3f"), _f(s["ok_recall"], ".3f"), s["confidence"],
                      str(s.get("errors", 0))])
     lines += _markdown(["Tracker", "F", "Pr", "Re", "threshold", "F (lost flag)", "Pr (lost flag)",
@@ -313,6 +333,14 @@ def format_longterm_table(scored: Mapping[str, Any], *, title: str) -> str:
         seq_rows.append([f"{q} ({absent})", *cells])
     lines += _markdown(["Sequence", *order], seq_rows, [])
     return "\n".join(lines) + "\n"
+
+
+def threshold_text(v: Any) -> str:
+    """A long-term confidence threshold as the table prints it: ``any`` for -inf (every frame
+    with a box counts as reported), ``none`` for +inf (no frame does), else 3 digits."""
+    if v is not None and math.isinf(float(v)):
+        return "any" if float(v) < 0 else "none"
+    return _f(v, ".3g")
 
 
 def _f(v: Any, spec: str) -> str:
@@ -543,8 +571,9 @@ def format_vot_table(
         (
             "VOT-style supervised protocol (VOT2015's rules on axis-aligned OTB boxes, so "
             "not VOT's own numbers): failure = overlap 0 with the ground truth; the "
-            f"tracker is re-initialised {skip} frames later; accuracy = mean overlap leaving "
-            f"out the {burnin} frames from each (re)initialisation; robustness = "
+            f"tracker is re-initialised {plural(skip, 'frame')} later; accuracy = mean overlap "
+            f"leaving out the first {plural(burnin, 'frame')} from each (re)initialisation; "
+            "robustness = "
             "exp(-100 * failures / frames) (VOT2016 reliability). Summary rows: accuracy = "
             "mean over sequences, failures = total (per sequence in brackets). FPS: "
             "update-only, frames decoded before timing."
@@ -635,7 +664,7 @@ def environment(cv_threads: int | None = None) -> dict[str, Any]:
     import cv2
 
     from .. import __version__
-    from ..trackers import installed_opencv
+    from ..integrations.opencv_wheels import installed_opencv
 
     try:
         import matplotlib

@@ -3,7 +3,7 @@
 The unit of work is a :class:`Task`, one (tracker spec, sequence, seed) with the protocol's
 settings; :func:`run_task` turns it into a :class:`RunOutcome` (boxes as the tracker gave
 them, its "found" flags, timing, any error).  An executor maps tasks to outcomes and hands
-each one back as soon as it is finished (:mod:`wmiltrack.executors`: in this process, in
+each one back as soon as it is finished (:mod:`wmiltrack.parallel.executors`: in this process, in
 worker processes or on Dask), so the caller can write each result at once and a failure or an
 interruption loses only the tasks not yet finished.
 
@@ -37,8 +37,8 @@ from typing import Any, Literal, TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from .. import executors
 from ..engine.result import TrackerLike, TrackResult
+from ..parallel import executors
 from ..timing import gc_paused, timed
 from ..trackers import make_tracker
 from .metrics import valid_mask
@@ -576,7 +576,7 @@ def run_task(task: Task) -> RunOutcome:
 
 # ----------------------------------------------------------------------------- executors
 class SerialExecutor(executors.SerialExecutor):
-    """:class:`wmiltrack.executors.SerialExecutor` that also lets go of the decoded sequence
+    """:class:`wmiltrack.parallel.executors.SerialExecutor` that also lets go of the decoded sequence
     it kept between tasks (one per process, see :func:`run_task`) once the tasks are done.
 
     Parameters

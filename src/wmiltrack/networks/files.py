@@ -1,5 +1,7 @@
-"""The model files of the networks wmiltrack runs (NanoTrack v2 and v3): where they are found,
-and how they are fetched and checked.
+"""The model sets of the networks wmiltrack runs (NanoTrack v2 and v3): their files, where
+they are found, how they are fetched and checked, and the constants their authors publish with
+them. :data:`MODELS` is the one registry of networks and their versions; the rest of wmiltrack
+derives its lists from it.
 
 No model file ships with wmiltrack: the files stay in their authors' public repository, pinned
 here by commit and SHA-1. A tracker finds each file, in this order,
@@ -23,21 +25,18 @@ import hashlib
 import os
 import sys
 import tempfile
-import urllib.error
-import urllib.request
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from http.client import HTTPException
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
-from .progress import progress
-from .trackers import MODEL_ENV, TrackerUnavailable
+from ..integrations.opencv_wheels import TrackerUnavailable
 
 __all__ = [
     "DEFAULT_BASE_URL",
     "MODELS",
     "MODELS_ENV",
+    "MODEL_ENV",
     "MODELS_URL_ENV",
     "FetchError",
     "Located",
@@ -52,7 +51,17 @@ __all__ = [
     "models_dir",
     "models_dir_origin",
     "nanotrack_files",
+    "nanotrack_versions",
 ]
+
+MODEL_ENV: dict[str, dict[str, str]] = {
+    "Nano": {"backbone": "WMILTRACK_NANO_BACKBONE", "neckhead": "WMILTRACK_NANO_HEAD"},
+    "Vit": {"net": "WMILTRACK_VIT_MODEL"},
+}
+"""The environment variables that give model files, by OpenCV tracker (``Nano``, ``Vit``) and
+its ``Params`` attribute. NanoTrack's two are also the ones every NanoTrack set reads
+(:attr:`ModelSet.env`), so that ``opencv:Nano``, ``nanotrack:VERSION`` and rcwmil-nano share
+them."""
 
 MODELS_ENV = "WMILTRACK_MODELS"
 """The models folder, when set and not empty (else the user's cache folder: :func:`models_dir`)."""
@@ -71,8 +80,8 @@ _CHUNK = 1 << 16
 class ModelFilesMissing(FileNotFoundError, TrackerUnavailable):
     """A set's model files cannot be used: each missing (or wrong) file with where it was looked
     for, and in the same message every way to give or fetch them. A tracker that cannot start
-    (:class:`~wmiltrack.trackers.TrackerUnavailable`), as one not installed is: ``eval`` and
-    ``demo`` skip it with this message.
+    (:class:`~wmiltrack.integrations.opencv_wheels.TrackerUnavailable`), as one not installed
+    is: ``eval`` and ``demo`` skip it with this message.
 
     ``problems`` holds the :class:`Located` entries that are not usable (empty after
     unpickling a message made elsewhere, where only the message travels)."""
@@ -111,12 +120,16 @@ class ModelFile:
 class ModelSet:
     """The files one network needs, pinned to a commit of their public repository.
 
+    ``family`` is the network (``"nanotrack"``) and ``version`` its release (``"v3"``);
     ``files`` maps each role (``"backbone"``, ``"head"``) to its :class:`ModelFile`; ``env`` the
     role to the environment variable that gives its path, and ``options`` to the command-line
-    option that does."""
+    option that does; ``step`` the constants of the tracking step the authors publish with the
+    files (their configuration: for NanoTrack the head's grid, the window's influence, the
+    penalty's ``k`` and the size's learning rate), read by the family's module."""
 
     name: str
     title: str
+    family: str
     version: str
     repository: str
     commit: str
@@ -124,6 +137,7 @@ class ModelSet:
     files: Mapping[str, ModelFile]
     env: Mapping[str, str]
     options: Mapping[str, str]
+    step: Mapping[str, float]
 
     def url(self, role: str, base_url: str | None = None) -> str:
         """The download address of the file of ``role``: ``base_url`` (default
@@ -143,28 +157,40 @@ _NANO_ENV = {"backbone": MODEL_ENV["Nano"]["backbone"], "head": MODEL_ENV["Nano"
 _NANO_OPTIONS = {"backbone": "--nano-backbone", "head": "--nano-head"}
 
 
-def _nanotrack(version: str, backbone: tuple[str, str, int], head: tuple[str, str, int]) -> ModelSet:
-    """NanoTrack ``version``'s set; ``backbone`` and ``head`` are (file name, SHA-1, size)."""
+def _nanotrack(version: str, backbone: tuple[str, str, int], head: tuple[str, str, int],
+               step: dict[str, float]) -> ModelSet:
+    """NanoTrack ``version``'s set; ``backbone`` and ``head`` are (file name, SHA-1, size),
+    ``step`` the published constants of its tracking step."""
     folder = f"NanoTrack/models/nanotrack{version}"
     files = {role: ModelFile(role, f"{folder}/{name}", sha1, size)
              for role, (name, sha1, size) in (("backbone", backbone), ("head", head))}
-    return ModelSet(name=f"nanotrack-{version}", title=f"NanoTrack {version}", version=version,
-                    repository=_SIAMTRACKERS, commit=_SIAMTRACKERS_COMMIT, license="Apache-2.0",
-                    files=files, env=dict(_NANO_ENV), options=dict(_NANO_OPTIONS))
+    return ModelSet(name=f"nanotrack-{version}", title=f"NanoTrack {version}", family="nanotrack",
+                    version=version, repository=_SIAMTRACKERS, commit=_SIAMTRACKERS_COMMIT,
+                    license="Apache-2.0", files=files, env=dict(_NANO_ENV),
+                    options=dict(_NANO_OPTIONS), step=step)
 
 
 MODELS: dict[str, ModelSet] = {
     s.name: s for s in (
         _nanotrack("v2",
                    ("nanotrack_backbone_sim.onnx", "6e773a364457b78574f9f63a23b0659ee8646f8f", 1056849),
-                   ("nanotrack_head_sim.onnx", "39f168489671700cf739e402dfc67d41ce648aef", 726198)),
+                   ("nanotrack_head_sim.onnx", "39f168489671700cf739e402dfc67d41ce648aef", 726198),
+                   {"grid": 16, "window_influence": 0.490, "penalty_k": 0.150, "lr": 0.385}),
         _nanotrack("v3",
                    ("nanotrack_backbone.onnx", "60814e834733116131ed0a5f66ca674438b2de87", 1431635),
-                   ("nanotrack_head.onnx", "68c3e1ec4dbda74a895afd5bff549777ea4810d8", 1183740)),
+                   ("nanotrack_head.onnx", "68c3e1ec4dbda74a895afd5bff549777ea4810d8", 1183740),
+                   {"grid": 15, "window_influence": 0.455, "penalty_k": 0.138, "lr": 0.348}),
     )
 }
 """The model sets wmiltrack knows, by name: NanoTrack v2 (the files OpenCV's TrackerNano runs)
-and v3, from ``NanoTrack/models/`` of HonglinChu/SiamTrackers at a pinned commit."""
+and v3, from ``NanoTrack/models/`` of HonglinChu/SiamTrackers at a pinned commit, with the
+constants of the repository's configuration files (``shared/models/nanotrack/README.md``).
+Another network is another set here and a module of its own in :mod:`wmiltrack.networks`."""
+
+
+def nanotrack_versions() -> tuple[str, ...]:
+    """NanoTrack's versions, from :data:`MODELS`: ``("v2", "v3")``."""
+    return tuple(s.version for s in MODELS.values() if s.family == "nanotrack")
 
 
 # -- where the files are -------------------------------------------------------------------
@@ -338,7 +364,7 @@ def nanotrack_files(version: str = "v3", backbone: str | Path | None = None,
     ``$WMILTRACK_NANO_BACKBONE`` / ``$WMILTRACK_NANO_HEAD``, else the models folder's
     (:func:`find_files`, which raises :class:`ModelFilesMissing` naming every missing file).
     ``version`` not one of NanoTrack's is a ValueError."""
-    versions = [s.version for s in MODELS.values() if s.name.startswith("nanotrack-")]
+    versions = nanotrack_versions()
     if version not in versions:
         raise ValueError(f"NanoTrack version {version!r}: use one of {', '.join(map(repr, versions))}")
     found = find_files(f"nanotrack-{version}", {"backbone": backbone, "head": head})
@@ -465,6 +491,10 @@ def _local_sources(s: ModelSet, root: Path, files: list[ModelFile]) -> dict[str,
 
 def _download(url: str, folder: Path, s: ModelSet, f: ModelFile, quiet: bool) -> Path:
     """Download ``url`` into a checked temporary file in ``folder``; see :func:`_stage`."""
+    import urllib.error  # here: only a download needs the network modules
+    import urllib.request
+    from http.client import HTTPException
+
     try:
         response = urllib.request.urlopen(url, timeout=60)
     except urllib.error.HTTPError as exc:
@@ -489,6 +519,8 @@ class _ReadOrFetchError:
         self._url = url
 
     def read(self, n: int) -> bytes:
+        from http.client import HTTPException
+
         try:
             return self._response.read(n)
         except (OSError, HTTPException) as exc:
@@ -499,6 +531,8 @@ def _stage(stream: BinaryIO | _ReadOrFetchError, folder: Path, s: ModelSet, f: M
            quiet: bool, *, total: int | None = None) -> Path:
     """Write ``stream`` to a temporary file in ``folder`` (a progress bar on standard error) and
     return it once its SHA-1 and size are ``f``'s; on any failure the file is removed."""
+    from ..progress import progress  # here: the engine imports this module, a fetch only needs tqdm
+
     fd, name = tempfile.mkstemp(dir=folder, prefix=f".{f.name}.", suffix=".part")
     tmp = Path(name)
     h = hashlib.sha1(usedforsecurity=False)

@@ -3,7 +3,7 @@
 The list file has one line per clip, ``PATH x,y,w,h`` (the box's numbers separated by commas,
 semicolons or spaces; ``PATH`` a video or image folder, relative to the list file's folder;
 blank lines and lines starting with ``#`` are skipped). Every clip becomes one job
-(:func:`track_clip`) on one of :mod:`wmiltrack.executors` (this process, worker processes,
+(:func:`track_clip`) on one of :mod:`wmiltrack.parallel.executors` (this process, worker processes,
 Dask), and its box file, ``<output folder>/<clip name>.txt`` (for clips of one name in
 different folders ``<output folder>/<folders>_<clip name>.txt``, the folders from the list
 file's), is written as soon as that clip is finished. A box file is written under a
@@ -167,9 +167,9 @@ def _clip_name(path: Path, base: Path | None = None) -> str:
 def track_clip(job: ClipJob) -> ClipResult:
     """Track one clip from its first box; an error (unreadable clip, bad box, unknown tracker)
     is the result's ``error``, not an exception."""
-    from .data.sequences import TolerantFrames, open_input
-    from .engine.frames import clip_box
-    from .trackers import make_tracker
+    from ..data.sequences import TolerantFrames, open_input
+    from ..engine.frames import clip_box
+    from ..trackers import make_tracker
 
     boxes: list[tuple[float, ...]] = []
     skipped = 0
@@ -212,7 +212,7 @@ def describe_clip(job: ClipJob) -> str:
 def _write_complete(path: Path, boxes: npt.NDArray[np.float64]) -> None:
     """Write the box file under a temporary name, then rename it: a file under the final name
     is always complete."""
-    from .data.boxes import write_boxes
+    from ..data.boxes import write_boxes
 
     partial = path.with_name(path.name + PARTIAL_SUFFIX)
     write_boxes(partial, boxes)
@@ -236,7 +236,7 @@ def track_clips(
     clips:
         From :func:`read_clip_list`.
     executor:
-        An executor of :mod:`wmiltrack.executors` (anything with their ``map``).
+        An executor of :mod:`wmiltrack.parallel.executors` (anything with their ``map``).
     tracker, seed, overrides:
         The tracker spec, its seed and parameter overrides, the same for every clip.
     wrap:

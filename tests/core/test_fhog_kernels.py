@@ -1,5 +1,5 @@
 """The correlation filters' patch resampling and fHOG kernels (cpp/src/fhog.cpp) beyond
-tests/engine/test_correlation.py: the resampling against a numpy reference on awkward sizes (output rows
+tests/core/test_correlation.py: the resampling against a numpy reference on awkward sizes (output rows
 not a multiple of the kernel's 4-row blocks, enlarging, shrinking, regions leaving the
 frame, 1/3/4 channels, strided frames), fHOG against its numpy reference at cell sizes other
 than 4 and sizes that are not whole cells, and the AVX2 and SSE2 copies giving the same bits

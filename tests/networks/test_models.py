@@ -1,4 +1,4 @@
-"""wmiltrack.models and ``wmiltrack models``: where the networks' files are found, and fetching
+"""wmiltrack.networks.files and ``wmiltrack models``: where the networks' files are found, and fetching
 them (from a folder, or over HTTP from a server on 127.0.0.1) with their SHA-1 checked.
 
 Most tests replace the two NanoTrack sets by sets of small generated files; the tests marked by
@@ -23,7 +23,7 @@ import pytest
 from conftest import REPO_ROOT
 
 from wmiltrack.cli import build_parser, main
-from wmiltrack.models import (
+from wmiltrack.networks.files import (
     MODELS,
     MODELS_ENV,
     MODELS_URL_ENV,
@@ -41,7 +41,7 @@ from wmiltrack.progress import NO_PROGRESS_ENV, progress
 
 COMMIT = "248663fde6bf7c40190cf10ee396d5662919ecd3"
 #: The repository's raw-file URL paths of the four files, and where ../shared/models/nanotrack
-#: keeps each (written out here, not derived from wmiltrack.models, so that a wrong pin fails).
+#: keeps each (written out here, not derived from wmiltrack.networks.files, so that a wrong pin fails).
 REPO_FILES = {
     f"/HonglinChu/SiamTrackers/{COMMIT}/NanoTrack/models/nanotrackv2/nanotrack_backbone_sim.onnx":
         "v2/nanotrack_backbone_sim.onnx",
@@ -417,7 +417,7 @@ def test_cli_fetch_shows_a_progress_bar(server: tuple[str, Served], fake: dict[s
     monkeypatch.setenv(MODELS_URL_ENV, url)
     monkeypatch.delenv(NO_PROGRESS_ENV)
     # (a local fetch ends before the bar's usual half-second delay: draw it from the start)
-    monkeypatch.setattr("wmiltrack.models.progress", functools.partial(progress, delay=0.0))
+    monkeypatch.setattr("wmiltrack.progress.progress", functools.partial(progress, delay=0.0))
     assert main(["models", "fetch", "nanotrack-v2"]) == 0
     err = capsys.readouterr().err
     assert "nanotrack-v2 nanotrack_head_sim.onnx: 100%" in err and err.count("(SHA-1 checked)") == 2
@@ -475,7 +475,7 @@ def test_the_real_file_tests_look_where_the_variable_says(tmp_path: Path) -> Non
     env = {k: v for k, v in os.environ.items() if k != "CI"}
     env["WMILTRACK_TEST_MODELS"] = str(tmp_path)
     r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider",
-                        "tests/package/test_models.py", "-k", "the_pinned_sha1s_are_the_shared_files"],
+                        "tests/networks/test_models.py", "-k", "the_pinned_sha1s_are_the_shared_files"],
                        capture_output=True, text=True, cwd=REPO_ROOT, env=env, timeout=300, check=False)
     assert "1 skipped" in r.stdout and "WMILTRACK_TEST_MODELS" in r.stdout, r.stdout
 
