@@ -125,17 +125,13 @@ def _parser() -> argparse.ArgumentParser:
 
 def _can_make(spec: str) -> bool:
     """Whether the tracker can be made here; if not (TrackerNano, NanoTrack or rcwmil-nano
-    without their model files), a note with the reason, as for a tracker missing from cv2."""
+    without their model files, a tracker missing from cv2), a note with the reason."""
     from wmiltrack.integrations.opencv_wheels import TrackerUnavailable
-    from wmiltrack.networks.files import find_files
     from wmiltrack.trackers import make_tracker
 
     try:
-        params = getattr(make_tracker(spec), "params", None)
-        if params is not None and params.network:  # (a preset finds its files at init)
-            find_files(params.network, {"backbone": params.backbone or None,
-                                        "head": params.head or None})
-    except (TrackerUnavailable, FileNotFoundError) as exc:
+        make_tracker(spec)  # a preset's model files are checked as it is made
+    except TrackerUnavailable as exc:
         print(f"note: {spec} skipped ({' '.join(str(exc).split())})", file=sys.stderr)
         return False
     return True
@@ -150,7 +146,7 @@ def _trackers(ap: argparse.ArgumentParser, chosen: str | None) -> list[str]:
             print(f"note: opencv:{n} skipped (not in this cv2)", file=sys.stderr)
     trackers = list(VARIANTS) + [f"opencv:{n}" for n in cv_names]
     if not chosen:
-        return trackers
+        return [t for t in trackers if t.startswith("opencv:") or _can_make(t)]
     wanted = split_specs(chosen)
     known = list(VARIANTS) + [f"opencv:{n}" for n in OPENCV_TRACKERS]
 
@@ -168,7 +164,7 @@ def _trackers(ap: argparse.ArgumentParser, chosen: str | None) -> list[str]:
         ap.error(f"unknown tracker(s): {', '.join(unknown)}; choose from {', '.join(known)}, "
                  "nanotrack:v2, nanotrack:v3 (a variant may carry settings: "
                  "variant:name=value:...)")
-    specs = [t for t in wanted if not t.startswith("opencv:")]
+    specs = [t for t in wanted if not t.startswith("opencv:") and _can_make(t)]
     return specs + [t for t in trackers if t.startswith("opencv:") and (t in wanted or t == REFERENCE)]
 
 

@@ -69,10 +69,11 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("results/example-got10k"), help="output folder")
     args = parser.parse_args()
 
+    # the trackers first: one that cannot start (no model files) stops before anything is written
+    trackers = [GOT10kTracker(name, seed=0) for name in args.trackers.split(",")]
     root = args.root or write_got10k_val(args.out / "GOT-10k")
     experiment = ExperimentGOT10k(str(root), subset="val", result_dir=str(args.out / "results"),
                                   report_dir=str(args.out / "reports"))
-    trackers = [GOT10kTracker(name, seed=0) for name in args.trackers.split(",")]
     with contextlib.redirect_stdout(io.StringIO()):   # the toolkit prints a line per sequence
         for tracker in trackers:
             experiment.run(tracker)

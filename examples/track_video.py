@@ -48,10 +48,11 @@ def track(video: Path, box: tuple[float, float, float, float], out: Path,
         raise SystemExit(f"cannot read a frame from {video}")
     fps = cap.get(cv2.CAP_PROP_FPS) or 30.0
     h, w = frame.shape[:2]
-    writer = cv2.VideoWriter(str(out), cv2.VideoWriter.fourcc(*"mp4v"), fps, (w, h))
 
-    t = wmiltrack.Tracker(tracker, seed=0)
+    t = wmiltrack.Tracker(tracker, seed=0)  # a preset that cannot start (no model files) stops here
     t.init(frame, box)
+    # the output is opened once the tracker has started: a run that cannot start leaves it as it was
+    writer = cv2.VideoWriter(str(out), cv2.VideoWriter.fourcc(*"mp4v"), fps, (w, h))
     boxes = [t.box]
     while True:
         writer.write(draw(frame, boxes[-1], len(boxes)))
@@ -92,7 +93,10 @@ def main() -> None:
         else:
             x, y, w, h = (float(v) for v in args.box.split(","))
             box = (x, y, w, h)
-        boxes = track(args.video, box, args.out, args.tracker)
+        try:
+            boxes = track(args.video, box, args.out, args.tracker)
+        except (ValueError, TypeError, FileNotFoundError) as exc:  # a bad preset, box or model file
+            raise SystemExit(f"track_video.py: {exc}") from None
 
     print(f"{len(boxes)} frames tracked with {args.tracker}; drawn boxes in {args.out}")
     if gt is not None:

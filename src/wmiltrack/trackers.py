@@ -12,6 +12,7 @@ tracking a video does not depend on the evaluation package.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from .engine.result import TrackerLike
@@ -24,6 +25,7 @@ __all__ = [
     "make_tracker",
     "parse_spec",
     "split_specs",
+    "tracker_labels",
 ]
 
 OPENCV_PREFIX = "opencv:"
@@ -64,6 +66,48 @@ def split_specs(text: str | None) -> list[str]:
         part.append(ch)
     out.append("".join(part))
     return [p.strip() for p in out if p.strip()]
+
+
+#: The parameters that give a tracker a model file: left out of its label (:func:`tracker_labels`).
+MODEL_KEYWORDS = frozenset({"backbone", "head", "neckhead", "net"})
+
+
+def tracker_labels(specs: Sequence[str]) -> dict[str, str]:
+    """Each spec's name in tables, plots and box folders: the spec without its model files
+    (``opencv:Nano:backbone=/a/b.onnx:neckhead=/a/c.onnx`` is ``opencv:Nano``). Specs that
+    differ only in their files keep the files' names (``:backbone=b.onnx``), and if that is
+    not enough, their whole spec."""
+    from collections import Counter
+    from pathlib import PurePath
+
+    def label(spec: str, with_files: bool) -> str:
+        name, overrides = parse_spec(spec)
+        parts = [name] + [f"{k}={_spec_text(spec, k)}" for k in overrides if k not in MODEL_KEYWORDS]
+        if with_files:
+            parts += [f"{k}={PurePath(str(v)).name}" for k, v in overrides.items()
+                      if k in MODEL_KEYWORDS]
+        return ":".join(parts)
+
+    def clashing() -> list[str]:
+        counts = Counter(out.values())
+        return [s for s in out if counts[out[s]] > 1]
+
+    out = {s: label(s, False) for s in specs}
+    for s in clashing():
+        out[s] = label(s, True)
+    for s in clashing():
+        out[s] = s.strip()
+    return out
+
+
+def _spec_text(spec: str, key: str) -> str:
+    """The text of parameter ``key`` as written in ``spec`` (``"rcwmil:lr=0.85"``, ``"lr"``:
+    ``"0.85"``)."""
+    for part in spec.strip().split(":"):
+        k, sep, text = part.partition("=")
+        if sep and k.strip() == key:
+            return text.strip()
+    return ""
 
 
 def parse_spec(spec: str) -> tuple[str, dict[str, Any]]:
@@ -158,11 +202,15 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
     if s.lower() not in presets:
         import difflib
 
-        close = difflib.get_close_matches(s.lower(), presets + [f"opencv:{n}" for n in OPENCV_TRACKERS],
-                                          n=2)
+        from .networks.files import nanotrack_versions
+
+        nano = [f"{NANOTRACK_PREFIX}{v}" for v in nanotrack_versions()]
+        close = difflib.get_close_matches(
+            s.lower(), presets + nano + [f"opencv:{n}" for n in OPENCV_TRACKERS], n=2)
         hint = f"did you mean {' or '.join(close)}? " if close else ""
         raise ValueError(f"unknown tracker {s!r}; {hint}choose one of {', '.join(presets)}, "
-                         f"or opencv:NAME with NAME one of {', '.join(OPENCV_TRACKERS)}")
+                         f"{' or '.join(nano)} (NanoTrack alone), or opencv:NAME with NAME one "
+                         f"of {', '.join(OPENCV_TRACKERS)}")
     from .engine.tracker import Tracker  # the compiled core is loaded only now
 
     tracker: TrackerLike = Tracker(s, seed=seed, **kw)

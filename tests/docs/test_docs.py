@@ -120,3 +120,26 @@ def test_the_site_builds_without_raw_roles_and_with_every_table(tmp_path: Path) 
         html = (site / page / "index.html").read_text(encoding="utf-8")
         source = (ROOT / "docs" / f"{page}.md").read_text(encoding="utf-8")
         assert html.count("<table>") == len(tables(source)), page
+
+
+def test_the_reliability_page_counts_the_cases_the_tests_run() -> None:
+    """The bad-input matrix's size, as the reliability page states it, is what pytest collects:
+    the cases of every preset (each ``preset/case``) and those that need no preset."""
+    import subprocess
+    import sys
+
+    from wmiltrack.engine.params import VARIANTS
+
+    listed = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p",
+                             "no:cacheprovider", "tests/engine/test_reliability.py"],
+                            capture_output=True, text=True, cwd=ROOT, timeout=300, check=True).stdout
+    ids = re.findall(r"::test_case\[([^\]]+)\]", listed)
+    per_preset = {p: sum(i.startswith(f"{p}/") for i in ids) for p in VARIANTS}
+    assert len(set(per_preset.values())) == 1 and all(per_preset.values()), per_preset
+    n = next(iter(per_preset.values()))
+    alone = len(ids) - n * len(VARIANTS)
+    page = " ".join((ROOT / "docs" / "reliability.md").read_text(encoding="utf-8").split())
+    words = {6: "six", 7: "seven", 8: "eight", 9: "nine", 10: "ten"}
+    presets = words.get(len(VARIANTS), str(len(VARIANTS)))
+    assert (f"({len(ids)} cases: {n} for each of the {presets} presets and {alone} that need no "
+            "preset") in page

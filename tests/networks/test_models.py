@@ -150,16 +150,11 @@ def serve_fake(served: Served, fake: dict[str, dict[str, bytes]]) -> None:
 
 
 @pytest.fixture(scope="session")
-def shared_models() -> Path:
-    """``../shared/models/nanotrack`` beside the repository (NanoTrack's real files): skipped
-    when missing, a failure under CI."""
-    root = REPO_ROOT.parent / "shared" / "models" / "nanotrack"
-    if not all((root / rel).is_file() for rel in REPO_FILES.values()):
-        msg = f"NanoTrack's model files not found in {root}"
-        if os.environ.get("CI"):
-            pytest.fail(msg)
-        pytest.skip(msg)
-    return root
+def shared_models(nanotrack_models: dict[str, tuple[Path, Path]]) -> Path:
+    """The folder of NanoTrack's real files (``v2/``, ``v3/``), where the ``nanotrack_models``
+    fixture finds them: ``$WMILTRACK_TEST_MODELS``, else ``../shared/models/nanotrack``;
+    skipped when missing, a failure under CI."""
+    return nanotrack_models["v2"][0].parent.parent
 
 
 # -- the registry and the models folder --------------------------------------------------------
@@ -468,3 +463,33 @@ def test_fetch_from_the_shared_copy(shared_models: Path, tmp_path: Path,
         assert paths == list(find_files(name))
         assert [hashlib.sha1(p.read_bytes()).hexdigest() for p in paths] == [
             f.sha1 for f in MODELS[name].files.values()]
+
+
+def test_the_real_file_tests_look_where_the_variable_says(tmp_path: Path) -> None:
+    """``WMILTRACK_TEST_MODELS`` decides where the real files are looked for: pointed at an
+    empty folder, the real-file tests skip (naming the variable) instead of reading
+    ``../shared``."""
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "CI"}
+    env["WMILTRACK_TEST_MODELS"] = str(tmp_path)
+    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-rs", "-p", "no:cacheprovider",
+                        "tests/networks/test_models.py", "-k", "the_pinned_sha1s_are_the_shared_files"],
+                       capture_output=True, text=True, cwd=REPO_ROOT, env=env, timeout=300, check=False)
+    assert "1 skipped" in r.stdout and "WMILTRACK_TEST_MODELS" in r.stdout, r.stdout
+
+
+def test_a_progress_bar_in_a_log_file_is_never_left_at_0(tmp_path: Path, fake: dict[str, dict[str, bytes]],
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Standard error a file (a log): a bar is drawn only once it has something to show (the
+    progress helper's delay), so no bar of a finished file stays at 0 %."""
+    monkeypatch.delenv(NO_PROGRESS_ENV)
+    write_set(tmp_path / "copy", "nanotrack-v3", fake["nanotrack-v3"])
+    log = tmp_path / "log.txt"
+    with log.open("w") as err:
+        monkeypatch.setattr("sys.stderr", err)
+        fetch("nanotrack-v3", source=tmp_path / "copy")
+    text = log.read_text()
+    assert text.count("(SHA-1 checked)") == 2
+    assert "  0%|" not in text or text.count("100%|") >= 2, text

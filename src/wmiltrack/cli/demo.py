@@ -26,7 +26,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     for name, scores, error in score_runs(trackers, frames, gt, args.seed):
         if error:
             first, *rest = error.splitlines()
-            print(f"{name:<{width}} failed: {first}")
+            print(f"{name:<{width}} {first}")
             for line in rest:  # e.g. the install commands of a tracker not installed
                 print(f"{'':<{width}} {line}")
             continue
@@ -41,8 +41,9 @@ def add_demo(sub: Subparsers) -> None:
                        description="Track the target of a generated sequence (moving textured target, "
                        "partial occlusion, illumination change, cluttered background) and print the "
                        "success AUC, success rate, precision and update-only frames per second.",
-                       epilog=EXIT_CODES_EPILOG + " For demo: a tracker that fails (one not "
-                       "installed) is named in the table, and the status stays 0.")
+                       epilog=EXIT_CODES_EPILOG + " For demo: a tracker that cannot start (one "
+                       "not installed, or whose model files are missing) is skipped with its "
+                       "reason, one that fails is named in the table, and the status stays 0.")
     p.add_argument("--trackers", default="rcwmil",
                    help="comma-separated trackers, each " + trackers_help() + "; e.g. "
                    "rcwmil,ct,opencv:MIL")

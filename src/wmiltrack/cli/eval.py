@@ -16,7 +16,7 @@ from .options import (
     add_executor_options,
     add_model_options,
     check_tracker_spec,
-    set_model_paths,
+    specs_with_model_files,
     trackers_help,
 )
 from .outputs import check_output_folder
@@ -36,7 +36,7 @@ def _cmd_eval(args: argparse.Namespace) -> int:
     if args.results is None:
         for spec in trackers:
             check_tracker_spec(spec)  # an unknown tracker or parameter: exit status 2
-    set_model_paths(args)
+        trackers = specs_with_model_files(trackers, args)
     from ..eval.pipeline import EvalArgumentError, EvalConfig, run_eval
 
     try:
@@ -81,9 +81,12 @@ def _report(args: argparse.Namespace, doc: dict[str, Any]) -> int:
 def score_runs(trackers: list[str], frames: list[Any], gt: Any, seed: int
                ) -> Iterator[tuple[str, tuple[float, float, float, float], str | None]]:
     """Each tracker run on ``frames`` from ``gt[0]`` and scored as ``eval`` scores it (the last
-    box held): ``(name, (AUC, SR@0.5, P@20, update frames/s), error)`` (for ``demo``). A
-    tracker that cannot be made (not installed, model files not given) or that fails gives its
-    error and NaN figures; the others still run."""
+    box held): ``(name, (AUC, SR@0.5, P@20, update frames/s), problem)`` (for ``demo``). A
+    tracker that cannot start (not installed, its model files missing) gives ``"skipped: "``
+    and why, one that fails ``"failed: "`` and its error, both with NaN figures; the others
+    still run. The problem is said here only (no warning besides)."""
+    import warnings
+
     from ..eval.metrics import ope_metrics
     from ..eval.runner import run_sequence
     from ..eval.scoring import scored_boxes
@@ -91,12 +94,15 @@ def score_runs(trackers: list[str], frames: list[Any], gt: Any, seed: int
 
     for name in (t.strip() for t in trackers):
         try:
-            run = run_sequence(name, frames, gt[0], seed=seed)
+            with warnings.catch_warnings():  # the failure is the table's line, not a warning
+                warnings.filterwarnings("ignore", message="tracker .* raised at frame",
+                                        category=RuntimeWarning)
+                run = run_sequence(name, frames, gt[0], seed=seed)
         except TrackerUnavailable as exc:  # not installed, or its model files not given
-            yield name, (math.nan,) * 4, str(exc)
+            yield name, (math.nan,) * 4, f"skipped: {exc}"
             continue
         if run.error:
-            yield name, (math.nan,) * 4, run.error
+            yield name, (math.nan,) * 4, f"failed: {run.error}"
             continue
         m = ope_metrics(scored_boxes(run.boxes, run.oks), gt)
         yield name, (m.auc, m.success_50, m.precision_20, run.fps), None

@@ -9,6 +9,7 @@ from typing import Any
 from .options import (
     EXIT_CODES_EPILOG,
     UsageError,
+    add_model_options,
     add_tracker_options,
     open_frames,
     parse_box,
@@ -78,4 +79,5 @@ def add_inspect(sub: Any) -> None:
     p.add_argument("--box", type=parse_box, help="first box as x,y,w,h (default: ground truth)")
     p.add_argument("--scale", type=int, default=3, help="enlargement of the crop (default 3)")
     add_tracker_options(p, opencv=False)
+    add_model_options(p)
     p.set_defaults(func=_cmd_inspect)

@@ -118,7 +118,11 @@ def trackers_help(default: str | None = "rcwmil", *, opencv: bool = True) -> str
 
     text = f"a preset: {', '.join(preset_names())}"
     if opencv:
-        text += f"; or opencv:NAME, NAME one of {', '.join(OPENCV_TRACKERS)}"
+        from ..networks.files import nanotrack_versions
+
+        nano = " or ".join(f"nanotrack:{v}" for v in nanotrack_versions())
+        text += (f"; {nano} (NanoTrack alone); or opencv:NAME, NAME one of "
+                 f"{', '.join(OPENCV_TRACKERS)}")
     text += " (`wmiltrack variants` lists the presets and their parameters)"
     if default is not None:
         text += f"; default {default}"
@@ -167,46 +171,167 @@ def _check_nanotrack_spec(version: str, overrides: dict[str, Any]) -> None:
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
-    """``--nano-backbone``, ``--nano-head`` and ``--vit-model``: the model files of OpenCV's
-    neural-network trackers (``opencv:Nano``, ``opencv:Vit``), which no wheel ships."""
+    """``--nano-backbone``, ``--nano-head`` and ``--vit-model``: the model files of the network
+    trackers (``opencv:Nano``, ``opencv:Vit``, ``nanotrack:VERSION`` and rcwmil-nano), which no
+    wheel ships; each goes to the trackers that run its network (:func:`model_keywords`)."""
+    from ..networks.files import MODEL_ENV, MODELS
+
+    v2, v3 = MODELS["nanotrack-v2"].files, MODELS["nanotrack-v3"].files
+    p.add_argument("--nano-backbone", type=Path, default=None, metavar="FILE",
+                   help="NanoTrack's backbone, for the trackers of its version: v2's "
+                   f"({v2['backbone'].name}) for opencv:Nano, nanotrack:v2 and rcwmil-nano "
+                   f"with network=nanotrack-v2, v3's ({v3['backbone'].name}) for nanotrack:v3 "
+                   f"and rcwmil-nano (default: {MODEL_ENV['Nano']['backbone']}, then the models "
+                   "folder, see `wmiltrack models list`; in eval, TRACKER:backbone=FILE gives one "
+                   "tracker its own)")
+    p.add_argument("--nano-head", type=Path, default=None, metavar="FILE",
+                   help=f"NanoTrack's head, as --nano-backbone: v2's ({v2['head'].name}) or "
+                   f"v3's ({v3['head'].name}); opencv:Nano calls it neckhead")
+    p.add_argument("--vit-model", type=Path, default=None, metavar="FILE",
+                   help="for opencv:Vit: " + _vit_file() + " (default: the environment "
+                   "variable WMILTRACK_VIT_MODEL)")
+
+
+def _vit_file() -> str:
     from ..integrations.opencv_peers import MODEL_FILES
-    from ..networks.files import MODEL_ENV
 
-    for kind, attrs in MODEL_ENV.items():
-        for attr, env in attrs.items():
-            option = _model_option(kind, attr)
-            users = f"opencv:{kind}" + (", rcwmil-nano and nanotrack:VERSION" if kind == "Nano" else "")
-            p.add_argument(option, type=Path, default=None, metavar="FILE",
-                           help=f"for {users}: {MODEL_FILES[(kind, attr)]} (default: "
-                           f"the environment variable {env}"
-                           + ("; then the models folder, see `wmiltrack models list`)"
-                              if kind == "Nano" else ")"))
+    return MODEL_FILES[("Vit", "net")]
 
 
-def _model_option(kind: str, attr: str) -> str:
-    """``--nano-backbone``, ``--nano-head``, ``--vit-model``: the option of a model file."""
-    from ..integrations.opencv_peers import model_option
+#: Each model option's tracker keyword, by the kind of tracker that takes it.
+_KEYWORDS = {
+    "opencv:Nano": {"--nano-backbone": "backbone", "--nano-head": "neckhead"},
+    "opencv:Vit": {"--vit-model": "net"},
+    "nanotrack": {"--nano-backbone": "backbone", "--nano-head": "head"},
+}
+_ROLES = {"--nano-backbone": "backbone", "--nano-head": "head"}
 
-    return model_option(kind, attr)
+
+def given_model_files(args: argparse.Namespace) -> dict[str, Path]:
+    """The model files given by option (:func:`add_model_options`), by option, as absolute
+    paths; a path that is not a file is a :class:`UsageError`."""
+    out: dict[str, Path] = {}
+    for option in ("--nano-backbone", "--nano-head", "--vit-model"):
+        path = getattr(args, option.lstrip("-").replace("-", "_"), None)
+        if path is None:
+            continue
+        if not Path(path).expanduser().is_file():
+            raise UsageError(f"{option} {path} is not a file")
+        if ":" in str(path):
+            raise UsageError(f"{option} {path}: a path with ':' cannot be given to a tracker")
+        out[option] = Path(path).expanduser().resolve()
+    return out
 
 
-def set_model_paths(args: argparse.Namespace) -> None:
-    """Put the model files given by :func:`add_model_options` into their environment variables
-    (:data:`wmiltrack.networks.files.MODEL_ENV`), where every tracker this run makes, in this
-    process or a worker started from it, finds them. A path that is not a file is a :class:`UsageError`."""
-    import os
+def _network_of(spec: str, extra: dict[str, Any]) -> tuple[str, str, dict[str, str]] | None:
+    """What the tracker of ``spec`` (with the overrides ``extra``) runs: (its name, the model
+    set, {option: its keyword}), or None for a tracker without model files."""
+    from ..engine.params import Params
+    from ..integrations.opencv_peers import NANO_MODELS
+    from ..integrations.opencv_wheels import parse_opencv_name
+    from ..trackers import NANOTRACK_PREFIX, is_opencv_spec, parse_spec
 
-    from ..networks.files import MODEL_ENV
+    name, overrides = parse_spec(spec)
+    overrides = {**overrides, **extra}
+    if is_opencv_spec(name):
+        kind = f"opencv:{parse_opencv_name(name)}"
+        return (kind, NANO_MODELS, _KEYWORDS[kind]) if kind in _KEYWORDS else None
+    if name.lower().startswith(NANOTRACK_PREFIX):
+        version = name[len(NANOTRACK_PREFIX):].lower() or "v3"
+        return name, f"nanotrack-{version}", _KEYWORDS["nanotrack"]
+    if name.lower() in preset_names():
+        network = Params.for_variant(name, **overrides).network
+        return (name, network, _KEYWORDS["nanotrack"]) if network else None
+    return None
 
-    for kind, attrs in MODEL_ENV.items():
-        for attr, env in attrs.items():
-            option = _model_option(kind, attr)
-            path = getattr(args, option.lstrip("-").replace("-", "_"), None)
-            if path is None:
-                continue
-            if not Path(path).is_file():
-                raise UsageError(f"{option} {path} is not a file")
-            os.environ[env] = str(Path(path).expanduser().resolve())
+
+def model_keywords(spec: str, given: dict[str, Path], extra: dict[str, Any] | None = None, *,
+                   alone: bool = True) -> dict[str, str]:
+    """The keywords that give the tracker of ``spec`` the files ``given`` by option: each file
+    whose content is the model set and role the tracker runs (or a file wmiltrack does not
+    know), unless the tracker is given its own (in ``spec`` or ``extra``). A file of another
+    set is left out; ``alone`` (one tracker in the run) makes that a :class:`UsageError`
+    naming the fix."""
+    from ..networks.files import identify
+
+    extra = extra or {}
+    found = _network_of(spec, extra)
+    if found is None:
+        return {}
+    name, model_set, keywords = found
+    own = set(extra) | set(_spec_keys(spec))
+    out: dict[str, str] = {}
+    for option, path in given.items():
+        keyword = keywords.get(option)
+        if keyword is None or keyword in own:
+            continue
+        known = identify(path)
+        if known is None or known == (model_set, _ROLES[option]):
+            out[keyword] = str(path)
+        elif alone:
+            raise UsageError(_wrong_file(option, path, known, name, model_set))
+    return out
+
+
+def _spec_keys(spec: str) -> list[str]:
+    from ..trackers import parse_spec
+
+    return list(parse_spec(spec)[1])
+
+
+def _wrong_file(option: str, path: Path, known: tuple[str, str], name: str, model_set: str) -> str:
+    """The message for a file of another set or role given to the tracker ``name``."""
+    from ..networks.files import MODELS
+
+    theirs, mine = MODELS[known[0]], MODELS[model_set]
+    role = _ROLES[option]
+    what = f"{option} {path} is {theirs.title}'s {known[1]}"
+    if known[0] == model_set:
+        other = next(o for o, r in _ROLES.items() if r == known[1])
+        return f"{what}, not its {role}: give it with {other}"
+    fix = ""
+    if name.lower().startswith("nanotrack:"):
+        fix = f"to run {theirs.title} use -t nanotrack:{theirs.version}, or "
+    elif not name.startswith("opencv:"):
+        fix = f"to run {name} on {theirs.title} add --set network={theirs.name}, or "
+    return (f"{what}, but {name} runs {mine.title}: {fix}give {mine.title}'s {role} "
+            f"({mine.files[role].name})")
+
+
+def specs_with_model_files(specs: list[str], args: argparse.Namespace) -> list[str]:
+    """``specs`` (eval's ``--trackers``), each given the files of ``--nano-backbone``,
+    ``--nano-head`` and ``--vit-model`` that are its network's (:func:`model_keywords`: a
+    file of NanoTrack v2 goes to the trackers of v2 only). A file that no tracker takes is a
+    :class:`UsageError`."""
+    from ..networks.files import MODELS, identify
+
+    given = given_model_files(args)
+    out, taken = [], set()
+    for spec in specs:
+        keywords = model_keywords(spec, given, alone=len(specs) == 1)
+        taken |= {o for o, p in given.items() if str(p) in keywords.values()}
+        out.append(spec + "".join(f":{k}={v}" for k, v in keywords.items()))
+    for option in given.keys() - taken:
+        known = identify(given[option])
+        what = (f"{MODELS[known[0]].title}'s {known[1]}, and no tracker of --trackers runs "
+                f"{MODELS[known[0]].title}" if known else "for no tracker of --trackers")
+        raise UsageError(f"{option} {given[option]} is {what}; give each tracker its own files "
+                         "as TRACKER:backbone=FILE:head=FILE (opencv:Nano: backbone, neckhead)")
+    return out
+
+
+def tracker_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The parameters ``--set`` gives the tracker of ``-t``, with the model files given by
+    option that are its (:func:`model_keywords`)."""
+    overrides = parse_overrides(args.set)
+    given = given_model_files(args)
+    try:
+        keywords = model_keywords(args.tracker, given, overrides)
+    except UsageError:
+        raise
+    except (ValueError, TypeError):  # a bad -t or --set: said when the tracker is made
+        return overrides
+    return {**overrides, **keywords}
 
 
 def add_tracker_options(p: argparse.ArgumentParser, *, opencv: bool = True) -> None:
@@ -228,7 +353,7 @@ def tracker_from_args(args: argparse.Namespace, *, several: bool = False, ours: 
     """
     from ..trackers import make_tracker
 
-    overrides = parse_overrides(args.set)
+    overrides = tracker_overrides(args)
     if (several or ours) and args.tracker.lower().startswith("opencv:"):
         what = "--boxes tracks several targets" if several else "this command runs"
         raise UsageError(f"{what} with wmiltrack's presets only; {args.tracker} is an OpenCV tracker")

@@ -32,9 +32,8 @@ from .options import (
     add_tracker_options,
     open_frames,
     parse_box,
-    parse_overrides,
-    set_model_paths,
     tracker_from_args,
+    tracker_overrides,
 )
 from .outputs import check_outputs
 
@@ -156,7 +155,6 @@ class _BoxLines:
 
 
 def _cmd_track(args: argparse.Namespace) -> int:
-    set_model_paths(args)
     if args.list is not None:
         return _track_list(args)
     if args.input is None:
@@ -212,7 +210,7 @@ def _track_list(args: argparse.Namespace) -> int:
     interrupted = False
     try:
         for result in track_clips(clips, executor, tracker=args.tracker, seed=args.seed,
-                                  overrides=parse_overrides(args.set), wrap=bar):
+                                  overrides=tracker_overrides(args), wrap=bar):
             if result.error is None:
                 tracked += 1
             else:

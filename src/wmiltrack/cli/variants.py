@@ -61,7 +61,22 @@ def _scale_parts(p: Any) -> list[str]:
 
 
 def _plus(p: Any) -> str:
-    """What a preset adds to the paper's tracker (rcwmil-plus and rcwmil-cf), or ``-``."""
+    """What a preset adds to the paper's tracker (rcwmil-plus, rcwmil-cf), or ``-``; a preset
+    with a network is named by the preset it adds the network to (rcwmil-nano: rcwmil-cf)."""
+    if p.network:
+        from ..engine.params import VARIANTS
+
+        base = _additions(p.replace(network=""))
+        same = next((n for n, q in VARIANTS.items() if not q.network and _additions(q) == base), None)
+        every = f", its likeness every {p.likeness_every} frames" if p.likeness_every > 1 else ""
+        version = p.network.rsplit("-", 1)[-1]
+        return (f"{same or base}'s additions and NanoTrack {version}'s network as a second expert "
+                f"under a judge{every}") if same else f"{base}, NanoTrack {version}'s network{every}"
+    return _additions(p)
+
+
+def _additions(p: Any) -> str:
+    """The additions column of a preset without a network."""
     parts = _scale_parts(p)
     if p.channels:
         parts.append("channels " + "+".join(p.channels))
@@ -113,6 +128,17 @@ def variant_table() -> str:
     return "\n".join([head, rule, *rows])
 
 
+def peers_note() -> str:
+    """The trackers ``eval``, ``demo`` and ``track`` take besides the presets."""
+    from ..integrations.opencv_wheels import OPENCV_TRACKERS
+    from ..networks.files import nanotrack_versions
+
+    nano = ", ".join(f"nanotrack:{v}" for v in nanotrack_versions())
+    return (f"Besides the presets: {nano} (NanoTrack alone, by its published tracking step; "
+            "its model files: `wmiltrack models list`) and opencv:NAME, NAME one of "
+            f"{', '.join(OPENCV_TRACKERS)}.")
+
+
 def _json_value(value: Any) -> Any:
     """A parameter value JSON has no type for (a tuple is a list already): its text."""
     return str(value)
@@ -136,6 +162,8 @@ def _cmd_variants(args: argparse.Namespace) -> int:
                 print(f"  {key} = {value!r}")
         return 0
     print(variant_table())
+    print()
+    print(peers_note())
     return 0
 
 

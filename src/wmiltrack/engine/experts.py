@@ -24,18 +24,20 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from ..networks.backends import RUNTIMES
 from ..networks.families import load_siamese, siamese_networks
+from ..networks.files import find_files
 from ..networks.siamese import SiameseStep, as_bgr
 from .geometry import centre, overlap, within
 from .result import TrackResult
 from .settings import check_choices, check_ints, check_numbers, need
 from .state import Verdict
 
-__all__ = ["NETWORKS", "ExpertJudge", "ExpertSettings", "TwoExperts", "Verdict"]
+__all__ = ["NETWORKS", "ExpertJudge", "ExpertSettings", "TwoExperts", "Verdict", "network_files"]
 
 
 NETWORKS: tuple[str, ...] = ("", *siamese_networks())
@@ -215,6 +217,22 @@ class ExpertJudge:
         return 1.0 / (1.0 + math.exp(-z)) if math.isfinite(z) else 0.0
 
 
+def network_files(settings: ExpertSettings) -> tuple[Path, Path]:
+    """The backbone and head of ``settings.network``: the paths in ``settings`` if given, else
+    found as :func:`wmiltrack.networks.files.find_files` finds them. The one check of a
+    network's files, made when a tracker is built (so that a missing file is said at once, not
+    at its first frame) and again when its network is loaded.
+
+    Raises
+    ------
+    ModelFilesMissing
+        A file is missing or is another set's or role's; the message says how to give them.
+    """
+    found = find_files(settings.network, {"backbone": settings.backbone or None,
+                                          "head": settings.head or None})
+    return found[0], found[1]
+
+
 class TwoExperts:
     """The network expert and the judge beside a tracker (see the module's docstring).
 
@@ -223,9 +241,10 @@ class TwoExperts:
     """
 
     def __init__(self, settings: ExpertSettings) -> None:
+        backbone, head = network_files(settings)
         self.settings = settings
         self.locator: SiameseStep = load_siamese(
-            settings.network, backbone=settings.backbone or None, head=settings.head or None,
+            settings.network, backbone=backbone, head=head,
             runtime=settings.network_runtime, threads=settings.network_threads)
         self._restart((0.0, 0.0, 0.0, 0.0))
 

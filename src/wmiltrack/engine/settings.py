@@ -65,7 +65,7 @@ def check_choices(obj: Any, choices: dict[str, tuple[str, ...]]) -> None:
     """Each named field of ``obj`` is one of its allowed values."""
     for name, allowed in choices.items():
         value = getattr(obj, name)
-        need(value in allowed, f"{name} must be one of {', '.join(allowed)}; got {value!r}")
+        need(value in allowed, f"{name} must be one of {', '.join(map(repr, allowed))}; got {value!r}")
 
 
 def check_ints(obj: Any, *names: str) -> None:

@@ -30,7 +30,7 @@ from . import copying as _copying  # noqa: F401 (installs deepcopy for the core'
 from .appearance import AppearanceSettings, HaarAppearance
 from .colour import ColourModel, ColourSettings
 from .cues import ColourCue, Cue, check_cue_weights
-from .experts import ExpertSettings, TwoExperts
+from .experts import ExpertSettings, TwoExperts, network_files
 from .frames import IntBox, as_frame, clip_box, frame_size
 from .geometry import roi_around
 from .judge import NO_EVIDENCE, Evidence, FrameJudge, JudgeSettings
@@ -270,6 +270,8 @@ class Tracker:
         elif overrides:
             params = params.replace(**overrides)
         check_cue_weights(params.colour_weight, params.template_weight, cues)
+        if params.network:  # its model files are checked now, not at the first frame
+            network_files(own(ExpertSettings, params))
         self._params = params
         # the search's (radius, step) grids: the coarse one, then the fine one if any
         self._grids = [(params.coarse_radius, params.coarse_step)]

@@ -97,6 +97,7 @@ import numpy.typing as npt
 
 from ..integrations.opencv_wheels import TrackerUnavailable
 from ..parallel.executors import Executor, ExecutorName, make_executor
+from ..trackers import tracker_labels
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 from .report import (
     box_path,
@@ -375,7 +376,8 @@ def _run_record(path: Path) -> Path:
 
 
 def _split_resumable(
-    tasks: Sequence[Task], box_root: Path, lengths: dict[str, int], missing: Missing
+    tasks: Sequence[Task], box_root: Path, lengths: dict[str, int], missing: Missing,
+    labels: dict[str, str],
 ) -> tuple[list[Task], list[RunOutcome]]:
     """``--resume``: the tasks still to run, and the outcomes of the others read back from
     their box files (a box file with one box per frame, and a record saying that the run
@@ -387,7 +389,8 @@ def _split_resumable(
     done: list[RunOutcome] = []
     for t in tasks:
         seq = Path(t.sequence).name
-        path = box_path(box_root, t.tracker, seq, t.repeat)
+        label = labels.get(t.tracker, t.tracker)
+        path = box_path(box_root, label, seq, t.repeat)
         boxes = None
         record: dict[str, Any] = {}
         try:  # the record is written after the boxes: with it, the box file is complete
@@ -402,7 +405,7 @@ def _split_resumable(
             continue
         oks = np.all(np.isfinite(boxes), axis=1)
         n_lost = int(record.get("n_lost", 0))
-        done.append(RunOutcome(t.tracker, seq, t.repeat, t.seed, boxes, oks, n_lost=n_lost))
+        done.append(RunOutcome(label, seq, t.repeat, t.seed, boxes, oks, n_lost=n_lost))
     return todo, done
 
 
@@ -567,7 +570,9 @@ def _run_trackers(ds: Any, tracker_names: list[str], cfg: EvalConfig, ex: Execut
                   say: Callable[[str], None]) -> tuple[list[RunOutcome], int, int]:
     """Run every (tracker, sequence, seed) task on ``ex``, writing each box file as its task
     ends (or, with ``resume``, reading back those already written); the runs in task order,
-    how many were read back, and how many failed on sequences that are not scored."""
+    named by their trackers' labels (:func:`~wmiltrack.trackers.tracker_labels`), how many
+    were read back, and how many failed on sequences that are not scored."""
+    labels = tracker_labels(tracker_names)
     seeds, protocol, skip, burnin = cfg.seeds, cfg.protocol, cfg.skip, cfg.burnin
     missing = cfg.missing
     # absolute paths: the workers of a cluster may run in other folders
@@ -584,7 +589,7 @@ def _run_trackers(ds: Any, tracker_names: list[str], cfg: EvalConfig, ex: Execut
     lengths = {name: gt.shape[0] for name, gt in ds.gts.items()}
     resumed: list[RunOutcome] = []
     if cfg.resume:
-        tasks, resumed = _split_resumable(tasks, box_root, lengths, missing)
+        tasks, resumed = _split_resumable(tasks, box_root, lengths, missing, labels)
         if resumed:
             notes.append(
                 f"resumed: {len(resumed)} of {len(tasks) + len(resumed)} runs read back from "
@@ -592,14 +597,15 @@ def _run_trackers(ds: Any, tracker_names: list[str], cfg: EvalConfig, ex: Execut
                 "runs made now)"
             )
             say(notes[-1])
-    new = run_tasks(
-        tasks,
-        ex,
-        _box_writer(box_root, protocol, missing, say, lengths),
-        cfg.show_progress,
-    ) if tasks else []
+    save = _box_writer(box_root, protocol, missing, say, lengths)
+
+    def labelled(run: RunOutcome) -> RunOutcome:
+        return replace(run, tracker=labels.get(run.tracker, run.tracker))
+
+    new = run_tasks(tasks, ex, lambda run: save(labelled(run)), cfg.show_progress) if tasks else []
+    new = [labelled(r) for r in new]
     order = {(t, s, r): i for i, (t, s, r) in enumerate(
-        (t.tracker, Path(t.sequence).name, t.repeat) for t in all_tasks
+        (labels[t.tracker], Path(t.sequence).name, t.repeat) for t in all_tasks
     )}
     runs = sorted(
         [_full_length(r, lengths) for r in new] + resumed,
@@ -749,6 +755,7 @@ def _obtain_runs(cfg: EvalConfig, ds: _Dataset, gts: dict[str, FloatArray], out:
     trackers on the executor, writing their boxes under ``out`` (recorded in ``files``)."""
     if cfg.results is not None:
         runs = read_results(Path(cfg.results), gts, notes)
+        out.mkdir(parents=True, exist_ok=True)
         names = list(dict.fromkeys(r.tracker for r in runs))
         return _Runs(runs, False, names, 1 + max(r.repeat for r in runs), 0, 0)
     specs = [t.strip() for t in cfg.trackers if t.strip()]
@@ -757,13 +764,15 @@ def _obtain_runs(cfg: EvalConfig, ds: _Dataset, gts: dict[str, FloatArray], out:
         say(n)
     if not names:
         raise ValueError("no tracker left to run")
+    out.mkdir(parents=True, exist_ok=True)  # once a tracker can start: nothing made before
     protocol = cfg.protocol
     box_root = out / {"ope": "boxes", "vot": "boxes_vot"}.get(protocol, f"boxes_{protocol}")
     files["boxes"] = str(box_root)
     ex = _executor(cfg.executor, cfg.jobs, cfg.cv_threads, cfg.scheduler, say)
     runs, n_resumed, unscored_errors = _run_trackers(ds, names, cfg, ex, box_root, notes, say)
     runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
-    return _Runs(runs, True, names, cfg.repeats, n_resumed, unscored_errors)
+    labels = tracker_labels(names)
+    return _Runs(runs, True, [labels[n] for n in names], cfg.repeats, n_resumed, unscored_errors)
 
 
 def _settings(cfg: EvalConfig, n_resumed: int) -> dict[str, Any]:
@@ -832,7 +841,6 @@ def run_eval(config: EvalConfig | str | os.PathLike[str],
     gts, first_only = _scored_truths(ds, notes)
     t_start = time.perf_counter()
     files: dict[str, str] = {}
-    out_p.mkdir(parents=True, exist_ok=True)
     got = _obtain_runs(cfg, ds, gts, out_p, notes, files, say)
     wall = time.perf_counter() - t_start
     settings = _settings(cfg, got.n_resumed)

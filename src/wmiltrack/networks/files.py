@@ -30,6 +30,8 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 from typing import BinaryIO
 
+from ..integrations.opencv_wheels import TrackerUnavailable
+
 __all__ = [
     "DEFAULT_BASE_URL",
     "MODELS",
@@ -43,6 +45,7 @@ __all__ = [
     "ModelFilesMissing",
     "ModelSet",
     "fetch",
+    "identify",
     "find_files",
     "look_up_files",
     "models_dir",
@@ -74,9 +77,11 @@ commit, byte for byte."""
 _CHUNK = 1 << 16
 
 
-class ModelFilesMissing(FileNotFoundError):
+class ModelFilesMissing(FileNotFoundError, TrackerUnavailable):
     """A set's model files cannot be used: each missing (or wrong) file with where it was looked
-    for, and in the same message every way to give or fetch them.
+    for, and in the same message every way to give or fetch them. A tracker that cannot start
+    (:class:`~wmiltrack.integrations.opencv_wheels.TrackerUnavailable`), as one not installed
+    is: ``eval`` and ``demo`` skip it with this message.
 
     ``problems`` holds the :class:`FileLookup` entries that are not usable (empty after
     unpickling a message made elsewhere, where only the message travels)."""
@@ -237,6 +242,14 @@ def _known_file(path: Path) -> tuple[ModelSet, ModelFile] | None:
     return next(((s, f) for s, f in candidates if f.sha1 == digest), None)
 
 
+def identify(path: str | Path) -> tuple[str, str] | None:
+    """The (set name, role) whose pinned bytes the file at ``path`` holds, or None (another
+    file, or no file): so that a file given for one network is not given to another."""
+    p = Path(path).expanduser()
+    known = _known_file(p) if p.is_file() else None
+    return None if known is None else (known[0].name, known[1].role)
+
+
 @dataclass(frozen=True)
 class FileLookup:
     """Where a set's file of ``role`` was looked for: ``path``, ``origin`` (``"backbone="``,
@@ -264,7 +277,10 @@ def _check_given(s: ModelSet, role: str, path: Path, label: str) -> str | None:
     known = _known_file(path)
     if known is not None and known[1] != s.files[role]:
         other_set, other = known
-        return f"{label}{path} is {other_set.title}'s {other.role}, not {s.title}'s {role}"
+        fix = "" if other_set == s else (
+            f" (to run {other_set.title}, choose it: network='{other_set.name}' for a preset, "
+            f"--set network={other_set.name} on the command line, or nanotrack:{other_set.version})")
+        return f"{label}{path} is {other_set.title}'s {other.role}, not {s.title}'s {role}{fix}"
     return None
 
 
@@ -524,7 +540,6 @@ def _stage(stream: BinaryIO | _ReadOrFetchError, folder: Path, s: ModelSet, f: M
     bar = progress(range(0), total=total or f.size, desc=f"{s.name} {f.name}",
                    enabled=False if quiet else None)
     bar.unit, bar.unit_scale, bar.unit_divisor = "B", True, 1024  # bytes, as 1.4M
-    bar.refresh()
     try:
         with os.fdopen(fd, "wb") as out, bar:
             while chunk := stream.read(_CHUNK):

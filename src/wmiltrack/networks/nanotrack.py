@@ -175,8 +175,8 @@ class NanoTrackStep:
         fw, fh = self.frame_wh
         cx, cy = min(max(cx, 0.0), fw), min(max(cy, 0.0), fh)
         nw, nh = min(max(nw, MIN_SIDE), fw), min(max(nh, MIN_SIDE), fh)
-        return Candidate((cx - nw / 2, cy - nh / 2, nw, nh), float(scores[best]),
-                       float(pscore[best]))
+        return Candidate((float(cx - nw / 2), float(cy - nh / 2), float(nw), float(nh)),
+                         float(scores[best]), float(pscore[best]))
 
     def _answer(self, frame: np.ndarray, centre: tuple[float, float], size: tuple[float, float]
                 ) -> tuple[np.ndarray, np.ndarray, float]:
