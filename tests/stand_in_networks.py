@@ -8,14 +8,15 @@ test of NanoTrack's own step or accuracy may run on them.
   dimensions are symbolic): the BGR crop less 127.5, one 16 x 16 convolution of stride 16
   (padding 1, so 127 -> 8 and 255 -> 16 cells, as NanoTrack's), ReLU;
 * head ``input1`` ``(1, C, 8, 8)`` (template), ``input2`` ``(1, C, 16, 16)`` (search) ->
-  ``output1`` ``(1, 2, n, n)`` and ``output2`` ``(1, 4, n, n)``, ``n`` 16 (v2) or 15 (v3, the
-  search map averaged over 2 x 2 cells): the log-odds are a correlation, the cosine between the
-  template's centre (the 4 x 4 cells the target fills) and each point of the search map,
-  scaled about a threshold; the four side distances are 24..40 crop pixels from a 1 x 1
-  convolution of the search map and a sigmoid.
+  ``output1`` ``(1, 2, n, n)`` and ``output2`` ``(1, 4, n, n)``, ``n`` 16 (v2) or 15 (v3): the
+  log-odds are a correlation, the cosine between the template's centre 2 x 2 cells and each
+  2 x 2 window of the search map (v2's padded by a row and a column of zeros before, so that
+  each window is centred on its grid point, 16 px apart), scaled about a threshold; the four
+  side distances are 24..40 crop pixels from a 1 x 1 convolution of the search map and a
+  sigmoid (about 32: the target's half side in the crop).
 
 Only operators that both onnxruntime and OpenCV's dnn read (Conv, Relu, Add, Mul, Div, Sqrt,
-Slice, ReduceMean, ReduceSum, AveragePool, Neg, Concat, Sigmoid), opset 11.
+Slice, Pad, ReduceMean, ReduceSum, AveragePool, Neg, Concat, Sigmoid), opset 11.
 """
 
 from __future__ import annotations
