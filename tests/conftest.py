@@ -9,9 +9,11 @@ after it installed the extras) the same absence is a failure, so no skip hides a
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.util
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 from typing import NoReturn
@@ -97,9 +99,14 @@ def otb_root() -> Path:
 
 
 MODELS_ENV = "WMILTRACK_TEST_MODELS"
-#: NanoTrack's two files per version, as laid out in ``shared/models/nanotrack``.
-NANOTRACK_FILES = {"v2": ("v2/nanotrack_backbone_sim.onnx", "v2/nanotrack_head_sim.onnx"),
-                   "v3": ("v3/nanotrack_backbone.onnx", "v3/nanotrack_head.onnx")}
+#: NanoTrack's two files per version, in ``<root>/v3/`` (``shared/models/nanotrack``'s layout) or
+#: ``<root>/nanotrack-v3/`` (the models folder's, as ``wmiltrack models fetch`` leaves it).
+NANOTRACK_FILES = {"v2": ("nanotrack_backbone_sim.onnx", "nanotrack_head_sim.onnx"),
+                   "v3": ("nanotrack_backbone.onnx", "nanotrack_head.onnx")}
+#: How to get NanoTrack's files for the tests, in skip and failure messages.
+MODELS_HINT = (f"fetch them (`wmiltrack models fetch nanotrack-v3`, `wmiltrack models fetch "
+               f"nanotrack-v2`) and set {MODELS_ENV} to the models folder `wmiltrack models list` "
+               "names, or to a folder with v2/ and v3/ holding them")
 
 
 def _shared_models() -> Path:
@@ -107,20 +114,81 @@ def _shared_models() -> Path:
     return Path(env).expanduser() if env else REPO_ROOT.parent / "shared" / "models" / "nanotrack"
 
 
+def _real_nanotrack(root: Path) -> dict[str, tuple[Path, Path]]:
+    """Each version's files under ``root``, in either layout (the ``v3/`` one when neither
+    holds them, for the message)."""
+    out = {}
+    for version, (backbone, head) in NANOTRACK_FILES.items():
+        pairs = [(root / d / backbone, root / d / head) for d in (version, f"nanotrack-{version}")]
+        out[version] = next((p for p in pairs if p[0].is_file() and p[1].is_file()), pairs[0])
+    return out
+
+
+def real_files_missing(reason: str) -> NoReturn:
+    """Skip a test that needs NanoTrack's real files with ``reason`` and how to get them, or
+    fail with it under CI (env ``CI`` set)."""
+    msg = f"{reason}; {MODELS_HINT}"
+    if os.environ.get("CI"):
+        pytest.fail(msg)
+    pytest.skip(msg)
+
+
 @pytest.fixture(scope="session")
 def nanotrack_models() -> dict[str, tuple[Path, Path]]:
-    """NanoTrack's model files by version (never part of the project): ``$WMILTRACK_TEST_MODELS``
-    if set, else ``<repo root>/../shared/models/nanotrack``. Missing: a failure under CI
-    (env ``CI`` set), a skip elsewhere."""
+    """NanoTrack's real model files by version (never part of the project), for the tests of
+    NanoTrack itself (its step, its accuracy): ``$WMILTRACK_TEST_MODELS`` if set, else
+    ``<repo root>/../shared/models/nanotrack``. Missing: a failure under CI (env ``CI`` set),
+    a skip elsewhere. Tests of the network expert's logic take :func:`nano_network`."""
     root = _shared_models()
-    files = {v: (root / b, root / h) for v, (b, h) in NANOTRACK_FILES.items()}
-    missing = [str(p) for pair in files.values() for p in pair if not p.is_file()]
-    if missing:
-        msg = f"NanoTrack's model files not found ({', '.join(missing)}); set {MODELS_ENV}"
-        if os.environ.get("CI"):
-            pytest.fail(msg)
-        pytest.skip(msg)
+    files = _real_nanotrack(root)
+    if not all(p.is_file() for pair in files.values() for p in pair):
+        real_files_missing(f"NanoTrack's model files not found in {root} (v2/ and v3/, or "
+                           "nanotrack-v2/ and nanotrack-v3/)")
     return files
+
+
+@pytest.fixture(scope="session")
+def stand_in_networks(tmp_path_factory: pytest.TempPathFactory) -> dict[str, tuple[Path, Path]]:
+    """Stand-in networks with NanoTrack's inputs, outputs and shapes, by version, written for
+    this session from seeded weights (``stand_in_networks.py``; needs ``onnx``, in the
+    ``test`` extra)."""
+    if importlib.util.find_spec("onnx") is None:
+        skip_or_fail("onnx not installed: it writes the stand-in networks (pip install '.[test]')")
+    from stand_in_networks import write_stand_ins
+
+    return write_stand_ins(tmp_path_factory.mktemp("stand_in_networks"))
+
+
+@pytest.fixture(scope="session")
+def nano_network(request: pytest.FixtureRequest) -> dict[str, tuple[Path, Path]]:
+    """Model files for the tests of the network expert's logic (the judge, re-detection,
+    recentring, copies, the bad-input matrix), by version: NanoTrack's real files when they
+    are there (:func:`nanotrack_models`'s places), else the stand-ins, so that those tests run
+    on a bare clone too."""
+    real = _real_nanotrack(_shared_models())
+    if all(p.is_file() for pair in real.values() for p in pair):
+        return real
+    files: dict[str, tuple[Path, Path]] = request.getfixturevalue("stand_in_networks")
+    return files
+
+
+@contextlib.contextmanager
+def nano_files_in_environment(files: tuple[Path, Path]) -> Iterator[None]:
+    """``WMILTRACK_NANO_BACKBONE`` / ``WMILTRACK_NANO_HEAD`` set to ``files`` meanwhile, so
+    that a tracker made by preset name (``Tracker("rcwmil-nano")``), here or in a child
+    process, runs on them."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("WMILTRACK_NANO_BACKBONE", str(files[0]))
+        mp.setenv("WMILTRACK_NANO_HEAD", str(files[1]))
+        yield
+
+
+@pytest.fixture
+def nano_in_environment(nano_network: dict[str, tuple[Path, Path]]) -> Iterator[tuple[Path, Path]]:
+    """:func:`nano_network`'s v3 files (rcwmil-nano's network) in the environment for the test
+    (:func:`nano_files_in_environment`): for tests that go over every preset by name."""
+    with nano_files_in_environment(nano_network["v3"]):
+        yield nano_network["v3"]
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -129,13 +197,12 @@ def _models_folder(tmp_path_factory: pytest.TempPathFactory) -> object:
     its files linked to NanoTrack's shared copies when they are there, so that every preset,
     rcwmil-nano included, can start in tests that go over all presets. A test of the lookup
     sets its own folder."""
-    root = _shared_models()
     folder = tmp_path_factory.mktemp("models")
-    for version, names in NANOTRACK_FILES.items():
+    for version, files in _real_nanotrack(_shared_models()).items():
         (folder / f"nanotrack-{version}").mkdir()
-        for name in names:
-            if (root / name).is_file():
-                (folder / f"nanotrack-{version}" / Path(name).name).symlink_to((root / name).resolve())
+        for path in files:
+            if path.is_file():
+                (folder / f"nanotrack-{version}" / path.name).symlink_to(path.resolve())
     before = {k: os.environ.get(k) for k in ("WMILTRACK_MODELS", "WMILTRACK_NANO_BACKBONE",
                                               "WMILTRACK_NANO_HEAD")}
     os.environ["WMILTRACK_MODELS"] = str(folder)

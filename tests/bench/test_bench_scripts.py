@@ -290,21 +290,19 @@ def test_lost_study_looks_only_at_frames_flagged_lost_whose_box_misses_a_target_
     assert missing.returncode != 0 and "no such sequence" in missing.stderr
 
 
-def test_lost_study_asks_nanotrack_only_with_its_model_files(tmp_path: Path) -> None:
-    """benchmarks/lost_study.py --nano: a clear error without NanoTrack's files; with them
-    (WMILTRACK_TEST_NANO_BACKBONE / _HEAD, not part of the project), NanoTrack's log-odds at
-    the target and at up to three places whose window misses it, on every studied frame."""
+def test_lost_study_asks_nanotrack_only_with_its_model_files(
+        tmp_path: Path, nano_network: dict[str, tuple[Path, Path]]) -> None:
+    """benchmarks/lost_study.py --nano: a clear error without NanoTrack's files; with v2's
+    (conftest's ``nano_network``: NanoTrack's own when they are there, else the stand-in), the
+    network's log-odds at the target and at up to three places whose window misses it, on
+    every studied frame."""
     _hidden_target_dataset(tmp_path / "dev")
     env = {k: v for k, v in os.environ.items() if not k.startswith("WMILTRACK_NANO_")}
     r = subprocess.run([sys.executable, str(BENCH / "lost_study.py"), "--roots",
                         str(tmp_path / "dev"), "--nano"], capture_output=True, text=True,
                        timeout=120, check=False, env=env, cwd=REPO)
     assert r.returncode != 0 and "WMILTRACK_NANO_BACKBONE" in r.stderr
-    backbone = os.environ.get("WMILTRACK_TEST_NANO_BACKBONE", "")
-    head = os.environ.get("WMILTRACK_TEST_NANO_HEAD", "")
-    if not (os.path.isfile(backbone) and os.path.isfile(head)):
-        pytest.skip("NanoTrack's model files are not part of the project: set "
-                    "WMILTRACK_TEST_NANO_BACKBONE and WMILTRACK_TEST_NANO_HEAD to run this part")
+    backbone, head = (str(p) for p in nano_network["v2"])
     out = tmp_path / "lost.json"
     env.update(WMILTRACK_NANO_BACKBONE=backbone, WMILTRACK_NANO_HEAD=head,
                WMILTRACK_NO_PROGRESS="1")

@@ -53,6 +53,7 @@ def fork_and_check(variant: str, frames: list[np.ndarray], box: tuple[float, ...
     assert results(got_fork) == want
 
 
+@pytest.mark.usefixtures("nano_in_environment")  # (rcwmil-nano: real or stand-in network)
 @pytest.mark.parametrize("variant", PRESETS)
 def test_deepcopy_forks_every_preset(variant: str, clip) -> None:  # type: ignore[no-untyped-def]
     fork_and_check(variant, *clip, copy.deepcopy)

@@ -1,9 +1,12 @@
 """rcwmil-nano's two experts under one judge (engine/experts.py); NanoTrack's network and
 step alone are tested in tests/networks.
 
-The judge's rules are checked without the network; everything that runs the network reads
-NanoTrack's model files from ``nanotrack_models`` (conftest: ``../shared/models/nanotrack``
-or ``$WMILTRACK_TEST_MODELS``; skipped without them, a failure under CI).
+The judge's rules are checked without the network. What checks NanoTrack itself (its step,
+both runtimes on its files, how well rcwmil-nano follows a target) reads its model files from
+``nanotrack_models`` (conftest: ``$WMILTRACK_TEST_MODELS`` or ``../shared/models/nanotrack``;
+skipped without them, a failure under CI); what checks the logic around the network (the step's
+state, copies, the same boxes for the same inputs, the judge flagging a hidden target) runs on
+the stand-in networks the tests write (``stand_in_networks``), everywhere.
 """
 
 from __future__ import annotations
@@ -87,6 +90,82 @@ def _run(tracker: wmiltrack.Tracker, frames: list[np.ndarray], box: tuple[float,
             np.array([r.ok for r in out]))
 
 
+def _runtimes() -> list[str]:
+    import importlib.util
+
+    return ["opencv", *(["onnxruntime"] if importlib.util.find_spec("onnxruntime") else [])]
+
+
+@pytest.mark.parametrize("runtime", _runtimes())
+def test_stand_ins_have_nanotracks_shapes_in_both_runtimes(
+        runtime: str, stand_in_networks: dict[str, tuple[Path, Path]]) -> None:
+    """The stand-in networks load in the runtime and answer with NanoTrack's shapes: 8 and 16
+    cells for the 127 and 255 px crops, a grid of 16 (v2) or 15 (v3) points, positive side
+    distances; the same input gives the same output."""
+    from wmiltrack.networks.nanotrack import NanoNetwork
+
+    rng = np.random.default_rng(0)
+    z, x = (rng.integers(0, 256, (n, n, 3), dtype=np.uint8) for n in (127, 255))
+    for version, files in stand_in_networks.items():
+        net = NanoNetwork(*files, runtime)
+        fz, fx = net.features(z), net.features(x)
+        assert fz.shape == (1, 96 if version == "v3" else 48, 8, 8) and fx.shape[-2:] == (16, 16)
+        cls, loc = net.head(fz, fx)
+        n = 16 if version == "v2" else 15
+        assert cls.shape == (2, n, n) and loc.shape == (4, n, n) and np.all(loc > 0)
+        np.testing.assert_array_equal(net.head(fz, net.features(x))[0], cls)
+
+
+@pytest.mark.parametrize("runtime", _runtimes())
+def test_the_step_on_a_stand_in_keeps_its_template(
+        runtime: str, stand_in_networks: dict[str, tuple[Path, Path]]) -> None:
+    """NanoTrack's step on a stand-in: the first box is its own likeness 1; ``search_at`` leaves
+    the state; ``recentre`` moves it and keeps the template; a copy goes on as the original."""
+    from wmiltrack.networks.nanotrack import NanoNetwork, NanoTrackStep, nanotrack_constants
+
+    seq = make_sequence(12, seed=1, occlusion=False)
+    frames, gt = seq.load(), [tuple(map(float, b)) for b in seq.groundtruth]
+    loc = NanoTrackStep(NanoNetwork(*stand_in_networks["v3"], runtime), nanotrack_constants("v3"))
+    loc.start(frames[0], gt[0])
+    assert loc.likeness(frames[0], gt[0]) == pytest.approx(1.0)
+    template, state = loc.template.copy(), (loc.centre, loc.size)
+    found = loc.search_at(frames[1], (60.0, 60.0), loc.size, window=False)
+    assert (loc.centre, loc.size) == state and 0.0 <= found.score <= 1.0
+    loc.recentre((100.0, 80.0, 30.0, 20.0))
+    assert loc.centre == (115.0, 90.0) and loc.size == (30.0, 20.0)
+    np.testing.assert_array_equal(loc.template, template)
+    fork = copy.deepcopy(loc)
+    assert [loc.locate(f) for f in frames[2:6]] == [fork.locate(f) for f in frames[2:6]]
+
+
+@pytest.mark.parametrize("runtime", _runtimes())
+def test_rcwmil_nano_logic_on_a_stand_in(runtime: str,
+                                         stand_in_networks: dict[str, tuple[Path, Path]]) -> None:
+    """rcwmil-nano on a stand-in network (which follows the target roughly) and a target hidden
+    behind a block for 20 frames: not flagged while in view, flagged lost on most hidden frames
+    (the judge reads the backbone's likeness); scores in [0, 1]; the same inputs give the same
+    boxes; a copy made mid-run goes on exactly as the original."""
+    files = {"backbone": str(stand_in_networks["v3"][0]), "head": str(stand_in_networks["v3"][1]),
+             "network_runtime": runtime}
+    seq = make_sequence(80, seed=0, occlusion=False, full_occlusion=(50, 20))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    boxes, scores, oks = _run(wmiltrack.Tracker("rcwmil-nano", seed=0, **files), frames, tuple(gt[0]))
+    hidden = ~seq.meta["visible"][1:]
+    assert hidden.sum() == 20 and np.mean(~oks[hidden]) >= 0.5
+    assert np.all(oks[:45])
+    assert np.all((scores >= 0) & (scores <= 1))
+    again = _run(wmiltrack.Tracker("rcwmil-nano", seed=0, **files), frames, tuple(gt[0]))
+    np.testing.assert_array_equal(boxes, again[0])
+    np.testing.assert_array_equal(oks, again[2])
+    t = wmiltrack.Tracker("rcwmil-nano", seed=0, **files)
+    t.init(frames[0], tuple(gt[0]))
+    for f in frames[1:45]:
+        t.update(f)
+    fork = copy.deepcopy(t)
+    rest = [(t.update(f), fork.update(f)) for f in frames[45:75]]
+    assert all(a == b for a, b in rest)
+
+
 @pytest.mark.usefixtures("nanotrack_models")
 def test_rcwmil_nano_tracks_flags_a_hidden_target_and_takes_it_back() -> None:
     """A generated target hidden behind a block for 20 frames: rcwmil-nano follows it before,
@@ -115,7 +194,6 @@ def test_rcwmil_nano_tracks_flags_a_hidden_target_and_takes_it_back() -> None:
     assert all(a == b for a, b in rest)
 
 
-@pytest.mark.usefixtures("nanotrack_models")
 def test_recentre_moves_the_tracker_and_keeps_what_it_learnt() -> None:
     """Tracker.recentre moves the box to the given centre at the tracker's own size; the
     models are not restarted (the next update from there matches a copy's)."""

@@ -133,7 +133,7 @@ def test_a_stage_of_ones_own_sees_tracked_and_lost_frames(sequence) -> None:
     assert results[3].ok and abs(results[3].box[0] - found[0]) <= fine
 
 
-@pytest.mark.usefixtures("nanotrack_models")
+@pytest.mark.usefixtures("nano_in_environment")  # (the logic: NanoTrack's files or a stand-in)
 def test_the_second_expert_is_a_stage_too(sequence) -> None:
     """rcwmil-nano's experts are the consult stage: a stage after it sees the experts' result
     in the record, and without it the tracker is rcwmil-cf alone (the same boxes)."""

@@ -34,6 +34,7 @@ def _run(variant: str, frames: list[np.ndarray], box: tuple[float, ...], seed: i
     return out
 
 
+@pytest.mark.usefixtures("nano_in_environment")  # (every preset, rcwmil-nano included)
 def test_same_seed_same_boxes_in_process() -> None:
     frames, box = _sequence()
     for v in VARIANTS:
@@ -45,6 +46,7 @@ def test_different_seeds_differ_somewhere() -> None:
     assert any(_run(v, frames, box, seed=0) != _run(v, frames, box, seed=1) for v in VARIANTS)
 
 
+@pytest.mark.usefixtures("nano_in_environment")
 def test_same_seed_same_boxes_across_processes() -> None:
     """A fresh interpreter (new hash seed, new allocations) gives bit-identical boxes and scores."""
     frames, box = _sequence()
@@ -64,6 +66,7 @@ def test_same_seed_same_boxes_across_processes() -> None:
     assert outs[0] == here and outs[1] == here
 
 
+@pytest.mark.usefixtures("nano_in_environment")
 @pytest.mark.parametrize("variant", VARIANTS)
 def test_two_threads_match_sequential(variant: str) -> None:
     """Two trackers on two sequences in two threads: the boxes of running them one by one."""

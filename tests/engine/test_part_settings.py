@@ -105,6 +105,7 @@ def sequence() -> tuple[list[np.ndarray], tuple[int, int, int, int]]:
 
 @pytest.mark.parametrize(("preset", "overrides"), CASES,
                          ids=[f"{p}-{'-'.join(o) or 'preset'}" for p, o in CASES])
+@pytest.mark.usefixtures("nano_in_environment")  # (rcwmil-nano: real or stand-in network)
 def test_each_part_reads_only_its_own_settings(
         monkeypatch: pytest.MonkeyPatch, sequence: tuple[list[np.ndarray], Any],
         preset: str, overrides: dict[str, Any]) -> None:

@@ -597,8 +597,14 @@ def run_cases_isolated() -> dict[str, dict[str, Any]]:
 
 
 @pytest.fixture(scope="module")
-def isolated_results() -> dict[str, dict[str, Any]]:
-    return run_cases_isolated()
+def isolated_results(nano_network: dict[str, tuple[Path, Path]]) -> dict[str, dict[str, Any]]:
+    """Every case's result; rcwmil-nano's on NanoTrack's files when they are there, else on
+    the stand-in networks (conftest's ``nano_network``), through the environment the child
+    interpreters inherit."""
+    from conftest import nano_files_in_environment  # (here: the child interpreters import this module alone)
+
+    with nano_files_in_environment(nano_network["v3"]):
+        return run_cases_isolated()
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])

@@ -2,8 +2,8 @@
 them (from a folder, or over HTTP from a server on 127.0.0.1) with their SHA-1 checked.
 
 Most tests replace the two NanoTrack sets by sets of small generated files; the tests marked by
-the ``shared_models`` fixture fetch the real files, served from ``../shared/models`` (skipped
-without it, failing under ``CI``). No test contacts any host but 127.0.0.1.
+the ``shared_models`` fixture fetch the real files, served from ``../shared/models`` or
+``$WMILTRACK_TEST_MODELS`` (skipped without them, failing under ``CI``). No test contacts any host but 127.0.0.1.
 """
 
 from __future__ import annotations
@@ -150,11 +150,17 @@ def serve_fake(served: Served, fake: dict[str, dict[str, bytes]]) -> None:
 
 
 @pytest.fixture(scope="session")
-def shared_models(nanotrack_models: dict[str, tuple[Path, Path]]) -> Path:
-    """The folder of NanoTrack's real files (``v2/``, ``v3/``), where the ``nanotrack_models``
-    fixture finds them: ``$WMILTRACK_TEST_MODELS``, else ``../shared/models/nanotrack``;
-    skipped when missing, a failure under CI."""
-    return nanotrack_models["v2"][0].parent.parent
+def shared_models(nanotrack_models: dict[str, tuple[Path, Path]],
+                  tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """NanoTrack's real files (conftest's ``nanotrack_models``: ``$WMILTRACK_TEST_MODELS`` or
+    ``../shared/models/nanotrack``; skipped when missing, a failure under CI), linked into a
+    folder with ``v2/`` and ``v3/`` as ``shared/models/nanotrack`` lays them out."""
+    root = tmp_path_factory.mktemp("shared_models")
+    for version, files in nanotrack_models.items():
+        (root / version).mkdir()
+        for path in files:
+            (root / version / path.name).symlink_to(path.resolve())
+    return root
 
 
 # -- the registry and the models folder --------------------------------------------------------

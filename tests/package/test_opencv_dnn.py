@@ -6,7 +6,6 @@ them (they are not part of the project)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
@@ -157,20 +156,13 @@ def test_eval_skips_nano_without_models_with_a_note(tmp_path: Path, capsys: pyte
     assert "--nano-backbone" in captured.err and "--nano-head" in captured.err
 
 
-def real_models() -> tuple[str, str]:
-    backbone = os.environ.get("WMILTRACK_TEST_NANO_BACKBONE", "")
-    head = os.environ.get("WMILTRACK_TEST_NANO_HEAD", "")
-    if not (os.path.isfile(backbone) and os.path.isfile(head)):
-        pytest.skip("NanoTrack's model files are not part of the project: set "
-                    "WMILTRACK_TEST_NANO_BACKBONE and WMILTRACK_TEST_NANO_HEAD to run this test")
-    return backbone, head
-
-
-def test_real_nano_follows_a_generated_target() -> None:
+def test_real_nano_follows_a_generated_target(nanotrack_models: dict[str, tuple[Path, Path]]) -> None:
+    """OpenCV's TrackerNano on NanoTrack v2's real files (conftest's ``nanotrack_models``:
+    skipped without them, a failure under CI) follows a generated target."""
     from wmiltrack.data.synthetic import make_sequence
     from wmiltrack.eval.metrics import iou
 
-    backbone, head = real_models()
+    backbone, head = (str(p) for p in nanotrack_models["v2"])
     seq = make_sequence(20, size=(240, 320), target_size=(48, 40), seed=2, occlusion=False)
     frames, gt = seq.load(), np.asarray(seq.groundtruth)
     t = OpenCVTracker("Nano", backbone=backbone, neckhead=head)
