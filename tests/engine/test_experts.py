@@ -220,3 +220,26 @@ def test_nanotrack_specs_are_checked_without_loading_the_network() -> None:
     with pytest.raises(UsageError, match="no parameter 'window'"):
         check_tracker_spec("nanotrack:v3:window=0.4")
     check_tracker_spec("nanotrack:v2:runtime=opencv:backbone=/nowhere/b.onnx")
+
+
+def test_every_view_of_rcwmil_nano_shows_the_reported_result(
+        stand_in_networks: dict[str, tuple[Path, Path]]) -> None:
+    """On every frame of rcwmil-nano (stand-in network, a target hidden for 20 frames so that
+    the result is the network's, not the inner tracker's, on many frames): ``update``'s box and
+    ``ok``, ``box``, ``lost``, ``samples()["box"]`` and ``repr`` agree, and the box is plain
+    floats. (Before, ``lost``, ``samples`` and ``repr`` showed the inner tracker's box.)"""
+    files = {"backbone": str(stand_in_networks["v3"][0]), "head": str(stand_in_networks["v3"][1])}
+    seq = make_sequence(70, seed=0, occlusion=False, full_occlusion=(40, 20))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    t = wmiltrack.Tracker("rcwmil-nano", seed=0, **files)
+    t.init(frames[0], tuple(gt[0]))
+    differs = 0
+    for f in frames[1:]:
+        r = t.update(f)
+        assert all(type(v) is float for v in r.box)
+        assert t.box == r.box and t.samples()["box"] == r.box
+        assert t.lost is (not r.ok)
+        assert f"box={r.box}" in repr(t)
+        inner = t._last.box  # noqa: SLF001 - the inner tracker's own box, to see the test bites
+        differs += tuple(float(v) for v in inner) != r.box
+    assert differs > 0  # frames where the result is not the inner tracker's box

@@ -375,10 +375,14 @@ class Tracker:
 
     @property
     def lost(self) -> bool:
-        """Whether the judge holds the target for lost after the last frame (the next
-        :meth:`update` looks for it again)."""
+        """Whether the target is held for lost after the last frame (the next :meth:`update`
+        looks for it again): the judge's verdict, or where a second expert made the frame's
+        result, that result's (not ``ok``), so that ``lost`` and :meth:`update`'s ``ok`` agree."""
         self._require_init()
-        return self._last.verdict is Verdict.LOST
+        last = self._last
+        if last.reported is not None:
+            return not last.reported.ok
+        return last.verdict is Verdict.LOST
 
     @property
     def uses_channels(self) -> bool:
@@ -431,7 +435,8 @@ class Tracker:
             ``"positive"``, ``"negative"``: top-left corners ``(n, 2)`` of the bags learnt
             from; ``"search"``: one ``(origin_box, radius, step)`` per search stage of the
             last ``update`` (coarse, then fine; empty after ``init``); ``"scales"``: the boxes
-            searched at the other scales (empty without scale search); ``"box"``: the box.
+            searched at the other scales (empty without scale search); ``"box"``: the frame's
+            box, as :meth:`update` reported it (a second expert's where it made the result).
         """
         self._require_init()
         pos, neg = self._parts.appearance.corners()
@@ -441,7 +446,7 @@ class Tracker:
             "negative": neg.copy(),
             "search": list(last.searched),
             "scales": list(last.tried),
-            "box": last.box,
+            "box": _result(last).box,  # the frame's result, as update() and box give it
         }
 
     @property
@@ -451,7 +456,7 @@ class Tracker:
         return self._parts.scale.scale if self._parts.scale is not None else 1.0
 
     def __repr__(self) -> str:
-        state = f"box={self._last.box}" if self._initialized else "not initialised"
+        state = f"box={_result(self._last).box}" if self._initialized else "not initialised"
         return f"Tracker({self._params.variant!r}, seed={self._seed}, {state})"
 
     # -- one frame -------------------------------------------------------------------------
