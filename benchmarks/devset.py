@@ -1,7 +1,8 @@
 """Accuracy and the lost flag on the development set, split in its two fixed halves.
 
-The development set is every OTB-layout sequence folder under the roots given (the 17 shared
-sequences and the 17 that ``shared/data/more/build.py`` builds: 34). Its halves are fixed
+The development set is every OTB-layout sequence folder under the roots given: the 17 shared
+sequences, the 17 that ``shared/data/more/build.py`` builds and the 26 that
+``shared/data/more2/build.py`` builds, 60 in all. Its halves are fixed
 before any setting is chosen: the sequence names sorted with Python's ``sorted``, then
 alternated (half 1 = positions 0, 2, 4, ...). A setting is chosen on one half and kept only
 if it helps on both.
@@ -13,7 +14,9 @@ none keeps its last box), and this prints:
 * the mean success AUC per half (the mean over sequences, then over seeds) and over all;
 * the lost flag: the share of frames with IoU >= 0.5 that the tracker flagged lost (it should
   be small), and the share of frames with IoU == 0 or an absent target that it flagged lost
-  (it should be large), pooled over sequences and seeds;
+  (it should be large), pooled over sequences and seeds. A sequence annotated only on some
+  frames (its pool's ``_meta.json`` calls it sparse: a missing box there means "not
+  annotated", not "absent") counts only its annotated frames;
 * with ``--against``: the collapse check, every sequence where the first tracker scores below
   0.10 while one of the others scores above 0.40.
 
@@ -24,7 +27,7 @@ tracker) of length between 0.25 and 1 pixel in a uniform direction. OpenCV's tra
 NanoTrack, which take no seed, so get three different runs too. The spread printed is the
 standard deviation over seeds of each half's mean. ``--jitter 0`` starts from the box as given.
 
-    python benchmarks/devset.py --roots ../shared/data/otb,$POOL_DIR \\
+    python benchmarks/devset.py --roots ../shared/data/otb,$MORE_DIR,$MORE2_DIR \\
         --trackers rcwmil-cf,rcwmil-plus --seeds 0,1,2 -j 2 [--json out.json]
 
 ``WMILTRACK_DEVSET`` (a comma-separated list of roots) replaces ``--roots``. OpenCV's
@@ -39,6 +42,7 @@ import json
 import math
 import os
 import sys
+from collections.abc import Collection
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -56,6 +60,21 @@ def halves(names: list[str]) -> tuple[list[str], list[str]]:
     """The two fixed halves: ``sorted`` names, alternated."""
     ordered = sorted(names)
     return ordered[0::2], ordered[1::2]
+
+
+def sparse_sequences(roots: list[Path]) -> set[str]:
+    """The sequences whose pool (``_meta.json`` beside them, as ``shared/data/more2/build.py``
+    writes it) says their ground truth is sparse: a missing box means "not annotated"."""
+    out: set[str] = set()
+    for root in roots:
+        meta = Path(root) / "_meta.json"
+        if not meta.is_file():
+            continue
+        for name, entry in json.loads(meta.read_text()).items():
+            text = f"{entry.get('gt_format', '')} {entry.get('notes', '')}" if isinstance(entry, dict) else ""
+            if "sparse" in text.lower():
+                out.add(name)
+    return out
 
 
 def _find(roots: list[Path]) -> dict[str, Path]:
@@ -102,8 +121,8 @@ def _run(job: tuple[str, int, str, str, float]) -> dict[str, Any]:
             "seconds": float(np.nansum(run.update_times)), "updates": run.n_updates}
 
 
-def summarise(runs: list[dict[str, Any]], gts: dict[str, np.ndarray], names: list[str]
-              ) -> dict[str, Any]:
+def summarise(runs: list[dict[str, Any]], gts: dict[str, np.ndarray], names: list[str],
+              sparse: Collection[str] = ()) -> dict[str, Any]:
     """Per-half AUC and lost-flag shares of one tracker's runs."""
     h1, h2 = halves(names)
     auc: dict[str, dict[int, float]] = {}
@@ -114,6 +133,9 @@ def summarise(runs: list[dict[str, Any]], gts: dict[str, np.ndarray], names: lis
         auc.setdefault(r["name"], {})[r["seed"]] = ope_metrics(boxes, gt, missing="hold").auc
         ov = iou(boxes[1:], gt[1:])
         absent = ~valid_mask(gt[1:])
+        if r["name"] in sparse:  # a missing box is "not annotated": leave those frames out
+            ov = np.where(absent, np.nan, ov)
+            absent = np.zeros_like(absent)
         lost = np.asarray(r["lost"][1:], dtype=bool)
         good = np.isfinite(ov) & (ov >= 0.5) & ~absent
         off = absent | (np.isfinite(ov) & (ov == 0))
@@ -169,7 +191,8 @@ def main(argv: list[str] | None = None) -> int:
         runs = list(progress(pool.map(_run, jobs), total=len(jobs), desc="runs"))
     summary = {}
     for spec in specs:
-        s = summarise([r for r in runs if r["spec"] == spec], gts, names)
+        s = summarise([r for r in runs if r["spec"] == spec], gts, names,
+                      sparse_sequences([Path(r) for r in args.roots.split(",")]))
         summary[spec] = s
         print(f"{spec}: half 1 {s['half1']:.3f} (sd {s['half1_spread']:.3f}), half 2 "
               f"{s['half2']:.3f} (sd {s['half2_spread']:.3f}), all {s['all']:.3f}; "

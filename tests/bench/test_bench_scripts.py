@@ -346,3 +346,26 @@ def test_interleaved_times_two_interpreters_in_turns(tmp_path: Path) -> None:
     assert wrong.returncode != 0 and "WxH/BOX" in wrong.stderr
     bad = _run([*args[:2], str(tmp_path / "no-python"), *args[3:]])
     assert bad.returncode != 0 and "cannot run" in bad.stderr and "no-python" in bad.stderr
+
+
+def test_devset_counts_only_annotated_frames_of_a_sparse_sequence(tmp_path: Path) -> None:
+    """A sequence its pool calls sparse (``_meta.json``): a missing box there is "not
+    annotated", so those frames are neither absent nor off target in the lost-flag shares;
+    elsewhere a missing box is an absent target."""
+    sys.path.insert(0, str(BENCH))
+    import devset
+
+    (tmp_path / "_meta.json").write_text(json.dumps({
+        "Sparse": {"gt_format": "annotated every 5th frame", "notes": "sparse: NaN = not annotated"},
+        "Dense": {"gt_format": "x,y,w,h", "notes": "NaN = absent"}}))
+    assert devset.sparse_sequences([tmp_path, tmp_path / "none"]) == {"Sparse"}
+    gt = np.array([[0, 0, 10, 10], [np.nan] * 4, [0, 0, 10, 10], [np.nan] * 4], dtype=float)
+    boxes = [[0.0, 0.0, 10.0, 10.0]] * 4
+    runs = [{"name": n, "seed": 0, "boxes": boxes, "lost": [False, True, False, True],
+             "seconds": 1.0, "updates": 3} for n in ("Sparse", "Dense")]
+    s = devset.summarise(runs, {"Sparse": gt, "Dense": gt}, ["Dense", "Sparse"], {"Sparse"})
+    # off target: only Dense's two absent frames (both flagged); Sparse's NaN frames left out
+    assert s["frames_off_target"] == 2 and s["off_target_flagged_lost"] == 1.0
+    assert s["frames_well_tracked"] == 2 and s["well_tracked_flagged_lost"] == 0.0
+    everything = devset.summarise(runs, {"Sparse": gt, "Dense": gt}, ["Dense", "Sparse"])
+    assert everything["frames_off_target"] == 4
