@@ -240,3 +240,37 @@ def test_without_onnx_the_command_line_tracks_after_one_note(
     assert r.returncode == 0, r.stderr
     assert len(r.stdout.splitlines()) == 6
     assert len(r.stderr.splitlines()) == 1 and "without the onnx package" in r.stderr, r.stderr
+
+
+# -- which runtime ran ---------------------------------------------------------------------------
+def test_eval_records_the_runtime_of_each_network_tracker(
+        stand_in_networks: dict[str, tuple[Path, Path]], no_models: Path, data: Path,
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    import cv2
+
+    backbone, head = stand_in_networks["v3"]
+    files = f"backbone={backbone}:head={head}"
+    specs = [f"rcwmil-nano:{files}:network_runtime=opencv", f"nanotrack:v3:{files}", "rcwmil"]
+    out = tmp_path / "out"
+    assert cli.main(["eval", str(data), "--trackers", ",".join(specs), "--out", str(out),
+                     "--no-plots", "--no-progress"]) == 0, capsys.readouterr().err
+    doc = json.loads((out / "eval_ope.json").read_text())
+    auto = backends.choose_runtime("auto")
+    version = {"opencv": cv2.__version__}.get(auto) or __import__("onnxruntime").__version__
+    assert doc["runtimes"] == {
+        "rcwmil-nano:network_runtime=opencv": {"runtime": "opencv", "version": cv2.__version__},
+        "nanotrack:v3": {"runtime": auto, "version": version}}
+
+
+def test_variants_says_which_runtime_would_run(capsys: pytest.CaptureFixture[str],
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    assert cli.main(["variants"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    name = {"onnxruntime": "onnxruntime", "opencv": "OpenCV's dnn"}[backends.choose_runtime("auto")]
+    assert f"The networks (rcwmil-nano, nanotrack:VERSION) run on {name} " in out
+    assert "same for the same runtime and version only" in out
+    monkeypatch.setitem(sys.modules, "onnxruntime", None)  # not installed: OpenCV's dnn
+    assert cli.main(["variants"]) == 0
+    assert "run on OpenCV's dnn" in " ".join(capsys.readouterr().out.split())

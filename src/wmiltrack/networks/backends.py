@@ -26,7 +26,7 @@ from ..integrations.opencv_wheels import TrackerUnavailable
 from .files import ModelFileUnreadable, unreadable_message
 
 __all__ = ["RUNTIMES", "Backend", "DnnBackend", "OrtBackend", "choose_runtime", "load_backend",
-           "make_dynamic"]
+           "make_dynamic", "runtime_version"]
 
 RUNTIMES: tuple[str, ...] = ("auto", "onnxruntime", "opencv")
 """The runtimes a network can be run by; ``"auto"`` is onnxruntime where it is installed (with
@@ -206,6 +206,15 @@ def load_backend(path: Path, runtime: str = "auto", threads: int = 1, *,
         raise unreadable(f"it gives the outputs {', '.join(backend.output_names())}, where a {role} "
                          f"gives {', '.join(outputs)} (another role's file, given in the wrong place?)")
     return backend
+
+
+def runtime_version(runtime: str) -> str:
+    """The installed version of ``runtime`` (``"onnxruntime"`` or ``"opencv"``: ``cv2``'s), as
+    its module says it; the boxes are the same for the same runtime and version only."""
+    import importlib
+
+    module = importlib.import_module("onnxruntime" if runtime == "onnxruntime" else "cv2")
+    return str(getattr(module, "__version__", "unknown"))
 
 
 def _importable(module: str) -> bool:
