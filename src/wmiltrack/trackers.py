@@ -229,7 +229,7 @@ def network_runtime(tracker: Any) -> str | None:
         return runtime
     if getattr(tracker, "kind", None) in ("Nano", "Vit"):  # OpenCV's network trackers
         return "opencv"
-    params = getattr(tracker, "params", None)
-    if params is not None and getattr(params, "network", ""):
+    params: Any = getattr(tracker, "params", None)
+    if params is not None and params.network:
         return choose_runtime(params.network_runtime, params.network_threads)
     return None

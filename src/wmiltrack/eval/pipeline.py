@@ -71,7 +71,8 @@ Outputs in ``--out DIR``
 ------------------------
 ``eval_<protocol>.md`` (table), ``eval_<protocol>.json`` (every figure per tracker and
 sequence, per repeat; ``runtimes``: the runtime and its version that ran each network tracker,
-as their boxes are the same for the same runtime and version only), ``success_ope.png`` and ``precision_ope.png`` (OPE), and the boxes:
+as their boxes are the same for the same runtime and version only), ``success_ope.png`` and
+``precision_ope.png`` (OPE), and the boxes:
 ``boxes/<tracker>/<seq>.txt`` (OPE; repeat ``k`` > 0 in ``<seq>.r<k>.txt``) or
 ``boxes_vot/...`` (VOT; NaN rows on frames not tracked) or ``boxes_longterm/...`` (long-term;
 the boxes as given), each with a ``<seq>[.r<k>].run.json`` record (seed, error, frames reported
@@ -97,8 +98,8 @@ import numpy as np
 import numpy.typing as npt
 
 from ..integrations.opencv_wheels import TrackerUnavailable
-from ..parallel.executors import Executor, ExecutorName, make_executor
 from ..networks.backends import runtime_version
+from ..parallel.executors import Executor, ExecutorName, make_executor
 from ..trackers import tracker_labels
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
 from .report import (
