@@ -23,6 +23,7 @@ __all__ = [
     "OPENCV_PREFIX",
     "is_opencv_spec",
     "make_tracker",
+    "network_runtime",
     "parse_spec",
     "split_specs",
     "tracker_labels",
@@ -215,3 +216,20 @@ def make_tracker(spec: str, seed: int = 0, **params: Any) -> TrackerLike:
 
     tracker: TrackerLike = Tracker(s, seed=seed, **kw)
     return tracker
+
+
+def network_runtime(tracker: Any) -> str | None:
+    """The runtime that runs ``tracker``'s network (one :func:`make_tracker` made):
+    ``"onnxruntime"`` or ``"opencv"`` (OpenCV's dnn), or None for a tracker without a network.
+    The boxes of a network tracker are the same for the same runtime and version only."""
+    from .networks.backends import choose_runtime
+
+    runtime = getattr(tracker, "runtime", None)  # NanoTrack alone
+    if isinstance(runtime, str):
+        return runtime
+    if getattr(tracker, "kind", None) in ("Nano", "Vit"):  # OpenCV's network trackers
+        return "opencv"
+    params: Any = getattr(tracker, "params", None)
+    if params is not None and params.network:
+        return choose_runtime(params.network_runtime, params.network_threads)
+    return None

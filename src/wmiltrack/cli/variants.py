@@ -139,6 +139,21 @@ def peers_note() -> str:
             f"{', '.join(OPENCV_TRACKERS)}.")
 
 
+def runtime_note() -> str:
+    """Which runtime would run the networks here (rcwmil-nano, nanotrack:VERSION), and how to
+    choose the other."""
+    from ..networks.backends import choose_runtime, runtime_version
+
+    chosen = choose_runtime("auto")
+    name = "onnxruntime" if chosen == "onnxruntime" else "OpenCV's dnn"
+    why = ("onnxruntime is installed" if chosen == "onnxruntime"
+           else "onnxruntime (with onnx) is not installed")
+    return (f"The networks (rcwmil-nano, nanotrack:VERSION) run on {name} "
+            f"{runtime_version(chosen)} here, as {why}; choose with network_runtime=onnxruntime "
+            "or =opencv (nanotrack:VERSION:runtime=...). Their boxes are the same for the same "
+            "runtime and version only (the two runtimes' boxes differ a little: docs/performance.md).")
+
+
 def _json_value(value: Any) -> Any:
     """A parameter value JSON has no type for (a tuple is a list already): its text."""
     return str(value)
@@ -164,6 +179,8 @@ def _cmd_variants(args: argparse.Namespace) -> int:
     print(variant_table())
     print()
     print(peers_note())
+    print()
+    print(runtime_note())
     return 0
 
 

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..networks.backends import RUNTIMES
-from ..networks.families import load_siamese, siamese_networks
+from ..networks.families import check_siamese, load_siamese, siamese_networks
 from ..networks.files import find_files
 from ..networks.siamese import SiameseStep, as_bgr
 from .geometry import centre, overlap, within
@@ -219,17 +219,22 @@ class ExpertJudge:
 
 def network_files(settings: ExpertSettings) -> tuple[Path, Path]:
     """The backbone and head of ``settings.network``: the paths in ``settings`` if given, else
-    found as :func:`wmiltrack.networks.files.find_files` finds them. The one check of a
-    network's files, made when a tracker is built (so that a missing file is said at once, not
-    at its first frame) and again when its network is loaded.
+    found as :func:`wmiltrack.networks.files.find_files` finds them, and loaded once by the
+    runtime (:func:`wmiltrack.networks.families.check_siamese`). The one check of a network's
+    files, made when a tracker is built (so that a missing or unreadable file is said at once,
+    not at its first frame) and again when its network is loaded.
 
     Raises
     ------
     ModelFilesMissing
         A file is missing or is another set's or role's; the message says how to give them.
+        :class:`~wmiltrack.networks.files.ModelFileUnreadable` (a ModelFilesMissing): a file
+        the runtime cannot run (empty, corrupt, truncated, another role's); one line.
     """
     found = find_files(settings.network, {"backbone": settings.backbone or None,
                                           "head": settings.head or None})
+    check_siamese(settings.network, backbone=found[0], head=found[1],
+                  runtime=settings.network_runtime, threads=settings.network_threads)
     return found[0], found[1]
 
 

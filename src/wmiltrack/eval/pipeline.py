@@ -70,7 +70,9 @@ table, JSON and plots.
 Outputs in ``--out DIR``
 ------------------------
 ``eval_<protocol>.md`` (table), ``eval_<protocol>.json`` (every figure per tracker and
-sequence, per repeat), ``success_ope.png`` and ``precision_ope.png`` (OPE), and the boxes:
+sequence, per repeat; ``runtimes``: the runtime and its version that ran each network tracker,
+as their boxes are the same for the same runtime and version only), ``success_ope.png`` and
+``precision_ope.png`` (OPE), and the boxes:
 ``boxes/<tracker>/<seq>.txt`` (OPE; repeat ``k`` > 0 in ``<seq>.r<k>.txt``) or
 ``boxes_vot/...`` (VOT; NaN rows on frames not tracked) or ``boxes_longterm/...`` (long-term;
 the boxes as given), each with a ``<seq>[.r<k>].run.json`` record (seed, error, frames reported
@@ -88,7 +90,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -96,6 +98,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..integrations.opencv_wheels import TrackerUnavailable
+from ..networks.backends import runtime_version
 from ..parallel.executors import Executor, ExecutorName, make_executor
 from ..trackers import tracker_labels
 from .metrics import PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS
@@ -323,17 +326,24 @@ def _got10k_section(
     return doc, "\n".join(lines) + "\n"
 
 
-def _check_trackers(specs: Sequence[str], notes: list[str]) -> list[str]:
-    from ..trackers import make_tracker
+def _check_trackers(specs: Sequence[str], notes: list[str],
+                    runtimes: dict[str, str] | None = None) -> list[str]:
+    """The specs whose trackers can start (the others noted in ``notes`` with their reason);
+    ``runtimes`` receives the runtime of each one that runs a network
+    (:func:`~wmiltrack.trackers.network_runtime`)."""
+    from ..trackers import make_tracker, network_runtime
 
     ok: list[str] = []
     for spec in specs:
         try:
-            make_tracker(spec)
+            tracker = make_tracker(spec)
         except TrackerUnavailable as exc:
             # the whole message, its install commands or model options included, on one line
             notes.append(f"skipped {spec}: {' '.join(line.strip() for line in str(exc).splitlines())}")
             continue
+        runtime = network_runtime(tracker)
+        if runtime is not None and runtimes is not None:
+            runtimes[spec] = runtime
         if spec not in ok:
             ok.append(spec)
     return ok
@@ -747,6 +757,7 @@ class _Runs:
     repeats: int
     n_resumed: int
     unscored_errors: int
+    runtimes: dict[str, dict[str, str]] = field(default_factory=dict)
 
 
 def _obtain_runs(cfg: EvalConfig, ds: _Dataset, gts: dict[str, FloatArray], out: Path,
@@ -759,7 +770,8 @@ def _obtain_runs(cfg: EvalConfig, ds: _Dataset, gts: dict[str, FloatArray], out:
         names = list(dict.fromkeys(r.tracker for r in runs))
         return _Runs(runs, False, names, 1 + max(r.repeat for r in runs), 0, 0)
     specs = [t.strip() for t in cfg.trackers if t.strip()]
-    names = _check_trackers(specs, notes)
+    runtimes: dict[str, str] = {}
+    names = _check_trackers(specs, notes, runtimes)
     for n in notes:
         say(n)
     if not names:
@@ -772,7 +784,9 @@ def _obtain_runs(cfg: EvalConfig, ds: _Dataset, gts: dict[str, FloatArray], out:
     runs, n_resumed, unscored_errors = _run_trackers(ds, names, cfg, ex, box_root, notes, say)
     runs = [r for r in runs if r.sequence in gts]  # not the first-frame-only ones
     labels = tracker_labels(names)
-    return _Runs(runs, True, [labels[n] for n in names], cfg.repeats, n_resumed, unscored_errors)
+    ran_by = {labels[n]: {"runtime": r, "version": runtime_version(r)} for n, r in runtimes.items()}
+    return _Runs(runs, True, [labels[n] for n in names], cfg.repeats, n_resumed, unscored_errors,
+                 ran_by)
 
 
 def _settings(cfg: EvalConfig, n_resumed: int) -> dict[str, Any]:
@@ -857,6 +871,7 @@ def run_eval(config: EvalConfig | str | os.PathLike[str],
         trackers=got.trackers,
         box_folders={t: safe_name(t) for t in got.trackers},
         seeds=settings["seeds"],
+        runtimes=got.runtimes,
         source=source,
         wall_time=wall,
     )

@@ -33,6 +33,11 @@ class NanoTracker:
         self._step = nanotrack_step(version, backbone=backbone, head=head, runtime=runtime,
                                     threads=threads)
 
+    @property
+    def runtime(self) -> str:
+        """The runtime that runs the network: ``"onnxruntime"`` or ``"opencv"``."""
+        return self._step.network.runtime
+
     def init(self, frame: np.ndarray, box: Any) -> None:
         """Take the template from ``frame`` at ``box = (x, y, w, h)``."""
         img = as_bgr(as_frame(frame))

@@ -2,30 +2,48 @@
 small :class:`Backend` with the same one method, chosen by :func:`load_backend`.
 
 A network family's module (:mod:`wmiltrack.networks.nanotrack`) loads each of its files with
-:func:`load_backend` and never asks which runtime runs it. A backend is copied and pickled by
-its file, runtime and threads, and loads the file again (a runtime's session cannot be copied).
+:func:`load_backend` and never asks which runtime runs it. :func:`load_backend` is the one place
+where a file that cannot be run (empty, corrupt, truncated, a folder, another role's) becomes one
+line naming it, its role and the fix (:class:`~wmiltrack.networks.files.ModelFileUnreadable`),
+whichever runtime read it. A backend is copied and pickled by its file, runtime and threads, and
+loads the file again (a runtime's session cannot be copied).
+
+onnxruntime runs a backbone at two sizes (:func:`make_dynamic`) only with the ``onnx`` package;
+``"auto"`` therefore takes onnxruntime where both are installed, else OpenCV's dnn, and says
+once (a logged warning) when onnxruntime is there without ``onnx``.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
+from ..integrations.opencv_wheels import TrackerUnavailable
+from .files import ModelFileUnreadable, unreadable_message
+
 __all__ = ["RUNTIMES", "Backend", "DnnBackend", "OrtBackend", "choose_runtime", "load_backend",
-           "make_dynamic"]
+           "make_dynamic", "runtime_version"]
 
 RUNTIMES: tuple[str, ...] = ("auto", "onnxruntime", "opencv")
-"""The runtimes a network can be run by; ``"auto"`` is onnxruntime where it is installed, else
-OpenCV's dnn."""
+"""The runtimes a network can be run by; ``"auto"`` is onnxruntime where it is installed (with
+``onnx``), else OpenCV's dnn."""
+
+_LOG = logging.getLogger("wmiltrack")
+_NOTED: set[str] = set()
 
 
 class Backend(Protocol):
     """One network file, loaded by one runtime."""
 
     path: Path
+
+    def output_names(self) -> tuple[str, ...]:
+        """The names of the network's outputs."""
+        ...
 
     def run(self, feeds: Mapping[str, np.ndarray], outputs: Sequence[str] | None = None
             ) -> list[np.ndarray]:
@@ -66,14 +84,23 @@ class OrtBackend:
         options.log_severity_level = 3
         source: Any = str(self.path)
         if self.dynamic:
-            import onnx
-
+            try:
+                import onnx
+            except ImportError:
+                raise TrackerUnavailable(
+                    "the runtime onnxruntime needs the onnx package to run a network at two "
+                    "sizes: pip install onnx, or choose OpenCV's dnn (network_runtime=opencv for "
+                    "a preset, runtime=opencv for nanotrack:VERSION)") from None
             source = make_dynamic(onnx.load(str(self.path))).SerializeToString()
         self._session = ort.InferenceSession(source, sess_options=options,
                                              providers=["CPUExecutionProvider"])
 
     def __getstate__(self) -> dict[str, Any]:
         return {"path": self.path, "threads": self.threads, "dynamic": self.dynamic}
+
+    def output_names(self) -> tuple[str, ...]:
+        """See :meth:`Backend.output_names`."""
+        return tuple(o.name for o in self._session.get_outputs())
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
@@ -101,6 +128,10 @@ class DnnBackend:
     def __getstate__(self) -> dict[str, Any]:
         return {"path": self.path}
 
+    def output_names(self) -> tuple[str, ...]:
+        """See :meth:`Backend.output_names`."""
+        return tuple(self._net.getUnconnectedOutLayersNames())
+
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._load()
@@ -120,29 +151,76 @@ class DnnBackend:
 
 def choose_runtime(runtime: str = "auto", threads: int = 1) -> str:
     """``runtime`` checked (one of :data:`RUNTIMES`, and ``threads`` a positive int), with
-    ``"auto"`` made onnxruntime where it is installed, else ``"opencv"``."""
+    ``"auto"`` made onnxruntime where it is installed with ``onnx``, else ``"opencv"`` (and,
+    once, a logged note when onnxruntime is there without ``onnx``)."""
     if runtime not in RUNTIMES:
         raise ValueError(f"runtime must be 'auto', 'onnxruntime' or 'opencv', got {runtime!r}")
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
         raise ValueError(f"threads must be a positive int, got {threads!r}")
-    if runtime == "auto":
-        return "onnxruntime" if _has_onnxruntime() else "opencv"
-    return runtime
+    if runtime != "auto":
+        return runtime
+    if not _importable("onnxruntime"):
+        return "opencv"
+    if _importable("onnx"):
+        return "onnxruntime"
+    if "onnx" not in _NOTED:
+        _NOTED.add("onnx")
+        _LOG.warning("wmiltrack: onnxruntime is installed without the onnx package, which it "
+                     "needs to run a backbone at two sizes; the networks run on OpenCV's dnn "
+                     "(pip install onnx to run them on onnxruntime)")
+    return "opencv"
 
 
 def load_backend(path: Path, runtime: str = "auto", threads: int = 1, *,
-                 dynamic: bool = False) -> Backend:
+                 dynamic: bool = False, role: str = "network", model: str | None = None,
+                 outputs: Sequence[str] = ()) -> Backend:
     """The file at ``path`` loaded by ``runtime`` (:func:`choose_runtime`); ``dynamic``: its
     spatial sizes may change from call to call (onnxruntime needs to be told, OpenCV's dnn
-    does not)."""
-    if choose_runtime(runtime, threads) == "onnxruntime":
-        return OrtBackend(path, threads, dynamic=dynamic)
-    return DnnBackend(path)
+    does not).
 
+    ``role`` and ``model`` (a set of :data:`~wmiltrack.networks.files.MODELS`) say what the
+    file was given as, and ``outputs`` the output names a file of that role has: a file that
+    is no file, empty, unreadable by the runtime (corrupt, truncated) or without those outputs
+    (another role's) is a :class:`~wmiltrack.networks.files.ModelFileUnreadable` whose one
+    line names the file, its role and the fix."""
+    chosen, path = choose_runtime(runtime, threads), Path(path)
 
-def _has_onnxruntime() -> bool:
+    def unreadable(reason: str) -> ModelFileUnreadable:
+        return ModelFileUnreadable(unreadable_message(path, role, reason, model))
+
+    if not path.is_file():
+        raise unreadable("it is a folder, not a file" if path.is_dir() else "there is no such file")
+    if path.stat().st_size == 0:
+        raise unreadable("it is empty (0 bytes)")
     try:
-        import onnxruntime  # noqa: F401
+        backend: Backend = (OrtBackend(path, threads, dynamic=dynamic) if chosen == "onnxruntime"
+                            else DnnBackend(path))
+    except (ImportError, TrackerUnavailable):
+        raise
+    except Exception as exc:  # each runtime has its own errors (DecodeError, Fail, cv2.error...)
+        runtime_name = "OpenCV's dnn" if chosen == "opencv" else chosen
+        raise unreadable(f"{runtime_name} cannot read it as an ONNX network (is it corrupt or "
+                         "truncated?)") from exc
+    missing = [name for name in outputs if name not in backend.output_names()]
+    if missing:
+        raise unreadable(f"it gives the outputs {', '.join(backend.output_names())}, where a {role} "
+                         f"gives {', '.join(outputs)} (another role's file, given in the wrong place?)")
+    return backend
+
+
+def runtime_version(runtime: str) -> str:
+    """The installed version of ``runtime`` (``"onnxruntime"`` or ``"opencv"``: ``cv2``'s), as
+    its module says it; the boxes are the same for the same runtime and version only."""
+    import importlib
+
+    module = importlib.import_module("onnxruntime" if runtime == "onnxruntime" else "cv2")
+    return str(getattr(module, "__version__", "unknown"))
+
+
+def _importable(module: str) -> bool:
+    """Whether ``module`` can be imported (the import is done: a later one is free)."""
+    try:
+        __import__(module)
     except ImportError:
         return False
     return True

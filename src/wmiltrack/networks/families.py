@@ -17,7 +17,7 @@ from .files import MODELS
 from .nanotrack import nanotrack_step
 from .siamese import SiameseStep
 
-__all__ = ["FAMILIES", "load_siamese", "siamese_networks"]
+__all__ = ["FAMILIES", "check_siamese", "load_siamese", "siamese_networks"]
 
 FAMILIES: dict[str, Callable[..., SiameseStep]] = {"nanotrack": nanotrack_step}
 """Each family's builder: ``builder(version, *, backbone, head, runtime, threads)``."""
@@ -41,3 +41,22 @@ def load_siamese(network: str, *, backbone: str | Path | None = None,
     s = MODELS[network]
     return FAMILIES[s.family](s.version, backbone=backbone, head=head, runtime=runtime,
                               threads=threads)
+
+
+_CHECKED: set[tuple[object, ...]] = set()
+
+
+def check_siamese(network: str, *, backbone: Path, head: Path, runtime: str = "auto",
+                  threads: int = 1) -> None:
+    """Load the files of ``network`` as :func:`load_siamese` does, so that a file that cannot
+    be run (empty, corrupt, truncated, another role's) is a
+    :class:`~wmiltrack.networks.files.ModelFileUnreadable` when a tracker is built, not at its
+    first frame. Done once per file (path, size and time of change) and runtime: a tracker
+    built again and again (``eval``'s runs) pays for one load."""
+    key = (network, runtime, threads,
+           *((str(p), p.stat().st_size, p.stat().st_mtime_ns) if p.is_file() else (str(p),)
+             for p in (Path(backbone), Path(head))))
+    if key in _CHECKED:
+        return
+    load_siamese(network, backbone=backbone, head=head, runtime=runtime, threads=threads)
+    _CHECKED.add(key)

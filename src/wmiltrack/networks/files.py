@@ -42,6 +42,7 @@ __all__ = [
     "FileLookup",
     "ModelFile",
     "ModelFileMismatch",
+    "ModelFileUnreadable",
     "ModelFilesMissing",
     "ModelSet",
     "fetch",
@@ -52,6 +53,7 @@ __all__ = [
     "models_dir_origin",
     "nanotrack_files",
     "nanotrack_versions",
+    "unreadable_message",
 ]
 
 MODEL_ENV: dict[str, dict[str, str]] = {
@@ -89,6 +91,25 @@ class ModelFilesMissing(FileNotFoundError, TrackerUnavailable):
     def __init__(self, message: str, problems: tuple[FileLookup, ...] = ()) -> None:
         super().__init__(message)
         self.problems = problems
+
+
+class ModelFileUnreadable(ModelFilesMissing):
+    """A model file is there but cannot be run as the file it was given for: empty, corrupt or
+    truncated, a folder, or another role's file (a head given as the backbone). Its message is
+    one line naming the file, its role and the fix; a tracker that cannot start, as for
+    :class:`ModelFilesMissing`."""
+
+
+def unreadable_message(path: Path, role: str, reason: str, model: str | None = None) -> str:
+    """The one line of a :class:`ModelFileUnreadable`: the file at ``path``, given as the
+    ``role`` of the set ``model`` (None: no set known), ``reason`` what is wrong, and how to
+    give the right file or fetch the set again."""
+    s = MODELS.get(model or "")
+    if s is None:
+        return f"the {role} file {path} cannot be used: {reason}; give the right file"
+    return (f"{s.title}'s {role} {path} cannot be used: {reason}; give the right file "
+            f"({role}=FILE in Python, {s.options[role]} FILE on the command line, or "
+            f"{s.env[role]}), or fetch the set again: `wmiltrack models fetch {s.name}`")
 
 
 class ModelFileMismatch(ValueError):

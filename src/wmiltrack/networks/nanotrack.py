@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .backends import load_backend
+from .backends import choose_runtime, load_backend
 from .files import MODELS, nanotrack_files, nanotrack_versions
 from .siamese import Candidate, FloatBox, box_centre, context_side, crop
 
@@ -43,6 +43,7 @@ EXEMPLAR = 127
 INSTANCE = 255
 STRIDE = 16
 MIN_SIDE = 10.0
+BACKBONE_OUTPUTS = ("output",)
 HEAD_OUTPUTS = ("output1", "output2")
 
 
@@ -74,13 +75,20 @@ class NanoNetwork:
 
     ``features(crop)`` gives the backbone's map of a square BGR uint8 crop (127 or 255 px);
     ``head(template, search)`` the head's (scores, boxes): log-odds of the two classes
-    ``(2, n, n)`` and the four side distances ``(4, n, n)``.
+    ``(2, n, n)`` and the four side distances ``(4, n, n)``. ``version`` names the set in the
+    message of a file that cannot be run; ``runtime`` is the runtime that runs both files
+    (``"onnxruntime"`` or ``"opencv"``, ``"auto"`` resolved).
     """
 
-    def __init__(self, backbone: Path, head: Path, runtime: str = "auto", threads: int = 1) -> None:
+    def __init__(self, backbone: Path, head: Path, runtime: str = "auto", threads: int = 1, *,
+                 version: str | None = None) -> None:
         self.files = (Path(backbone), Path(head))
-        self._backbone = load_backend(self.files[0], runtime, threads, dynamic=True)
-        self._head = load_backend(self.files[1], runtime, threads)
+        self.runtime = choose_runtime(runtime, threads)
+        model = None if version is None else f"nanotrack-{version}"
+        self._backbone = load_backend(self.files[0], self.runtime, threads, dynamic=True,
+                                      role="backbone", model=model, outputs=BACKBONE_OUTPUTS)
+        self._head = load_backend(self.files[1], self.runtime, threads, role="head", model=model,
+                                  outputs=HEAD_OUTPUTS)
 
     def features(self, crop: np.ndarray) -> np.ndarray:
         """The backbone's feature map ``(1, c, h, w)`` of a square BGR crop."""
@@ -101,7 +109,8 @@ def nanotrack_step(version: str = "v3", *, backbone: str | Path | None = None,
     precedence) and run by ``runtime`` on ``threads`` threads."""
     constants = nanotrack_constants(version)
     files = nanotrack_files(version, backbone, head)
-    return NanoTrackStep(NanoNetwork(files[0], files[1], runtime, threads), constants)
+    return NanoTrackStep(NanoNetwork(files[0], files[1], runtime, threads, version=version),
+                         constants)
 
 
 class NanoTrackStep:
