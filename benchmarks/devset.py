@@ -77,7 +77,7 @@ def sparse_sequences(roots: list[Path]) -> set[str]:
     return out
 
 
-def _find(roots: list[Path]) -> dict[str, Path]:
+def find_sequences(roots: list[Path]) -> dict[str, Path]:
     """Sequence name -> the root that holds it (names must be unique over the roots)."""
     where: dict[str, Path] = {}
     for root in roots:
@@ -178,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if not args.roots:
         ap.error("give --roots or set WMILTRACK_DEVSET")
-    where = _find([Path(r) for r in args.roots.split(",")])
+    where = find_sequences([Path(r) for r in args.roots.split(",")])
     names = sorted(where) if args.sequences is None else sorted(args.sequences.split(","))
     gts = {n: load_dataset(where[n], [n])[0].groundtruth for n in names}
     specs = split_specs(args.trackers)
