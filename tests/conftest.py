@@ -229,3 +229,18 @@ def _model_variables_restored() -> object:
             os.environ.pop(k, None)
         else:
             os.environ[k] = v
+
+
+#: The variables that give NanoTrack's files to every tracker that runs it.
+NANO_ENV = ("WMILTRACK_NANO_BACKBONE", "WMILTRACK_NANO_HEAD")
+
+
+@pytest.fixture()
+def no_models(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """An empty models folder and no model file in the environment."""
+    for name in NANO_ENV:
+        monkeypatch.delenv(name, raising=False)
+    folder = tmp_path / "no-models"
+    folder.mkdir()
+    monkeypatch.setenv("WMILTRACK_MODELS", str(folder))
+    return folder

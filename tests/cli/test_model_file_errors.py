@@ -30,7 +30,6 @@ from wmiltrack.networks.nanotrack import NanoNetwork
 from wmiltrack.trackers import make_tracker
 
 RUNTIMES = ("onnxruntime", "opencv")
-NANO_ENV = ("WMILTRACK_NANO_BACKBONE", "WMILTRACK_NANO_HEAD")
 
 
 def _corrupt(right: Path, to: Path) -> Path:
@@ -67,17 +66,6 @@ BAD_BACKBONES: dict[str, tuple[Callable[[Path, Path], Path], str]] = {
 }
 #: The fix each line gives: another file by its option, or the set fetched again.
 FIX = re.compile(r"--nano-backbone|wmiltrack models fetch nanotrack-v3")
-
-
-@pytest.fixture()
-def no_models(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """An empty models folder and no model file in the environment."""
-    for name in NANO_ENV:
-        monkeypatch.delenv(name, raising=False)
-    folder = tmp_path / "no-models"
-    folder.mkdir()
-    monkeypatch.setenv("WMILTRACK_MODELS", str(folder))
-    return folder
 
 
 @pytest.fixture()

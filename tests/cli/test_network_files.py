@@ -12,26 +12,13 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import REPO_ROOT, write_generated_otb
+from conftest import NANO_ENV, REPO_ROOT, write_generated_otb
 
 from wmiltrack import Tracker, cli
 from wmiltrack.compat import TrackerRCWMILNano
 from wmiltrack.integrations.opencv_wheels import TrackerUnavailable
 from wmiltrack.networks.files import ModelFilesMissing
 from wmiltrack.trackers import make_tracker
-
-NANO_ENV = ("WMILTRACK_NANO_BACKBONE", "WMILTRACK_NANO_HEAD")
-
-
-@pytest.fixture()
-def no_models(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """An empty models folder and no model file in the environment."""
-    for name in NANO_ENV:
-        monkeypatch.delenv(name, raising=False)
-    folder = tmp_path / "no-models"
-    folder.mkdir()
-    monkeypatch.setenv("WMILTRACK_MODELS", str(folder))
-    return folder
 
 
 @pytest.fixture()
