@@ -24,7 +24,6 @@ from wmiltrack.engine.judge import NO_EVIDENCE, FrameJudge, JudgeSettings
 from wmiltrack.engine.state import ExpertReport, FrameState, Verdict
 from wmiltrack.eval.metrics import iou
 
-
 _FRAME = np.zeros((100, 100), dtype=np.uint8)
 
 
@@ -264,3 +263,57 @@ def test_every_view_of_rcwmil_nano_shows_the_reported_result(
         inner = t._last.box  # noqa: SLF001 - the inner tracker's own box, to see the test bites
         differs += tuple(float(v) for v in inner) != r.box
     assert differs > 0  # frames where the result is not the inner tracker's box
+
+
+class _ToyJudge:
+    """A judge of one's own: on every third frame it doubts (not ``ok``, nothing learns);
+    on the others it takes the second expert's box for the frame and lets the tracker learn
+    there (moved to its centre). It keeps the expert's reports it saw."""
+
+    def __init__(self, settings: object, frame: np.ndarray, box: tuple[int, ...]) -> None:
+        self.reports: list[ExpertReport] = []
+
+    def start(self, frame: np.ndarray, box: tuple[int, ...]) -> None:
+        self.frames = 0
+
+    def back(self, state: FrameState, evidence: object) -> bool:
+        return True
+
+    def verdict(self, state: FrameState, evidence: object) -> FrameState:
+        from wmiltrack.engine.geometry import placed_at
+
+        assert state.expert is not None  # the network located before the judge
+        self.reports.append(state.expert)
+        self.frames += 1
+        if self.frames % 3 == 0:
+            return state.judged(Verdict.DOUBTFUL, False, False, False)
+        fh, fw = state.frame.shape[:2]
+        box = placed_at(state.box, state.expert.box, fw, fh)
+        return state.evolve(box=box, exact=state.expert.box, verdict=Verdict.TRACKED, ok=True,
+                            learns=True, steady=False)
+
+
+def test_a_judge_of_ones_own_gates_learning_and_sets_ok_on_rcwmil_nano(
+        stand_in_networks: dict[str, tuple[Path, Path]]) -> None:
+    """rcwmil-nano with a toy judge (``parts={"judge": ...}``): the judge sees the network's
+    evidence on every frame; its verdict sets ``ok`` and the box, and gates learning: the
+    appearance model learns only on the frames it lets learn, at the box it gave."""
+    files = {"backbone": str(stand_in_networks["v3"][0]), "head": str(stand_in_networks["v3"][1])}
+    seq = make_sequence(16, seed=3, occlusion=False)
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    t = wmiltrack.Tracker("rcwmil-nano", seed=0, parts={"judge": _ToyJudge}, **files)
+    t.init(frames[0], tuple(gt[0]))
+    judge = t.parts.judge
+    assert isinstance(judge, _ToyJudge)
+    for i, f in enumerate(frames[1:], start=1):
+        r = t.update(f)
+        report = judge.reports[-1]
+        positives = t.samples()["positive"]
+        if i % 3 == 0:
+            assert not r.ok and len(positives) == 0  # not learnt
+        else:
+            assert r.ok and r.box == report.box
+            x, y, w, h = t._last.box  # noqa: SLF001 - the tracker's box, moved to the network's
+            assert abs(x + w / 2 - (r.box[0] + r.box[2] / 2)) <= 1
+            assert len(positives) > 0 and [x, y] in positives.tolist()  # learnt there
+    assert len(judge.reports) == len(frames) - 1

@@ -28,12 +28,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from .frames import IntBox
 from .geometry import overlap, placed_at, within
 from .policy import logistic
 from .recovery import check_recover_memory
 from .settings import check_ints, check_numbers, need
-from .state import ExpertReport, FloatBox, FrameState, Verdict
+from .state import ExpertReport, FrameState, Verdict
 
 __all__ = ["NO_EVIDENCE", "Evidence", "FrameJudge", "JudgeSettings"]
 
