@@ -1,5 +1,5 @@
-"""rcwmil-nano: a second expert (engine/experts.py) under the one judge (engine/judge.py); NanoTrack's network and
-step alone are tested in tests/networks.
+"""rcwmil-nano: a second expert (engine/experts.py) under the one judge (engine/judge.py);
+NanoTrack's network and step alone are tested in tests/networks.
 
 The judge's rules are checked without the network. What checks NanoTrack itself (its step,
 both runtimes on its files, how well rcwmil-nano follows a target) reads its model files from

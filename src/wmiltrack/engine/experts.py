@@ -176,11 +176,12 @@ class NetworkExpert:
         if state.verdict is Verdict.FOUND:
             self._sweep = []
 
-    def _places(self, img: np.ndarray, tracker: IntBox, lost_for: int) -> list[tuple[float, float]]:
+    def _places(self, img: np.ndarray, tracker_box: IntBox, lost_for: int
+                ) -> list[tuple[float, float]]:
         """The centres this lost frame searches besides the network's own: the tracker's box,
         then, after ``redetect_after`` lost frames, the next ``redetect_windows`` of the
         whole-frame sweep."""
-        places = [centre(tracker)]
+        places = [centre(tracker_box)]
         n = self.settings.redetect_windows
         if n <= 0 or lost_for < self.settings.redetect_after:
             return places

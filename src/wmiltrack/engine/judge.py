@@ -232,17 +232,18 @@ NO_EVIDENCE = Evidence()
 class FrameJudge:
     """The built-in judge (:class:`JudgeSettings`).
 
-    State: ``lost`` whether the memory of the target holds it for lost, ``turned`` whether the
+    State: ``memory_lost`` whether the memory of the target holds it for lost, ``turned`` whether the
     last frame changed that; ``reference`` the running mean of the classifier's confidence over
     tracked frames (None right after the start or a re-detection), ``witnesses`` those of the
     cues' own confidences, ``seen`` the tracked frames judged since then; with a second
     expert, ``typical`` the running mean of its likeness over tracked frames and ``shown`` the
-    last measured confidence.
+    last measured confidence, ``experts_lost`` whether the second expert's rule holds the
+    target for lost.
     """
 
     def __init__(self, settings: JudgeSettings) -> None:
         self.settings = settings
-        self.lost = False
+        self.memory_lost = False
         self.turned = False
         self._run = 0  # frames in a row that argue for changing the memory's verdict
         self.reference: float | None = None
@@ -252,7 +253,7 @@ class FrameJudge:
 
     def start(self, frame: object, box: object) -> None:
         """No history: the first frame is tracked."""
-        self.lost = self.turned = False
+        self.memory_lost = self.turned = False
         self._run = 0
         self._forget()
         self._restart_experts()
@@ -300,7 +301,7 @@ class FrameJudge:
                                     ok=False, learns=False, steady=False)
             self._remember(state.conf, evidence.witnesses)
         tracked = self._tracked(state.score, evidence.first_peak)
-        if self.lost and self.turned and self.settings.judge_holds:  # the box stays
+        if self.memory_lost and self.turned and self.settings.judge_holds:  # the box stays
             return state.evolve(score=0.0, verdict=Verdict.LOST, ok=False, learns=False,
                                 steady=False)
         return state.judged(_TRACKED if tracked else _DOUBTFUL, tracked, self._learns(),
@@ -322,10 +323,10 @@ class FrameJudge:
     def _learns(self) -> bool:
         """Whether the parts learn from a frame that is not lost (not while the memory holds
         the target for lost, with ``judge_gates``)."""
-        return not (self.lost and self.settings.judge_gates)
+        return not (self.memory_lost and self.settings.judge_gates)
 
     # -- the threshold and the memory of the target --------------------------------------
-    def judged(self, score: float, first_peak: float) -> float:
+    def memory_confidence(self, score: float, first_peak: float) -> float:
         """The memory's judged confidence in [0, 1] of one frame (NaN without a peak)."""
         s = self.settings
         if not (math.isfinite(first_peak) and math.isfinite(score)):
@@ -342,14 +343,14 @@ class FrameJudge:
         s = self.settings
         if s.judge_memory <= 0:
             return score >= s.lost_threshold
-        c = self.judged(score, first_peak)
-        against = c < s.judge_low if not self.lost else c > s.judge_high  # False for NaN
+        c = self.memory_confidence(score, first_peak)
+        against = c < s.judge_low if not self.memory_lost else c > s.judge_high  # False for NaN
         self._run = self._run + 1 if against else 0
-        self.turned = self._run >= (s.judge_leave if self.lost else s.judge_enter)
+        self.turned = self._run >= (s.judge_leave if self.memory_lost else s.judge_enter)
         if self.turned:
-            self.lost = not self.lost
+            self.memory_lost = not self.memory_lost
             self._run = 0
-        return not self.lost
+        return not self.memory_lost
 
     # -- the second expert ------------------------------------------------------------------
     def _weigh_experts(self, own: FrameState, report: ExpertReport) -> FrameState:

@@ -681,15 +681,15 @@ class Tracker:
         box, raw, searched = _moved(origin, grids, (yield search))
         return state.located(origin, box, raw, searched, state.learnt)
 
-    def _search(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]],
+    def _search(self, img: np.ndarray, origin: IntBox, grids: list[tuple[int, int]],
                 margin: int, *, shared: bool = False) -> Search:
-        """The core's search request from ``origin`` over ``stages`` (the one place a frame's
+        """The core's search request from ``origin`` over ``grids`` (the one place a frame's
         search is built): the appearance model makes its integral image ready (``margin``
         pixels around ``origin``; with ``shared``, the borrowed one it holds), then the cues
         give their tables (:meth:`_cue_tables`), which the search merges in."""
         model = self._parts.appearance
         frame, roi = model.prepare(None if shared else img, origin, margin)
-        return model.search_request(origin, stages, self._frame_wh, frame, roi,
+        return model.search_request(origin, grids, self._frame_wh, frame, roi,
                                     self._cue_tables(img, origin))
 
     def _origin(self, frame: np.ndarray | None, box: IntBox) -> IntBox:
