@@ -2,9 +2,9 @@
 
 A frame walks through one list of stages (:attr:`~wmiltrack.engine.tracker.Tracker.stages`:
 locate, a second expert's locate, rescale, score, recover, judge, learn, follow); each stage
-takes the record and returns
-a new one, so a value of the frame is written once, by the stage that finds it, and read by the
-stages after it instead of travelling through the tracker's attributes. The record of the last
+takes the record and returns a new one, so a value of the frame is written once, by the stage
+that finds it, and read by the stages after it instead of travelling through the tracker's
+attributes. The record of the last
 frame is the tracker's whole state between frames (its box, score, ``ok``, and whether the
 target is lost).
 """
