@@ -1,5 +1,5 @@
-"""rcwmil-nano's two experts under one judge (engine/experts.py); NanoTrack's network and
-step alone are tested in tests/networks.
+"""rcwmil-nano: a second expert (engine/experts.py) under the one judge (engine/judge.py);
+NanoTrack's network and step alone are tested in tests/networks.
 
 The judge's rules are checked without the network. What checks NanoTrack itself (its step,
 both runtimes on its files, how well rcwmil-nano follows a target) reads its model files from
@@ -20,38 +20,58 @@ import pytest
 
 import wmiltrack
 from wmiltrack.data.synthetic import make_sequence
-from wmiltrack.engine.experts import ExpertJudge, ExpertSettings, Verdict
+from wmiltrack.engine.judge import NO_EVIDENCE, FrameJudge, JudgeSettings
+from wmiltrack.engine.state import ExpertReport, FrameState, Verdict
 from wmiltrack.eval.metrics import iou
+
+_FRAME = np.zeros((100, 100), dtype=np.uint8)
+
+
+def _seen(judge: FrameJudge, likeness: float, agree: bool) -> Verdict:
+    """The one judge's verdict of a frame where a second expert reports ``likeness`` for a box
+    that the tracker (score 1: ``ok``) agrees with or not (``agree``); a frame judged lost
+    makes the next one start lost, as in the tracker."""
+    mine = (10, 10, 20, 20)
+    theirs = (10.0, 10.0, 20.0, 20.0) if agree else (60.0, 60.0, 20.0, 20.0)
+    state = FrameState(_FRAME, mine, lost=judge.experts_lost, box=mine, conf=1.0, score=1.0,
+                       expert=ExpertReport(theirs, lambda: likeness))
+    out = judge.verdict(state, NO_EVIDENCE)
+    assert out.verdict is not None and out.exact is not None
+    return out.verdict
+
+
+def _judge(**values: object) -> FrameJudge:
+    return FrameJudge(JudgeSettings(**values))  # type: ignore[arg-type]
 
 
 def test_judge_needs_enough_frames_in_a_row_to_turn() -> None:
-    """lost_frames below like_low turn the verdict to lost, found_frames above like_high turn
-    it back; a good frame in between restarts the count."""
-    judge = ExpertJudge(ExpertSettings(like_low=0.5, like_high=0.6, like_drop=0.0, like_found=0.0,
-                                       lost_frames=3, found_frames=2))
-    seen = [judge.verdict(v, False) for v in (0.9, 0.4, 0.4, 0.9, 0.4, 0.4, 0.4, 0.7, 0.55, 0.7, 0.7)]
-    assert seen == [Verdict.TRACKED, Verdict.DOUBTFUL, Verdict.DOUBTFUL, Verdict.TRACKED,
-                    Verdict.DOUBTFUL, Verdict.DOUBTFUL, Verdict.LOST, Verdict.LOST,
-                    Verdict.LOST, Verdict.LOST, Verdict.FOUND]
-    assert not judge.lost
+    """judge_enter frames below like_low turn the verdict to lost, judge_leave above like_high
+    turn it back; a good frame in between restarts the count; the frames counting towards lost
+    stay tracked (ok)."""
+    judge = _judge(like_low=0.5, like_high=0.6, like_drop=0.0, like_found=0.0, judge_enter=3,
+                   judge_leave=2)
+    seen = [_seen(judge, v, False) for v in (0.9, 0.4, 0.4, 0.9, 0.4, 0.4, 0.4, 0.7, 0.55, 0.7, 0.7)]
+    T, L, F = Verdict.TRACKED, Verdict.LOST, Verdict.FOUND
+    assert seen == [T, T, T, T, T, T, L, L, L, L, F]
+    assert not judge.experts_lost
 
 
 def test_judge_drop_from_the_running_mean_and_agreement() -> None:
     """A fall to below like_drop of the tracked frames' mean counts against the target even
     above like_low; frames on which the experts agree never count against it."""
-    judge = ExpertJudge(ExpertSettings(like_low=0.3, like_high=0.6, like_drop=0.8, like_rate=0.05,
-                                       lost_frames=2, found_frames=1))
-    assert [judge.verdict(v, False) for v in (0.9, 0.9)] == [Verdict.TRACKED] * 2
+    judge = _judge(like_low=0.3, like_high=0.6, like_drop=0.8, like_rate=0.05, judge_enter=2,
+                   judge_leave=1)
+    assert [_seen(judge, v, False) for v in (0.9, 0.9)] == [Verdict.TRACKED] * 2
     assert judge.typical == pytest.approx(0.9)
-    assert judge.verdict(0.65, True) is Verdict.TRACKED       # agreement outvotes the drop
-    assert judge.verdict(0.65, False) is Verdict.DOUBTFUL     # 0.65 < 0.8 x typical
-    assert judge.verdict(0.65, False) is Verdict.LOST
-    assert judge.verdict(0.65, False) is Verdict.LOST         # above like_high, not the floor
-    assert judge.verdict(0.95, False) is Verdict.FOUND
+    assert _seen(judge, 0.65, True) is Verdict.TRACKED       # agreement outvotes the drop
+    assert _seen(judge, 0.65, False) is Verdict.TRACKED      # 0.65 < 0.8 x typical: one against
+    assert _seen(judge, 0.65, False) is Verdict.LOST
+    assert _seen(judge, 0.65, False) is Verdict.LOST         # above like_high, not the floor
+    assert _seen(judge, 0.95, False) is Verdict.FOUND
 
 
 def test_judge_confidence_is_monotone_and_half_at_the_middle() -> None:
-    judge = ExpertJudge(ExpertSettings(like_low=0.5, like_high=0.6, like_drop=0.0))
+    judge = _judge(like_low=0.5, like_high=0.6, like_drop=0.0)
     values = [judge.confidence(v) for v in np.linspace(-1, 1, 41)]
     assert all(a <= b for a, b in zip(values, values[1:]))
     assert judge.confidence(0.5) == pytest.approx(0.5)
@@ -60,7 +80,7 @@ def test_judge_confidence_is_monotone_and_half_at_the_middle() -> None:
 
 @pytest.mark.parametrize("bad", [{"network": "nanotrack-v9"}, {"network_runtime": "cuda"},
                                  {"network_threads": 0}, {"expert_blend": 1.5},
-                                 {"like_low": 0.7, "like_high": 0.6}, {"lost_frames": 0},
+                                 {"like_low": 0.7, "like_high": 0.6}, {"judge_enter": 0},
                                  {"redetect_windows": -1}])
 def test_expert_settings_are_checked(bad: dict[str, object]) -> None:
     with pytest.raises(ValueError, match=next(iter(bad))):
@@ -201,3 +221,57 @@ def test_every_view_of_rcwmil_nano_shows_the_reported_result(
         inner = t._last.box  # noqa: SLF001 - the inner tracker's own box, to see the test bites
         differs += tuple(float(v) for v in inner) != r.box
     assert differs > 0  # frames where the result is not the inner tracker's box
+
+
+class _ToyJudge:
+    """A judge of one's own: on every third frame it doubts (not ``ok``, nothing learns);
+    on the others it takes the second expert's box for the frame and lets the tracker learn
+    there (moved to its centre). It keeps the expert's reports it saw."""
+
+    def __init__(self, settings: object, frame: np.ndarray, box: tuple[int, ...]) -> None:
+        self.reports: list[ExpertReport] = []
+
+    def start(self, frame: np.ndarray, box: tuple[int, ...]) -> None:
+        self.frames = 0
+
+    def back(self, state: FrameState, evidence: object) -> bool:
+        return True
+
+    def verdict(self, state: FrameState, evidence: object) -> FrameState:
+        from wmiltrack.engine.geometry import placed_at
+
+        assert state.expert is not None  # the network located before the judge
+        self.reports.append(state.expert)
+        self.frames += 1
+        if self.frames % 3 == 0:
+            return state.judged(Verdict.DOUBTFUL, False, False, False)
+        fh, fw = state.frame.shape[:2]
+        box = placed_at(state.box, state.expert.box, fw, fh)
+        return state.evolve(box=box, exact=state.expert.box, verdict=Verdict.TRACKED, ok=True,
+                            learns=True, steady=False)
+
+
+def test_a_judge_of_ones_own_gates_learning_and_sets_ok_on_rcwmil_nano(
+        stand_in_networks: dict[str, tuple[Path, Path]]) -> None:
+    """rcwmil-nano with a toy judge (``parts={"judge": ...}``): the judge sees the network's
+    evidence on every frame; its verdict sets ``ok`` and the box, and gates learning: the
+    appearance model learns only on the frames it lets learn, at the box it gave."""
+    files = {"backbone": str(stand_in_networks["v3"][0]), "head": str(stand_in_networks["v3"][1])}
+    seq = make_sequence(16, seed=3, occlusion=False)
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+    t = wmiltrack.Tracker("rcwmil-nano", seed=0, parts={"judge": _ToyJudge}, **files)
+    t.init(frames[0], tuple(gt[0]))
+    judge = t.parts.judge
+    assert isinstance(judge, _ToyJudge)
+    for i, f in enumerate(frames[1:], start=1):
+        r = t.update(f)
+        report = judge.reports[-1]
+        positives = t.samples()["positive"]
+        if i % 3 == 0:
+            assert not r.ok and len(positives) == 0  # not learnt
+        else:
+            assert r.ok and r.box == report.box
+            x, y, w, h = t._last.box  # noqa: SLF001 - the tracker's box, moved to the network's
+            assert abs(x + w / 2 - (r.box[0] + r.box[2] / 2)) <= 1
+            assert len(positives) > 0 and [x, y] in positives.tolist()  # learnt there
+    assert len(judge.reports) == len(frames) - 1

@@ -135,8 +135,9 @@ def test_a_stage_of_ones_own_sees_tracked_and_lost_frames(sequence) -> None:
 
 @pytest.mark.usefixtures("nano_in_environment")  # (the logic: NanoTrack's files or a stand-in)
 def test_the_second_expert_is_a_stage_too(sequence) -> None:
-    """rcwmil-nano's experts are the consult stage: a stage after it sees the experts' result
-    in the record, and without it the tracker is rcwmil-cf alone (the same boxes)."""
+    """rcwmil-nano's network is a stage before the judge: a stage after the judge sees the
+    network's report and the frame's result in the one record (the same as ``update``'s), and
+    without the network's stage the tracker is rcwmil-cf alone (the same boxes)."""
     frames, gt = sequence
     seen: list[FrameState] = []
 
@@ -145,12 +146,15 @@ def test_the_second_expert_is_a_stage_too(sequence) -> None:
         return state
 
     t = Tracker("rcwmil-nano", seed=0)
-    t.stages = (*t.stages, after)
+    stages = list(t.stages)
+    stages.insert(stages.index(Tracker._judge) + 1, after)
+    t.stages = tuple(stages)
     t.init(frames[0], gt[0])
     results = [t.update(f) for f in frames[1:6]]
-    assert [s.reported for s in seen] == results  # (the experts' fractional boxes)
+    assert all(s.expert is not None and s.exact is not None for s in seen)
+    assert [(s.exact, s.score, s.ok) for s in seen] == [(r.box, r.score, r.ok) for r in results]
     alone = Tracker("rcwmil-nano", seed=0)
-    alone.stages = tuple(s for s in alone.stages if s.__name__ != "_consult")
+    alone.stages = tuple(s for s in alone.stages if s.__name__ != "_locate_expert")
     cf = Tracker("rcwmil-cf", seed=0)
     np.testing.assert_array_equal(alone.track(frames[:10], gt[0]), cf.track(frames[:10], gt[0]))
 

@@ -34,10 +34,10 @@ def _judge(**kw: float) -> _Judge:
 
 def test_judged_confidence_is_the_documented_logistic() -> None:
     j = _judge()
-    assert j.judged(0.5, 0.082) == pytest.approx(0.5)
+    assert j.memory_confidence(0.5, 0.082) == pytest.approx(0.5)
     z = 8.0 * (0.7 - 0.5) + 3.0 * math.log(0.2 / 0.082)
-    assert j.judged(0.7, 0.2) == pytest.approx(1.0 / (1.0 + math.exp(-z)))
-    assert math.isnan(j.judged(0.7, math.nan))
+    assert j.memory_confidence(0.7, 0.2) == pytest.approx(1.0 / (1.0 + math.exp(-z)))
+    assert math.isnan(j.memory_confidence(0.7, math.nan))
 
 
 def test_lost_after_three_low_frames_in_a_row_and_back_after_two_high() -> None:
@@ -105,7 +105,7 @@ def test_while_the_judge_holds_the_target_for_lost_nothing_learns() -> None:
         t.update(f)
         judge = t.parts.judge
         assert judge is not None
-        if judge.lost and not judge.turned:
+        if judge.memory_lost and not judge.turned:
             judged_lost += 1
             pos, neg = t.samples()["positive"], t.samples()["negative"]
             assert len(pos) == 0 and len(neg) == 0
@@ -125,7 +125,7 @@ def test_when_the_judge_turns_to_lost_the_tracker_enters_the_lost_state() -> Non
         t.update(f)
         judge = t.parts.judge
         assert judge is not None
-        if judge.turned and judge.lost:
+        if judge.turned and judge.memory_lost:
             assert t.lost  # the recovery looks for the target from the next frame
             entered += 1
     assert entered >= 1

@@ -141,8 +141,7 @@ def test_each_part_reads_only_its_own_settings(
         held = [k for k, v in vars(part).items() if isinstance(v, Params)]
         assert not held, f"{type(part).__name__} holds the whole Params in {held}"
     # no part can call back into the tracker: none holds it or one of its bound methods
-    experts = [parts.experts] if parts.experts is not None else []
-    for part in (*parts.others(), parts.policy, parts.appearance, *experts):
+    for part in (*parts.others(), parts.policy, parts.appearance):
         back = [k for k, v in vars(part).items()
                 if v is t or getattr(v, "__self__", None) is t]
         assert not back, f"{type(part).__name__} holds the tracker in {back}"
@@ -170,11 +169,10 @@ def _held(part: Any) -> dict[int, tuple[str, Any]]:
 
 def _shared_objects(parts: Any) -> list[tuple[str, str, str]]:
     """(part, other part, what) for each object two parts hold, or a part that holds another."""
-    experts = [parts.experts] if parts.experts is not None else []
     report = getattr(parts.policy, "report", None)
     own: list[Any] = []
     for part in (*parts.others(), parts.policy, *([report] if report is not None else []),
-                 parts.appearance, *experts):
+                 parts.appearance):
         if not any(part is seen for seen in own):
             own.append(part)
     found = []

@@ -139,9 +139,9 @@ def track_checked(tracker: wmiltrack.Tracker, frames: Sequence[Frame], box: Any)
         lost = tracker.lost
         judge = tracker.parts.judge
         memory = tracker.params.judge_memory > 0  # (the judge's memory of the target)
-        tracked = not judge.lost if memory else r.score >= tracker.params.lost_threshold
-        if tracker.parts.experts is not None:
-            lost, tracked = False, not tracker.parts.experts.judge.lost
+        tracked = not judge.memory_lost if memory else r.score >= tracker.params.lost_threshold
+        if tracker.parts.expert is not None:  # the experts' verdict: ok unless lost
+            tracked = True
         if r.ok != (tracked and not lost) or (lost and r.score):
             return boxes, f"frame {i}: ok={r.ok} disagrees with score {r.score} (lost: {lost})"
     return boxes, None

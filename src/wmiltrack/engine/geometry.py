@@ -1,6 +1,6 @@
 """Box geometry that several parts share: a box's centre, a box of another size on the same
 centre, two boxes' overlap, a box cut to the frame, and the region an integral image must hold
-around a box. (No part needs to import another part for these.)"""
+around a box, a box moved to another's centre. (No part needs to import another part for these.)"""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 from .frames import IntBox
 
-__all__ = ["centre", "centred", "overlap", "roi_around", "within"]
+__all__ = ["centre", "centred", "overlap", "placed_at", "roi_around", "within"]
 
 #: A box ``(x, y, w, h)`` of whole or fractional pixels.
 AnyBox = Sequence[float]
@@ -50,3 +50,13 @@ def within(box: AnyBox, frame_w: int, frame_h: int) -> tuple[float, float, float
     x1 = min(max(x + w, x0 + 1.0), float(frame_w))
     y1 = min(max(y + h, y0 + 1.0), float(frame_h))
     return x0, y0, x1 - x0, y1 - y0
+
+
+def placed_at(box: IntBox, other: AnyBox, frame_w: int, frame_h: int) -> IntBox:
+    """``box`` (whole pixels) moved to the centre of ``other`` at its own size, rounded and
+    kept inside a ``frame_w x frame_h`` frame: a tracker handed the target by another expert."""
+    x, y, w, h = (float(v) for v in other)
+    _, _, bw, bh = box
+    nx = min(max(int(round(x + w / 2 - bw / 2)), 0), max(frame_w - bw, 0))
+    ny = min(max(int(round(y + h / 2 - bh / 2)), 0), max(frame_h - bh, 0))
+    return nx, ny, bw, bh

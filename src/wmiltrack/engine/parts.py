@@ -1,5 +1,5 @@
 """What the tracker asks of each kind of part: the scale estimator, the motion model, the
-re-detection, the judge and the reported score (the cues' interface is
+re-detection, a second expert, the judge and the reported score (the cues' interface is
 :class:`~wmiltrack.engine.cues.Cue`; an appearance model is a
 :class:`~wmiltrack.engine.appearance.HaarAppearance`).
 
@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 import numpy as np
 
 from .appearance import AppearanceSettings, HaarAppearance
+from .experts import ExpertSettings
 from .frames import IntBox
 from .judge import Evidence, JudgeSettings
 from .motion import MotionSettings
@@ -25,10 +26,10 @@ from .recovery import RecoverySettings
 from .scale import ScaleSettings
 
 if TYPE_CHECKING:
-    from .state import FrameState
+    from .state import ExpertReport, FrameState
 
 __all__ = ["PART_KINDS", "PART_SETTINGS", "Judge", "MotionModel", "PartFactory", "Recovery",
-           "ScaleEstimator", "ScorePolicy"]
+           "ScaleEstimator", "ScorePolicy", "SecondExpert"]
 
 
 @runtime_checkable
@@ -127,13 +128,37 @@ class Recovery(Protocol):
 
 
 @runtime_checkable
+class SecondExpert(Protocol):
+    """Another locator beside the tracker, whose evidence the judge weighs with the tracker's:
+    it locates the target on each frame (a stage right after the tracker's locate, before the
+    judge) and reports what it saw into the frame's record (``FrameState.expert``); after the
+    judge's verdict it follows the frame's result.
+
+    Built-in: :class:`~wmiltrack.engine.experts.NetworkExpert` (a Siamese network, rcwmil-nano;
+    ``network=``).
+    """
+
+    def start(self, frame: np.ndarray, box: IntBox) -> None:
+        """The first frame, where the target is ``box``."""
+
+    def locate(self, state: FrameState) -> ExpertReport:
+        """Its evidence on the record's frame (``state.frame``; ``state.box`` the tracker's
+        located box, ``state.lost`` whether the frame started with the target lost,
+        ``state.lost_for`` for how many frames)."""
+
+    def follow(self, state: FrameState) -> None:
+        """The judged record of the frame (its verdict, ``exact`` the frame's box where the
+        judge took it from the experts): follow it."""
+
+
+@runtime_checkable
 class Judge(Protocol):
     """The one place that decides what a frame means: its verdict (tracked, doubtful, lost,
     found; :class:`~wmiltrack.engine.state.Verdict`), ``ok``, whether the parts learn from it
     and whether the motion model takes its move as a velocity.
 
     Built-in: :class:`~wmiltrack.engine.judge.FrameJudge` (the threshold on the score, the
-    memory of the target, the lost state's running means).
+    memory of the target, the lost state's running means, a second expert's likeness).
     """
 
     def start(self, frame: np.ndarray, box: IntBox) -> None:
@@ -145,8 +170,11 @@ class Judge(Protocol):
 
     def verdict(self, state: FrameState, evidence: Evidence) -> FrameState:
         """The frame's record with ``verdict``, ``ok``, ``learns`` and ``steady`` set (a lost
-        frame: the box held at ``state.previous`` and score 0). Called once per frame, after
-        the search and the score (and, for a lost target's frame, the recovery)."""
+        frame: the box held at ``state.previous`` and score 0), and, where a second expert
+        reported (``state.expert``), the frame's box (``exact``; ``box`` where the tracker is
+        to learn there) and score. Called once per frame, after the search and the score
+        (and, for a lost target's frame, the recovery); the parts learn at the record's
+        ``box`` if its ``learns`` says so."""
 
 
 @runtime_checkable
@@ -191,6 +219,7 @@ PART_KINDS: dict[str, type[Any]] = {
     "scale": ScaleEstimator,
     "motion": MotionModel,
     "recovery": Recovery,
+    "expert": SecondExpert,
 }
 
 #: The settings each kind of part is made with (:func:`~wmiltrack.engine.settings.own`).
@@ -201,4 +230,5 @@ PART_SETTINGS: dict[str, type[Any]] = {
     "scale": ScaleSettings,
     "motion": MotionSettings,
     "recovery": RecoverySettings,
+    "expert": ExpertSettings,
 }

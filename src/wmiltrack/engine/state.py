@@ -1,9 +1,10 @@
 """One frame's record: what the tracker knows about a frame at each stage of its step.
 
 A frame walks through one list of stages (:attr:`~wmiltrack.engine.tracker.Tracker.stages`:
-locate, rescale, score, recover, judge, learn, follow, consult); each stage takes the record and returns
-a new one, so a value of the frame is written once, by the stage that finds it, and read by the
-stages after it instead of travelling through the tracker's attributes. The record of the last
+locate, a second expert's locate, rescale, score, recover, judge, learn, follow); each stage
+takes the record and returns a new one, so a value of the frame is written once, by the stage
+that finds it, and read by the stages after it instead of travelling through the tracker's
+attributes. The record of the last
 frame is the tracker's whole state between frames (its box, score, ``ok``, and whether the
 target is lost).
 """
@@ -11,13 +12,17 @@ target is lost).
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from .frames import IntBox
 
-__all__ = ["FrameState", "SearchStage", "Verdict", "new_frame"]
+__all__ = ["ExpertReport", "FloatBox", "FrameState", "SearchStage", "Verdict", "new_frame"]
+
+#: A box ``(x, y, w, h)`` in fractional pixels (a second expert's).
+FloatBox = tuple[float, float, float, float]
 
 #: One stage of a translation search as :meth:`~wmiltrack.Tracker.samples` reports it: the box
 #: the stage started from, its radius and its step.
@@ -27,10 +32,11 @@ SearchStage = tuple[IntBox, int, int]
 class Verdict(enum.Enum):
     """What the judge made of a frame (as DiMP's flag steers its state update and learning)."""
 
-    #: The target is where the box is: ``ok``, and every part learns.
+    #: The target is where the box is: ``ok``; the parts learn unless the judge holds them back
+    #: (the record's ``learns``).
     TRACKED = "tracked"
-    #: The box is kept but the frame is not confident: not ``ok``; the parts learn unless the
-    #: judge holds the target for lost (``judge_gates``).
+    #: The box is kept (not held) but the frame is not confident: not ``ok``, the lost state not
+    #: entered; the parts learn unless the judge holds them back (``judge_gates``).
     DOUBTFUL = "doubtful"
     #: The target is lost: the box is held at the last confident one, the score is 0, ``ok`` is
     #: False, nothing learns, and the next frame starts by looking for the target again.
@@ -38,6 +44,18 @@ class Verdict(enum.Enum):
     #: A lost target was found again on this frame (by the usual search or over the whole
     #: frame): the lost state ends there and the parts learn from the new box.
     FOUND = "found"
+
+
+class ExpertReport(NamedTuple):
+    """A second expert's evidence on a frame (:class:`~wmiltrack.engine.parts.SecondExpert`),
+    for the judge: ``box`` its own choice; ``likeness`` a call measuring how alike that box is
+    to the expert's memory of the target (1: the same; called at most once, only when the
+    judge needs it: a measure may cost a network pass); ``places`` on a lost target's frame,
+    the other places it searched, each ``(box, likeness)``, in the order searched."""
+
+    box: FloatBox
+    likeness: Callable[[], float]
+    places: tuple[tuple[FloatBox, float], ...] = ()
 
 
 class FrameState(NamedTuple):
@@ -55,9 +73,11 @@ class FrameState(NamedTuple):
     tried, ``learnt`` whether the appearance model has learnt from the frame (a paper
     preset's one-call step learns as it locates), ``rescued`` whether the recovery placed the
     box by looking over the whole frame, ``lost_for`` the frames in the lost state so far
-    (counting this one once it is judged lost); ``reported`` the frame's result when a second
-    expert makes it (rcwmil-nano's experts and their judge: a fractional box, their score and
-    ``ok``), else None (the result is read from ``box``, ``score`` and ``ok``).
+    (counting this one once it is judged lost); ``expert`` a second expert's evidence on the
+    frame (:class:`ExpertReport`, None without one); ``exact`` the frame's box in fractional
+    pixels where the judge took it from a second expert (None: the frame's box is ``box``,
+    the tracker's own, in whole pixels). The frame's result (``TrackResult``) is ``exact`` or
+    ``box``, ``score`` and ``ok``: one record, which every view of the tracker reads.
     """
 
     frame: np.ndarray
@@ -78,7 +98,8 @@ class FrameState(NamedTuple):
     learnt: bool = False
     rescued: bool = False
     lost_for: int = 0
-    reported: Any = None
+    expert: ExpertReport | None = None
+    exact: FloatBox | None = None
 
     def evolve(self, **changes: Any) -> FrameState:
         """A copy with the fields named in ``changes`` replaced (``_replace``, at half its
@@ -119,4 +140,4 @@ def new_frame(frame: np.ndarray, last: FrameState, integral: Any) -> FrameState:
     box, lost = last.box, last.verdict is _LOST
     return _new_tuple(FrameState, (frame, box, lost, integral, box, box, _NAN, _NAN, _NAN, None,
                                    False, False, False, (), (), False, False, last.lost_for,
-                                   None))
+                                   None, None))

@@ -4,11 +4,12 @@ model, the reported score's policy, a recovery part and a judge.
 One frame walks one way, through one list of stages (:attr:`Tracker.stages`), each taking the
 frame's immutable record (:class:`~wmiltrack.engine.state.FrameState`) and returning the next:
 locate (the motion model's origin, the cues' maps, the appearance model's coarse and fine
-candidate scoring in C++) -> rescale (the scale estimator) -> score (the confidence, the policy's
-reported score) -> recover (a lost target looked for over the whole frame) -> judge (the
-verdict: tracked, doubtful, lost or found, and what learns) -> learn (the appearance model's
-bags in C++, the cues, the scale estimator, the recovery part) -> follow (the motion model)
--> consult (a second expert and the judge of the two make the frame's result: rcwmil-nano).
+candidate scoring in C++; then a second expert's own search, its evidence into the record) ->
+rescale (the scale estimator) -> score (the confidence, the policy's reported score) ->
+recover (a lost target looked for over the whole frame) -> judge (every expert's evidence
+weighed: the one verdict, tracked, doubtful, lost or found, the frame's box and what learns)
+-> learn (at the frame's box, if the verdict lets it: the appearance model's bags in C++, the
+cues, the scale estimator, the recovery part) -> follow (the motion model, a second expert).
 A tracked target's frame, a lost target's frame and a paper preset's frame take the same
 stages; a preset made of the appearance model alone locates and learns in one core call. A
 preset is a composition plus values (:func:`compose`).
@@ -30,9 +31,9 @@ from . import copying as _copying  # noqa: F401 (installs deepcopy for the core'
 from .appearance import AppearanceSettings, HaarAppearance
 from .colour import ColourModel, ColourSettings
 from .cues import ColourCue, Cue, check_cue_weights
-from .experts import ExpertSettings, TwoExperts, network_files
+from .experts import ExpertSettings, NetworkExpert, network_files
 from .frames import IntBox, as_frame, clip_box, frame_size
-from .geometry import roi_around
+from .geometry import placed_at, roi_around
 from .judge import NO_EVIDENCE, Evidence, FrameJudge, JudgeSettings
 from .motion import MotionSettings, VelocityMotion
 from .params import Params
@@ -45,6 +46,7 @@ from .parts import (
     Recovery,
     ScaleEstimator,
     ScorePolicy,
+    SecondExpert,
 )
 from .policy import ContrastScore, ReportedScore, ScoreSettings, confidence
 from .recovery import RecoverySettings, Redetector
@@ -99,7 +101,7 @@ class Parts:
     judge: Judge
     recovery: Recovery | None = None
     template: CorrelationTemplate | None = None  # (its first-frame filter's peak: evidence)
-    experts: TwoExperts | None = None  # a second expert and the judge between the two
+    expert: SecondExpert | None = None  # a second expert beside the tracker (rcwmil-nano)
 
     @property
     def appearance_only(self) -> bool:
@@ -109,13 +111,13 @@ class Parts:
         return (not self.cues and self.scale is None and self.motion is None
                 and self.recovery is None and self.policy.plain
                 and isinstance(self.judge, FrameJudge) and self.judge.always_learns
-                and self.experts is None)
+                and self.expert is None)
 
     def others(self) -> list[Any]:
         """The parts besides the appearance model and the policy, each once (a correlation
         template may be both a cue and the motion model), in the order they start."""
         out: list[Any] = []
-        for part in (*self.cues, self.motion, self.scale, self.recovery, self.judge):
+        for part in (*self.cues, self.motion, self.scale, self.recovery, self.judge, self.expert):
             if part is not None and not any(part is seen for seen in out):
                 out.append(part)
         return out
@@ -160,7 +162,15 @@ def compose(params: Params, seed: int, frame: np.ndarray, box: IntBox,
                        ReportedScore(own(ScoreSettings, params), report)),
                  _made(parts, "judge", params, frame, box, FrameJudge(own(JudgeSettings, params))),
                  _made(parts, "recovery", params, frame, box, recovery), template,
-                 TwoExperts(own(ExpertSettings, params)) if params.network else None)
+                 _made(parts, "expert", params, frame, box, _network(params, parts)))
+
+
+def _network(params: Params, parts: Mapping[str, PartFactory]) -> SecondExpert | None:
+    """The second expert ``params`` asks for (a network; None without one, or when ``parts``
+    supplies the expert)."""
+    if not params.network or "expert" in parts:
+        return None
+    return NetworkExpert(own(ExpertSettings, params))
 
 
 def _scale_part(params: Params, frame: np.ndarray, box: IntBox) -> ScaleEstimator | None:
@@ -236,12 +246,12 @@ class Tracker:
         most 1 (:func:`~wmiltrack.engine.cues.check_cue_weights`).
     parts : mapping, optional
         Parts of your own instead of the preset's, by kind: ``"appearance"``, ``"policy"``,
-        ``"judge"``, ``"scale"``, ``"motion"``, ``"recovery"``; each a factory called at
+        ``"judge"``, ``"scale"``, ``"motion"``, ``"recovery"``, ``"expert"``; each a factory called at
         :meth:`init` as ``factory(settings, frame, box)`` with the kind's own settings
         (:data:`~wmiltrack.engine.parts.PART_SETTINGS`; an appearance model's factory also
         gets ``seed=``), returning an object with the kind's interface
         (:data:`~wmiltrack.engine.parts.PART_KINDS`), or None for no scale estimator, motion
-        model or re-detection. A class whose ``__init__`` takes ``(settings, frame, box)`` is
+        model, re-detection or second expert. A class whose ``__init__`` takes ``(settings, frame, box)`` is
         such a factory.
     **overrides
         Any :class:`~wmiltrack.Params` field, e.g. ``num_selected=30``.
@@ -328,7 +338,7 @@ class Tracker:
     def box(self) -> tuple[float, float, float, float]:
         """The current box ``(x, y, w, h)``."""
         self._require_init()
-        return _result(self._last).box  # (the experts' where they made the last result)
+        return _result(self._last).box
 
     @_one_thread_at_a_time
     def init(self, frame: np.ndarray, box: Any) -> None:
@@ -349,8 +359,6 @@ class Tracker:
         for part in parts.others():
             part.start(img, b)
         parts.policy.start(img, b)
-        if parts.experts is not None:
-            parts.experts.start(img, (float(b[0]), float(b[1]), float(b[2]), float(b[3])))
         self._parts = parts
         self._frame_wh = (fw, fh)
         model.compute_integral(img, b, model.first_sampler.reach)
@@ -376,13 +384,9 @@ class Tracker:
     @property
     def lost(self) -> bool:
         """Whether the target is held for lost after the last frame (the next :meth:`update`
-        looks for it again): the judge's verdict, or where a second expert made the frame's
-        result, that result's (not ``ok``), so that ``lost`` and :meth:`update`'s ``ok`` agree."""
+        looks for it again): the frame's verdict."""
         self._require_init()
-        last = self._last
-        if last.reported is not None:
-            return not last.reported.ok
-        return last.verdict is Verdict.LOST
+        return self._last.verdict is Verdict.LOST
 
     @property
     def uses_channels(self) -> bool:
@@ -436,7 +440,7 @@ class Tracker:
             from; ``"search"``: one ``(origin_box, radius, step)`` per search stage of the
             last ``update`` (coarse, then fine; empty after ``init``); ``"scales"``: the boxes
             searched at the other scales (empty without scale search); ``"box"``: the frame's
-            box, as :meth:`update` reported it (a second expert's where it made the result).
+            box, as :meth:`update` reported it (the judge's from a second expert's, where it took it).
         """
         self._require_init()
         pos, neg = self._parts.appearance.corners()
@@ -446,7 +450,7 @@ class Tracker:
             "negative": neg.copy(),
             "search": list(last.searched),
             "scales": list(last.tried),
-            "box": _result(last).box,  # the frame's result, as update() and box give it
+            "box": _result(last).box,
         }
 
     @property
@@ -484,36 +488,28 @@ class Tracker:
 
     def _stages_walked(self) -> tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...]:
         """:attr:`stages` less those of the parts this tracker lacks (rescale without a scale
-        estimator, recover without re-detection, follow without a motion model, consult
-        without a second expert: each would hand the record back unchanged: a call a frame
-        saved), worked out again when ``stages`` changes."""
+        estimator, recover without re-detection, follow without a motion model or a second
+        expert, a second expert's locate without one: each would hand the record back
+        unchanged: a call a frame saved), worked out again when ``stages`` changes."""
         stages, walk = self.stages, self._walk
         if walk is None or walk[0] is not stages:
             parts = self._parts
             needs: dict[Any, Any] = {Tracker._rescale: parts.scale, Tracker._recover: parts.recovery,
-                                     Tracker._follow: parts.motion, Tracker._consult: parts.experts}
+                                     Tracker._follow: parts.motion or parts.expert,
+                                     Tracker._locate_expert: parts.expert}
             walk = self._walk = (stages, tuple(s for s in stages if needs.get(s, s) is not None))
         return walk[1]
 
     def recentre(self, box: Any) -> None:
         """Move the target to the centre of ``box = (x, y, w, h)`` keeping its current size and
-        everything learnt (the models, the first-frame memories; a lost state ends): how
-        another expert hands the target over (:mod:`wmiltrack.engine.experts`). Unlike
-        :meth:`init`, nothing is relearnt."""
+        everything learnt (the models, the first-frame memories; a lost state ends), as the
+        judge does when another expert hands the target over. Unlike :meth:`init`, nothing is
+        relearnt."""
         self._require_init()
-        self._last = self._recentred(self._last, box)
-
-    def _recentred(self, state: FrameState, box: Any) -> FrameState:
-        """The record with the target moved to the centre of ``box`` at the record's size
-        (clipped to the frame; a lost state ends)."""
-        x, y, w, h = (float(v) for v in box)
-        _, _, bw, bh = state.box
-        fw, fh = self._frame_wh
-        nx = min(max(int(round(x + w / 2 - bw / 2)), 0), max(fw - bw, 0))
-        ny = min(max(int(round(y + h / 2 - bh / 2)), 0), max(fh - bh, 0))
+        state = self._last
         if state.verdict is Verdict.LOST:
             state = state.evolve(verdict=Verdict.TRACKED, lost_for=0)
-        return state.evolve(box=(nx, ny, bw, bh))
+        self._last = state.evolve(box=placed_at(state.box, box, *self._frame_wh), exact=None)
 
     def _locate(self, state: FrameState) -> Steps:
         """Locate: the search with the cues merged, from the motion model's origin (a lost
@@ -537,6 +533,14 @@ class Tracker:
             results = yield search
         box, raw, searched = _moved(origin, self._grids, results)
         return state.located(origin, box, raw, searched, self._fused)
+
+    def _locate_expert(self, state: FrameState) -> FrameState:
+        """Locate (the second expert): its own search on the frame, beside the tracker's; its
+        evidence (box, likeness) goes into the record for the judge."""
+        expert = self._parts.expert
+        if expert is None:
+            return state
+        return state.evolve(expert=expert.locate(state))
 
     def _rescale(self, state: FrameState) -> FrameState:
         """Rescale: the scale estimator tries other sizes around the located box (on a tracked
@@ -611,6 +615,8 @@ class Tracker:
         """The learn stage's work: the appearance model (one core request), the cues and the
         scale estimator (from frames of a high enough score) and the recovery part."""
         parts, img, box = self._parts, state.frame, state.box
+        if state.exact is not None:  # (the judge may have moved the box: a second expert's frame)
+            self._cover(state, box)
         yield from self._learn_steps(parts.appearance.sampler, box)
         for cue in parts.cues:
             if state.score >= getattr(cue, "learn_above", 0.0):
@@ -622,37 +628,40 @@ class Tracker:
             parts.recovery.learn(img, box)
         return state.evolve(learnt=True)
 
+    def _cover(self, state: FrameState, box: IntBox) -> None:
+        """The appearance model's integral image made to cover learning at ``box`` (where the
+        judge moved the box away from the search; a borrowed table is left as it was)."""
+        model = self._parts.appearance
+        margin = self._margin(box)
+        x, y, w, h = roi_around(box, margin)
+        fw, fh = self._frame_wh
+        ii = model.ii
+        if (ii.x0 <= max(x, 0) and ii.y0 <= max(y, 0) and ii.x0 + ii.width >= min(x + w, fw)
+                and ii.y0 + ii.height >= min(y + h, fh)):
+            return
+        if state.integral is not None and ii is state.integral:
+            model.ii = _core.IntegralImage()
+        model.compute_integral(state.frame, box, margin)
+
     def _follow(self, state: FrameState) -> FrameState:
         """Follow: the motion model sees the frame's move (a lost, found or held frame is no
-        move: the target stands at its box, not steady)."""
-        motion = self._parts.motion
+        move: the target stands at its box, not steady); a second expert sees the verdict."""
+        motion, expert = self._parts.motion, self._parts.expert
         if motion is not None:
             if state.lost or state.verdict is _LOST:
                 motion.follow(state.box, state.box, False)
             else:
                 motion.follow(state.previous, state.box, state.steady)
+        if expert is not None:
+            expert.follow(state)
         return state
-
-    def _consult(self, state: FrameState) -> FrameState:
-        """Consult: a second expert and the judge of the two (rcwmil-nano's network,
-        :class:`~wmiltrack.engine.experts.TwoExperts`) make the frame's result from the
-        tracker's; where they hand the target over, the tracker's box moves to theirs at its
-        own size (:meth:`recentre`), everything learnt kept."""
-        experts = self._parts.experts
-        if experts is None:
-            return state
-        handed: list[Any] = []
-        reported = experts.step(state.frame, _result(state), handed.append)
-        for box in handed:
-            state = self._recentred(state, box)
-        return state.evolve(reported=reported)
 
     #: The stages every frame walks through, in order: each takes the tracker and the frame's
     #: record and returns the next record, or a generator of core requests that returns it
     #: (:meth:`_update_steps`). A stage of one's own goes into an instance's or a subclass's
     #: copy of this tuple.
     stages: tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...] = (
-        _locate, _rescale, _score, _recover, _judge, _learn, _follow, _consult)
+        _locate, _locate_expert, _rescale, _score, _recover, _judge, _learn, _follow)
 
     def _witnesses(self) -> tuple[float, ...]:
         """The cues' own confidences of this frame (those that give one; see
@@ -672,15 +681,15 @@ class Tracker:
         box, raw, searched = _moved(origin, grids, (yield search))
         return state.located(origin, box, raw, searched, state.learnt)
 
-    def _search(self, img: np.ndarray, origin: IntBox, stages: list[tuple[int, int]],
+    def _search(self, img: np.ndarray, origin: IntBox, grids: list[tuple[int, int]],
                 margin: int, *, shared: bool = False) -> Search:
-        """The core's search request from ``origin`` over ``stages`` (the one place a frame's
+        """The core's search request from ``origin`` over ``grids`` (the one place a frame's
         search is built): the appearance model makes its integral image ready (``margin``
         pixels around ``origin``; with ``shared``, the borrowed one it holds), then the cues
         give their tables (:meth:`_cue_tables`), which the search merges in."""
         model = self._parts.appearance
         frame, roi = model.prepare(None if shared else img, origin, margin)
-        return model.search_request(origin, stages, self._frame_wh, frame, roi,
+        return model.search_request(origin, grids, self._frame_wh, frame, roi,
                                     self._cue_tables(img, origin))
 
     def _origin(self, frame: np.ndarray | None, box: IntBox) -> IntBox:
@@ -749,10 +758,11 @@ class Tracker:
 
 
 def _result(state: FrameState) -> TrackResult:
-    """A frame's result, from its record: the second expert's where it made one (``reported``),
-    else the tracker's own."""
-    if state.reported is not None:
-        return state.reported  # type: ignore[no-any-return]
+    """A frame's result, from its record: its box (``exact``, fractional, where the judge took
+    it from a second expert, else the tracker's ``box``), score and ``ok``."""
+    if state.exact is not None:
+        x, y, w, h = state.exact
+        return TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
     x, y, w, h = state.box
     return TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
 
