@@ -29,7 +29,9 @@ from wmiltrack.networks.files import ModelFilesMissing, ModelFileUnreadable
 from wmiltrack.networks.nanotrack import NanoNetwork
 from wmiltrack.trackers import make_tracker
 
-RUNTIMES = ("onnxruntime", "opencv")
+#: Both runtimes; onnxruntime's cases need the nano extra (skipped without it, a failure
+#: under WMILTRACK_REQUIRE_EXTRAS, where .ci/run installs it).
+RUNTIMES = (pytest.param("onnxruntime", marks=pytest.mark.extras("onnxruntime", "onnx")), "opencv")
 
 
 def _corrupt(right: Path, to: Path) -> Path:
@@ -140,7 +142,7 @@ def test_eval_skips_the_tracker_with_the_line(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     backbone, head = bad_backbone(case, stand_in_networks, tmp_path), stand_in_networks["v3"][1]
     specs = [f"rcwmil-nano:backbone={backbone}:head={head}:network_runtime=opencv",
-             f"nanotrack:v3:backbone={backbone}:head={head}:runtime=onnxruntime", "rcwmil"]
+             f"nanotrack:v3:backbone={backbone}:head={head}:runtime=opencv", "rcwmil"]
     out = tmp_path / "out"
     status = cli.main(["eval", str(data), "--trackers", ",".join(specs), "--out", str(out),
                        "--no-plots", "--no-progress"])
@@ -187,11 +189,11 @@ def test_another_versions_file_is_one_line(
 @pytest.fixture()
 def onnx_hidden(monkeypatch: pytest.MonkeyPatch) -> None:
     """``onnx`` not importable (as after ``pip install onnxruntime``), the note not yet said."""
-    pytest.importorskip("onnxruntime")
     monkeypatch.setitem(sys.modules, "onnx", None)
     monkeypatch.setattr(backends, "_NOTED", set())
 
 
+@pytest.mark.extras("onnxruntime")
 def test_without_onnx_auto_runs_on_opencv_after_one_note(
         stand_in_networks: dict[str, tuple[Path, Path]], onnx_hidden: None,
         caplog: pytest.LogCaptureFixture) -> None:
@@ -206,6 +208,7 @@ def test_without_onnx_auto_runs_on_opencv_after_one_note(
     assert "OpenCV's dnn" in notes[0] and "pip install onnx" in notes[0]
 
 
+@pytest.mark.extras("onnxruntime")
 def test_without_onnx_asking_for_onnxruntime_says_what_to_install(
         stand_in_networks: dict[str, tuple[Path, Path]], onnx_hidden: None, no_models: Path) -> None:
     files = stand_in_networks["v3"]
@@ -216,9 +219,9 @@ def test_without_onnx_asking_for_onnxruntime_says_what_to_install(
                 network_runtime="onnxruntime")
 
 
+@pytest.mark.extras("onnxruntime")
 def test_without_onnx_the_command_line_tracks_after_one_note(
         stand_in_networks: dict[str, tuple[Path, Path]], no_models: Path, data: Path) -> None:
-    pytest.importorskip("onnxruntime")
     files = stand_in_networks["v3"]
     code = ("import sys; sys.modules['onnx'] = None; from wmiltrack.cli import main; "
             "sys.exit(main(sys.argv[1:]))")
@@ -228,6 +231,20 @@ def test_without_onnx_the_command_line_tracks_after_one_note(
     assert r.returncode == 0, r.stderr
     assert len(r.stdout.splitlines()) == 6
     assert len(r.stderr.splitlines()) == 1 and "without the onnx package" in r.stderr, r.stderr
+
+
+def test_asking_for_onnxruntime_where_it_is_not_installed_says_what_to_install(
+        stand_in_networks: dict[str, tuple[Path, Path]], no_models: Path,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """``network_runtime=onnxruntime`` without onnxruntime: one line naming the package and the
+    other runtime, when the tracker is made (was a ModuleNotFoundError traceback)."""
+    monkeypatch.setitem(sys.modules, "onnxruntime", None)
+    files = stand_in_networks["v3"]
+    with pytest.raises(TrackerUnavailable, match=r"onnxruntime is not installed.*pip install onnxruntime") as info:
+        Tracker("rcwmil-nano", backbone=str(files[0]), head=str(files[1]), network_runtime="onnxruntime")
+    assert "network_runtime=opencv" in str(info.value) and "\n" not in str(info.value)
+    with pytest.raises(TrackerUnavailable, match="not installed"):
+        make_tracker("nanotrack:v3", backbone=str(files[0]), head=str(files[1]), runtime="onnxruntime")
 
 
 # -- which runtime ran ---------------------------------------------------------------------------

@@ -75,8 +75,13 @@ class OrtBackend:
         self._load()
 
     def _load(self) -> None:
-        import onnxruntime as ort
-
+        try:
+            import onnxruntime as ort
+        except ImportError:
+            raise TrackerUnavailable(
+                "the runtime onnxruntime is not installed: pip install onnxruntime onnx (the "
+                "nano extra), or choose OpenCV's dnn (network_runtime=opencv for a preset, "
+                "runtime=opencv for nanotrack:VERSION)") from None
         options = ort.SessionOptions()
         options.intra_op_num_threads = self.threads
         options.inter_op_num_threads = 1
