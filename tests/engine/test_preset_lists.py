@@ -40,6 +40,7 @@ def test_no_help_ranks_a_preset_by_hand(cmd: str) -> None:
     assert "most accurate" not in command_help(cmd)
 
 
+@pytest.mark.usefixtures("nano_in_environment")  # (rcwmil-nano checks its files when made)
 def test_every_preset_has_its_compat_class() -> None:
     from wmiltrack import compat
 

@@ -142,7 +142,8 @@ def track_checked(tracker: wmiltrack.Tracker, frames: Sequence[Frame], box: Any)
         tracked = not judge.memory_lost if memory else r.score >= tracker.params.lost_threshold
         if tracker.parts.expert is not None:  # the experts' verdict: ok unless lost
             tracked = True
-        if r.ok != (tracked and not lost) or (lost and r.score):
+        # (the lost state's score is 0, except with a second expert: the judge's confidence)
+        if r.ok != (tracked and not lost) or (lost and r.score and tracker.parts.expert is None):
             return boxes, f"frame {i}: ok={r.ok} disagrees with score {r.score} (lost: {lost})"
     return boxes, None
 
@@ -655,10 +656,15 @@ def _rss_kib() -> int:
 
 @pytest.mark.skipif(not Path("/proc/self/statm").exists(), reason="needs /proc")
 def test_reinit_many_times_does_not_grow() -> None:
-    """200 re-inits (+ one update each) of one tracker: Python heap and RSS stay flat."""
+    """200 re-inits (+ one update each) of one tracker: Python heap and RSS stay flat.
+
+    The warm-up is long: the interpreter's and numpy's own caches keep growing, more slowly
+    each time, over the first several hundred re-inits (in one process, 200 re-inits after 20
+    grew the heap by 220-390 KiB, 200 after 1000 by 70-100 KiB; 1000 and 2000 re-inits in all,
+    819 and 892 KiB: bounded), while a leak grows by the same amount every time."""
     frames = _base_frames(2)
     t = wmiltrack.Tracker("rcwmil")
-    for _ in range(20):  # warm-up: buffers reach their steady size
+    for _ in range(1000):  # warm-up: buffers and caches reach their steady size
         t.init(frames[0], BASE_BOX)
         t.update(frames[1])
     tracemalloc.start()
