@@ -142,7 +142,8 @@ class NanoTrackStep:
         self.centre = (x + (w - 1) / 2, y + (h - 1) / 2)
         self.size = (w, h)
         self.frame_wh = (frame.shape[1], frame.shape[0])
-        self.fill = tuple(float(v) for v in frame.reshape(-1, 3).mean(axis=0))
+        # the mean colour, truncated as the published step stores it (in a uint8 image)
+        self.fill = tuple(float(int(v)) for v in frame.reshape(-1, 3).mean(axis=0))
         side = round(context_side(w, h))
         exemplar = crop(frame, *self.centre, side, EXEMPLAR, self.fill)  # type: ignore[arg-type]
         self.template = self.network.features(exemplar)

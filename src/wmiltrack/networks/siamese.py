@@ -92,17 +92,28 @@ def context_side(w: float, h: float) -> float:
 def crop(frame: np.ndarray, cx: float, cy: float, side: float, out: int,
          fill: tuple[float, float, float]) -> np.ndarray:
     """The square of ``side`` frame pixels (rounded) centred at ``(cx, cy)``, resized to
-    ``out`` x ``out``; beyond the frame, ``fill``. One bilinear warp: the same pixel centres
-    as cropping the integer window and resizing it."""
+    ``out`` x ``out``; beyond the frame, ``fill``. The published step's window (SiamRPN's
+    ``get_subwindow``: the integer square, padded with the fill where it leaves the frame,
+    resized bilinearly), padded only as far as the window leaves the frame: 2-3 times faster
+    than one ``warpAffine`` of the whole frame, and its edges as the network was trained."""
     import cv2
 
     n = max(1, int(round(side)))
     x0 = math.floor(cx - (n + 1) / 2 + 0.5)
     y0 = math.floor(cy - (n + 1) / 2 + 0.5)
-    s = n / out
-    m = np.array([[s, 0.0, x0 + 0.5 * s - 0.5], [0.0, s, y0 + 0.5 * s - 0.5]])
-    return cv2.warpAffine(frame, m, (out, out), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                          borderMode=cv2.BORDER_CONSTANT, borderValue=fill)
+    fh, fw = frame.shape[:2]
+    left, top = max(0, -x0), max(0, -y0)
+    right, bottom = max(0, x0 + n - fw), max(0, y0 + n - fh)
+    if left + right >= n or top + bottom >= n:  # (the window is wholly outside the frame)
+        return np.full((out, out, frame.shape[2]), np.round(fill), dtype=frame.dtype)
+    window = frame[y0 + top:y0 + n - bottom, x0 + left:x0 + n - right]
+    if left or top or right or bottom:
+        window = cv2.copyMakeBorder(window, top, bottom, left, right, cv2.BORDER_CONSTANT,
+                                    value=fill)
+    if n == out:
+        return np.ascontiguousarray(window)
+    patch: np.ndarray = cv2.resize(window, (out, out), interpolation=cv2.INTER_LINEAR)
+    return patch
 
 
 def as_bgr(frame: np.ndarray) -> np.ndarray:
