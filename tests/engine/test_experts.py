@@ -81,7 +81,7 @@ def test_judge_confidence_is_monotone_and_half_at_the_middle() -> None:
 @pytest.mark.parametrize("bad", [{"network": "nanotrack-v9"}, {"network_runtime": "cuda"},
                                  {"network_threads": 0}, {"expert_blend": 1.5},
                                  {"like_low": 0.7, "like_high": 0.6}, {"judge_enter": 0},
-                                 {"redetect_windows": -1}])
+                                 {"redetect_windows": -1}, {"tracker_every": 0}])
 def test_expert_settings_are_checked(bad: dict[str, object]) -> None:
     with pytest.raises(ValueError, match=next(iter(bad))):
         wmiltrack.Tracker("rcwmil-nano", **bad)
@@ -275,3 +275,43 @@ def test_a_judge_of_ones_own_gates_learning_and_sets_ok_on_rcwmil_nano(
             assert abs(x + w / 2 - (r.box[0] + r.box[2] / 2)) <= 1
             assert len(positives) > 0 and [x, y] in positives.tolist()  # learnt there
     assert len(judge.reports) == len(frames) - 1
+
+
+@pytest.mark.parametrize("every", [1, 2, 3])
+def test_the_tracker_rests_between_the_frames_the_experts_vouch_for(
+        every: int, stand_in_networks: dict[str, tuple[Path, Path]]) -> None:
+    """``tracker_every``: after a frame the experts vouched for, the tracker rests until its
+    ``every``-th frame (no search, nothing learnt: ``samples()`` shows neither); the network's
+    box is the frame's. A frame after one not ``ok`` always runs the tracker; 1 never rests.
+    The same inputs give the same boxes, and a copy made mid-run goes on as the original."""
+    files = {"backbone": str(stand_in_networks["v3"][0]), "head": str(stand_in_networks["v3"][1])}
+    seq = make_sequence(70, seed=0, occlusion=False, full_occlusion=(40, 15))
+    frames, gt = seq.load(), np.asarray(seq.groundtruth, dtype=np.float64)
+
+    def run(t: wmiltrack.Tracker) -> tuple[list[object], list[bool]]:
+        t.init(frames[0], tuple(gt[0]))
+        results, rested = [], []
+        for f in frames[1:]:
+            results.append(t.update(f))
+            seen = t.samples()
+            rested.append(not seen["search"])
+            if rested[-1]:
+                assert len(seen["positive"]) == 0 and len(seen["negative"]) == 0
+        return results, rested
+
+    results, rested = run(wmiltrack.Tracker("rcwmil-nano", seed=0, tracker_every=every, **files))
+    runs, longest = 0, 0
+    for r in rested:
+        runs = runs + 1 if r else 0
+        longest = max(longest, runs)
+    assert longest == every - 1  # (it rests, never longer than every - 1 frames in a row)
+    for before, now in zip(results, rested[1:]):
+        assert before.ok or not now  # (a frame after a doubtful or lost one runs the tracker)
+    again, _ = run(wmiltrack.Tracker("rcwmil-nano", seed=0, tracker_every=every, **files))
+    assert again == results
+    t = wmiltrack.Tracker("rcwmil-nano", seed=0, tracker_every=every, **files)
+    t.init(frames[0], tuple(gt[0]))
+    for f in frames[1:31]:
+        t.update(f)
+    fork = copy.deepcopy(t)
+    assert all(t.update(f) == fork.update(f) for f in frames[31:])

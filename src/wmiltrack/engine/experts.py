@@ -74,6 +74,14 @@ class ExpertSettings:
         Lost frames before the whole-frame windows start: a short spell (a turn, a brief
         occlusion) is better left to the network's own search than risked on a far place that
         looks like the target's surroundings.
+    tracker_every : int
+        While the experts vouch for the target and the tracker's own confidence is at least
+        ``lost_threshold``, the tracker locates and learns only on every ``tracker_every``-th
+        frame; on the frames between it rests: the network's search alone
+        gives the frame's box, the judge weighs it against the tracker's box of the frame
+        before, and the tracker is moved there without learning (the record's ``rested``).
+        A frame after one that was doubtful, lost or not vouched for always runs the tracker.
+        1: the tracker runs on every frame.
     """
 
     network: str = ""
@@ -83,6 +91,7 @@ class ExpertSettings:
     network_threads: int = 1
     redetect_windows: int = 4
     redetect_after: int = 10
+    tracker_every: int = 1
 
     def __post_init__(self) -> None:
         ExpertSettings.check(self)
@@ -93,7 +102,8 @@ class ExpertSettings:
                               "network_runtime": RUNTIMES})
         need(isinstance(self.backbone, str) and isinstance(self.head, str),
              "backbone and head must be paths as strings ('' to find them)")
-        check_ints(self, "network_threads", "redetect_windows", "redetect_after")
+        check_ints(self, "network_threads", "redetect_windows", "redetect_after", "tracker_every")
+        need(self.tracker_every >= 1, f"tracker_every must be >= 1, got {self.tracker_every}")
         need(self.redetect_after >= 0, f"redetect_after must be >= 0, got {self.redetect_after}")
         need(self.network_threads >= 1, f"network_threads must be >= 1, got {self.network_threads}")
         need(self.redetect_windows >= 0,

@@ -287,7 +287,10 @@ class FrameJudge:
         (``state.expert``), the tracker's own judgement is weighed with it and the frame's
         box (``exact``, and the tracker's ``box`` where it learns there) and score are the
         experts' (:meth:`_weigh_experts`)."""
-        own = self._own_verdict(state, evidence)
+        if state.rested:  # (the tracker did not look: its judgement of the last frame stands)
+            own = state.judged(_TRACKED, True, True, True)
+        else:
+            own = self._own_verdict(state, evidence)
         return own if state.expert is None else self._weigh_experts(own, state.expert)
 
     def _own_verdict(self, state: FrameState, evidence: Evidence) -> FrameState:
@@ -370,7 +373,7 @@ class FrameJudge:
             likeness = report.likeness()
             self.shown = self.confidence(likeness)
         verdict = self._by_likeness(likeness, vouched)
-        b = s.expert_blend
+        b = 0.0 if own.rested else s.expert_blend  # (a rested tracker's box is the last frame's)
         box = within(tuple((1 - b) * n + b * t for n, t in zip(report.box, own.box))
                      if agree else report.box, fw, fh)
         if verdict is Verdict.LOST:
@@ -378,10 +381,10 @@ class FrameJudge:
                               learns=False, steady=False)
         doubting = self._against > 0  # (counting towards lost: nothing learns, nothing moves)
         learns = own.learns and not doubting
-        moved = not doubting and (learns or not agree)
+        moved = not doubting and (learns or not agree or own.rested > 0)
         return own.evolve(box=placed_at(own.box, box, fw, fh) if moved else own.box, exact=box,
                           score=self.shown, verdict=verdict, ok=True, learns=learns,
-                          steady=own.steady and agree)
+                          steady=own.steady and agree, vouched=vouched and not doubting)
 
     def _look_again(self, own: FrameState, report: ExpertReport) -> FrameState:
         """A lost target's frame with a second expert: its own choice, unless another place it

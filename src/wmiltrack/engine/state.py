@@ -76,7 +76,12 @@ class FrameState(NamedTuple):
     (counting this one once it is judged lost); ``expert`` a second expert's evidence on the
     frame (:class:`ExpertReport`, None without one); ``exact`` the frame's box in fractional
     pixels where the judge took it from a second expert (None: the frame's box is ``box``,
-    the tracker's own, in whole pixels). The frame's result (``TrackResult``) is ``exact`` or
+    the tracker's own, in whole pixels); ``rested`` the frames in a row, this one included,
+    on which the tracker rested while a second expert alone located the target
+    (:attr:`~wmiltrack.engine.experts.ExpertSettings.tracker_every`; 0: the tracker ran);
+    ``vouched`` whether the judge found the second expert's box and the tracker's in
+    agreement, the tracker ``ok``, and nothing counting against the target.
+    The frame's result (``TrackResult``) is ``exact`` or
     ``box``, ``score`` and ``ok``: one record, which every view of the tracker reads.
     """
 
@@ -100,6 +105,8 @@ class FrameState(NamedTuple):
     lost_for: int = 0
     expert: ExpertReport | None = None
     exact: FloatBox | None = None
+    rested: int = 0
+    vouched: bool = False
 
     def evolve(self, **changes: Any) -> FrameState:
         """A copy with the fields named in ``changes`` replaced (``_replace``, at half its
@@ -140,4 +147,4 @@ def new_frame(frame: np.ndarray, last: FrameState, integral: Any) -> FrameState:
     box, lost = last.box, last.verdict is _LOST
     return _new_tuple(FrameState, (frame, box, lost, integral, box, box, _NAN, _NAN, _NAN, None,
                                    False, False, False, (), (), False, False, last.lost_for,
-                                   None, None))
+                                   None, None, 0, False))

@@ -65,6 +65,7 @@ __all__ = ["NotInitializedError", "Parts", "Tracker", "check_part_factories", "c
 _NO_FRAME = np.zeros((0, 0), dtype=np.uint8)
 _NO_FRAME.setflags(write=False)
 _LOST = Verdict.LOST  # (an enum member read from its class costs ~70 ns, this name ~10 ns)
+_TRACKED = Verdict.TRACKED
 
 
 class NotInitializedError(ValueError):
@@ -367,6 +368,7 @@ class Tracker:
         self._last = FrameState(_NO_FRAME, b, False, None, b, b, score=1.0,
                                 verdict=Verdict.TRACKED, ok=True, learns=True)
         self._fused = parts.appearance_only and model.can_fuse
+        self._rest_every = self._params.tracker_every if parts.expert is not None else 1
         self._walk = None  # parts of another kind may lack other stages
         self._reach = self._params.search_reach + model.reach  # the search's and the bags
         self._initialized = True
@@ -475,6 +477,9 @@ class Tracker:
         self._check_frame(img)
         last = self._last
         state = new_frame(img, last, integral)
+        if self._rests(last):
+            state = state.evolve(rested=last.rested + 1, raw=last.raw, conf=last.conf,
+                                 score=last.score)
         model = self._parts.appearance
         own_table = model.ii
         try:
@@ -485,6 +490,14 @@ class Tracker:
             model.ii = own_table  # a shared integral image is only borrowed for the frame
         self._last = state  # (copies and pickles leave its pixels out: __getstate__)
         return _result(state)
+
+    def _rests(self, last: FrameState) -> bool:
+        """Whether the tracker rests on the frame after ``last`` (a second expert's
+        ``tracker_every``): the judge found the experts vouching for ``last`` (tracked), the
+        tracker's own confidence there was at least ``lost_threshold`` (``steady``), and it
+        has not yet rested ``tracker_every - 1`` frames in a row."""
+        return (self._rest_every > 1 and last.vouched and last.steady
+                and last.verdict is _TRACKED and last.rested + 1 < self._rest_every)
 
     def _stages_walked(self) -> tuple[Callable[[Tracker, FrameState], FrameState | Steps], ...]:
         """:attr:`stages` less those of the parts this tracker lacks (rescale without a scale
@@ -519,6 +532,8 @@ class Tracker:
         frame's shared luma table (``integral``) is borrowed if it covers the search."""
         if state.lost:
             return (yield from self._search_at(state, state.previous, self._grids))
+        if state.rested:  # (the tracker rests: its box stays where the last frame put it)
+            return state
         img, model = state.frame, self._parts.appearance
         origin = self._origin(img, state.previous)
         margin = self._margin(state.previous)
@@ -546,7 +561,7 @@ class Tracker:
         """Rescale: the scale estimator tries other sizes around the located box (on a tracked
         target's frame whose search found a candidate)."""
         scale = self._parts.scale
-        if scale is None or state.lost or not math.isfinite(state.raw):
+        if scale is None or state.lost or state.rested or not math.isfinite(state.raw):
             return state
         box, raw = scale.search(self._parts.appearance, state.frame, state.box, state.raw,
                                 self._contrast())
@@ -555,6 +570,8 @@ class Tracker:
     def _score(self, state: FrameState) -> FrameState:
         """Score: the classifier's confidence at the box and the score to report (the
         policy's)."""
+        if state.rested:  # (the last frame's score stands)
+            return state
         parts = self._parts
         conf = confidence(state.raw, parts.appearance.k, self._params.confidence_offset)
         return state.scored(conf, parts.policy.score(conf, state.frame, state.box))
@@ -583,7 +600,8 @@ class Tracker:
     def _judge(self, state: FrameState) -> FrameState:
         """Judge: the judge's verdict on the frame (:class:`~wmiltrack.engine.parts.Judge`),
         from the record and the other parts' evidence; the count of frames lost."""
-        state = self._parts.judge.verdict(state, self._evidence(state))
+        evidence = NO_EVIDENCE if state.rested else self._evidence(state)
+        state = self._parts.judge.verdict(state, evidence)
         if state.verdict is _LOST:
             return state.evolve(lost_for=state.lost_for + 1)
         return state.evolve(lost_for=0) if state.lost_for else state
@@ -606,7 +624,7 @@ class Tracker:
         appearance model of a one-call frame has learnt already)."""
         if state.learnt:
             return state
-        if not state.learns:
+        if not state.learns or state.rested:
             self._parts.appearance.skip_learning()
             return state
         return self._learn_all(state)
