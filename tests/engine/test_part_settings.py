@@ -60,7 +60,7 @@ COMPOSER_READS = {
     "variant", "coarse_radius", "coarse_step", "fine_radius", "fine_step", "colour_weight",
     "template_weight", "template_motion", "motion", "scale_steps", "scale_model", "redetect",
     "score_colour", "score_luma", "confidence_offset", "colour_relative", "stage_reach",
-    "judge_memory", "network",
+    "judge_memory", "network", "tracker_every",  # (which stages a frame walks: rests)
 }
 
 SETTINGS = {*PARTS, AppearanceSettings, Params}

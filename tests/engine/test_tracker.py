@@ -112,7 +112,7 @@ def test_variants_lists_the_six_family_members() -> None:
                        "rcwmil-nano"]
     nano, cf = v["rcwmil-nano"].as_dict(), v["rcwmil-cf"].as_dict()
     assert {k for k in nano if nano[k] != cf[k]} == {"variant", "description", "network",
-                                                     "likeness_every"}
+                                                     "likeness_every", "tracker_every"}
     assert all(isinstance(p, wmiltrack.Params) for p in v.values())
     assert wmiltrack.Tracker().params == v["rcwmil"]
 

@@ -219,13 +219,15 @@ VARIANTS["rcwmil-cf"] = VARIANTS["rcwmil-plus"].replace(
 )
 
 VARIANTS["rcwmil-nano"] = VARIANTS["rcwmil-cf"].replace(
-    variant="rcwmil-nano", network="nanotrack-v3", likeness_every=3,
+    variant="rcwmil-nano", network="nanotrack-v3", likeness_every=3, tracker_every=2,
     description="rcwmil-cf and NanoTrack v3's Siamese network (two ONNX files, run by "
     "onnxruntime or OpenCV's dnn; not shipped: `wmiltrack models fetch nanotrack-v3`) as two "
     "experts under one judge. The network leads; where the two boxes agree (IoU >= 0.3) the box "
     "is 0.8 the network's and 0.2 the tracker's, where they do not the network's; the tracker "
     "learns at that box (moved there at its own size) when the verdict is tracked and the frame "
-    "does not count towards lost. ok is judged from how alike the network's choice "
+    "does not count towards lost; after a frame both vouch for where the tracker's own confidence "
+    "is at least 0.5, the tracker rests for one frame (the network's box is the frame's, the tracker "
+    "is moved there without looking or learning). ok is judged from how alike the network's choice "
     "is to the first frame's target (the cosine of the backbone's feature maps; measured on "
     "every third frame the experts vouch for): lost after 3 frames in a row below 0.45 or below "
     "0.8 of the tracked frames' running mean on which the experts do not agree, found after 2 "
