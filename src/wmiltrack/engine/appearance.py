@@ -246,11 +246,13 @@ class HaarAppearance:
         a ``frame_wh`` frame (it uses no other channel and ``ii`` holds the region)."""
         if self.chan_names is not None:
             return False
-        x, y, w, h = roi
-        x0, y0 = max(x, 0), max(y, 0)
-        x1, y1 = min(x + w, frame_wh[0]), min(y + h, frame_wh[1])
-        return (ii.num_channels == 1 and ii.channels == (_core.CH_LUMA,) and ii.x0 <= x0
-                and ii.y0 <= y0 and ii.x0 + ii.width >= x1 and ii.y0 + ii.height >= y1)
+        return (ii.num_channels == 1 and ii.channels == (_core.CH_LUMA,)
+                and _holds(ii, roi, frame_wh))
+
+    def holds(self, roi: IntBox, frame_wh: tuple[int, int]) -> bool:
+        """Whether this model's own integral image holds ``roi`` clipped to a ``frame_wh``
+        frame (learning there needs no new table)."""
+        return _holds(self.ii, roi, frame_wh)
 
     # -- search ------------------------------------------------------------------------------
     def search_request(self, box: IntBox, stages: list[tuple[int, int]], frame_wh: tuple[int, int],
@@ -410,3 +412,11 @@ class HaarAppearance:
         elif h is not None:
             self.selected = milboost_select(h[:, :n_pos], h[:, n_pos:], self.params.num_selected,
                                             guard=self.params.guard)
+
+
+def _holds(ii: _core.IntegralImage, roi: IntBox, frame_wh: tuple[int, int]) -> bool:
+    """Whether the integral image ``ii`` holds ``roi`` clipped to a ``frame_wh`` frame."""
+    x, y, w, h = roi
+    x0, y0 = max(x, 0), max(y, 0)
+    x1, y1 = min(x + w, frame_wh[0]), min(y + h, frame_wh[1])
+    return ii.x0 <= x0 and ii.y0 <= y0 and ii.x0 + ii.width >= x1 and ii.y0 + ii.height >= y1

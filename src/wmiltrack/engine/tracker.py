@@ -651,13 +651,9 @@ class Tracker:
         judge moved the box away from the search; a borrowed table is left as it was)."""
         model = self._parts.appearance
         margin = self._margin(box)
-        x, y, w, h = roi_around(box, margin)
-        fw, fh = self._frame_wh
-        ii = model.ii
-        if (ii.x0 <= max(x, 0) and ii.y0 <= max(y, 0) and ii.x0 + ii.width >= min(x + w, fw)
-                and ii.y0 + ii.height >= min(y + h, fh)):
+        if model.holds(roi_around(box, margin), self._frame_wh):
             return
-        if state.integral is not None and ii is state.integral:
+        if state.integral is not None and model.ii is state.integral:
             model.ii = _core.IntegralImage()
         model.compute_integral(state.frame, box, margin)
 
@@ -778,10 +774,7 @@ class Tracker:
 def _result(state: FrameState) -> TrackResult:
     """A frame's result, from its record: its box (``exact``, fractional, where the judge took
     it from a second expert, else the tracker's ``box``), score and ``ok``."""
-    if state.exact is not None:
-        x, y, w, h = state.exact
-        return TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
-    x, y, w, h = state.box
+    x, y, w, h = state.box if state.exact is None else state.exact
     return TrackResult((float(x), float(y), float(w), float(h)), state.score, state.ok)
 
 

@@ -110,8 +110,8 @@ def crop(frame: np.ndarray, cx: float, cy: float, side: float, out: int,
     if left or top or right or bottom:
         window = cv2.copyMakeBorder(window, top, bottom, left, right, cv2.BORDER_CONSTANT,
                                     value=fill)
-    if n == out:
-        return np.ascontiguousarray(window)
+    if n == out:  # (a copy: a window inside the frame is a view of it)
+        return window.copy()
     patch: np.ndarray = cv2.resize(window, (out, out), interpolation=cv2.INTER_LINEAR)
     return patch
 
