@@ -11,6 +11,7 @@ Small ``max_examples`` keep the file to a few seconds.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -399,9 +400,16 @@ def tracker_params(draw: st.DrawFn, variant: str) -> dict[str, Any]:
 
 @SLOW
 @given(data=st.data())
-def test_tracker_random_frames_boxes_params(data: st.DataObject) -> None:
+def test_tracker_random_frames_boxes_params(data: st.DataObject,
+                                           nano_network: dict[str, tuple[Path, Path]]) -> None:
+    """(A preset with a network runs on ``nano_network``'s files: the real ones, else the
+    stand-ins, so that a bare clone draws it too.)"""
     variant = data.draw(st.sampled_from(VARIANTS))
     overrides = data.draw(tracker_params(variant))
+    network = Params.for_variant(variant).network
+    if network:
+        backbone, head = nano_network[network.rsplit("-", 1)[-1]]
+        overrides.update(backbone=str(backbone), head=str(head))
     fh = data.draw(st.integers(4, 64))
     fw = data.draw(st.integers(4, 64))
     channels = data.draw(st.sampled_from([0, 1, 3, 4]))
