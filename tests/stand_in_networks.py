@@ -32,6 +32,7 @@ OPSET = 11
 #: The log-odds: ``GAIN x (cosine - THRESHOLD)`` for the target, its negative for the rest.
 GAIN, THRESHOLD = 6.0, 0.6
 LOC_WEIGHT = 0.002
+_TO_END = 2**62  # (a Slice end beyond the dimension: up to its end)
 
 
 def _const(name: str, values: np.ndarray | list[float] | list[int], dtype: type = np.float32):  # type: ignore[no-untyped-def]
@@ -102,14 +103,19 @@ def _correlation_nodes(search: str, n: int) -> list:  # type: ignore[type-arg]
     return nodes
 
 
-def _correlation_constants(c: int, n: int) -> list:  # type: ignore[type-arg]
-    """Slice bounds of :func:`_correlation_nodes` (the search map has ``n + 1`` cells a side)."""
+def _correlation_constants(c: int) -> list:  # type: ignore[type-arg]
+    """Slice bounds of :func:`_correlation_nodes` (the search map has one cell a side more
+    than the answer): the windows' first cells are all cells less the last row or column, or
+    less the first; counted from the ends, so that the head takes a search map of any size
+    (as NanoTrack's head does once :func:`wmiltrack.networks.nanotrack.resize_head` moved its
+    shape constants)."""
     out = [_const("hw", [2, 3], np.int64), _const("norm_scale", [0.25 / np.sqrt(c)])]
     for dy in (0, 1):
         for dx in (0, 1):
             k = f"{dy}{dx}"
             out += [_const(f"at{k}", [dy, dx], np.int64), _const(f"to{k}", [dy + 1, dx + 1], np.int64),
-                    _const(f"end{k}", [dy + n, dx + n], np.int64)]
+                    _const(f"end{k}", [dy - 1 if dy == 0 else _TO_END, dx - 1 if dx == 0 else _TO_END],
+                           np.int64)]
     return out
 
 
@@ -139,7 +145,7 @@ def head_model(version: str, seed: int):  # type: ignore[no-untyped-def]
              _const("minus_threshold", [-THRESHOLD]), _const("gain", [GAIN]),
              _const("w_loc", rng.standard_normal((4, c, 1, 1)) * LOC_WEIGHT), _const("b_loc", np.zeros(4)),
              _const("loc_span", [16.0]), _const("loc_least", [24.0]),
-             *_correlation_constants(c, n)]
+             *_correlation_constants(c)]
     graph = helper.make_graph(
         nodes, f"stand_in_head_{version}",
         [helper.make_tensor_value_info("input1", TensorProto.FLOAT, [1, c, 8, 8]),

@@ -8,6 +8,8 @@ line naming it, its role and the fix (:class:`~wmiltrack.networks.files.ModelFil
 whichever runtime read it. A backend is copied and pickled by its file, runtime and threads, and
 loads the file again (a runtime's session cannot be copied).
 
+A file can be loaded rewritten (``rewrite``: a function on its ``onnx.ModelProto``, such as
+NanoTrack's head resized for a smaller search map), by either runtime, with the ``onnx`` package.
 onnxruntime runs a backbone at two sizes (:func:`make_dynamic`) only with the ``onnx`` package;
 ``"auto"`` therefore takes onnxruntime where both are installed, else OpenCV's dnn, and says
 once (a logged warning) when onnxruntime is there without ``onnx``.
@@ -16,7 +18,7 @@ once (a logged warning) when onnxruntime is there without ``onnx``.
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -25,8 +27,8 @@ import numpy as np
 from ..integrations.opencv_wheels import TrackerUnavailable
 from .files import ModelFileUnreadable, unreadable_message
 
-__all__ = ["RUNTIMES", "Backend", "DnnBackend", "OrtBackend", "choose_runtime", "load_backend",
-           "make_dynamic", "runtime_version"]
+__all__ = ["RUNTIMES", "Backend", "Rewrite", "DnnBackend", "OrtBackend", "choose_runtime", "load_backend",
+           "make_dynamic", "note_once", "onnx_installed", "runtime_version"]
 
 RUNTIMES: tuple[str, ...] = ("auto", "onnxruntime", "opencv")
 """The runtimes a network can be run by; ``"auto"`` is onnxruntime where it is installed (with
@@ -66,12 +68,42 @@ def make_dynamic(model: Any) -> Any:
     return model
 
 
-class OrtBackend:
-    """A file run by onnxruntime on ``threads`` threads, sequentially; with ``dynamic`` its
-    spatial sizes are made symbolic first (:func:`make_dynamic`, which needs ``onnx``)."""
+Rewrite = Callable[[Any], Any]
+"""A change made to a network's ``onnx.ModelProto`` before a runtime reads it (picklable: a
+module-level function or a ``functools.partial`` of one, so that a backend copies)."""
 
-    def __init__(self, path: Path, threads: int = 1, *, dynamic: bool = False) -> None:
-        self.path, self.threads, self.dynamic = Path(path), threads, dynamic
+
+def _rewritten(path: Path, rewrite: Rewrite | None, dynamic: bool = False) -> bytes | None:
+    """The file at ``path`` as bytes after ``rewrite`` and, with ``dynamic``,
+    :func:`make_dynamic`; None where neither is asked (the runtime reads the file itself)."""
+    if rewrite is None and not dynamic:
+        return None
+    try:
+        import onnx
+    except ImportError:
+        other = (", or choose OpenCV's dnn (network_runtime=opencv for a preset, runtime=opencv "
+                 "for nanotrack:VERSION)") if dynamic else ""
+        raise TrackerUnavailable(
+            f"the runtime {'onnxruntime' if dynamic else 'here'} needs the onnx package to run "
+            f"{'a network at two sizes' if dynamic else 'a rewritten network'}: pip install onnx "
+            f"(the nano extra){other}") from None
+    model = onnx.load(str(path))
+    if rewrite is not None:
+        model = rewrite(model)
+    if dynamic:
+        model = make_dynamic(model)
+    data: bytes = model.SerializeToString()
+    return data
+
+
+class OrtBackend:
+    """A file run by onnxruntime on ``threads`` threads, sequentially; ``rewrite`` changes it
+    first, and with ``dynamic`` its spatial sizes are made symbolic (:func:`make_dynamic`); both
+    need ``onnx``."""
+
+    def __init__(self, path: Path, threads: int = 1, *, dynamic: bool = False,
+                 rewrite: Rewrite | None = None) -> None:
+        self.path, self.threads, self.dynamic, self.rewrite = Path(path), threads, dynamic, rewrite
         self._load()
 
     def _load(self) -> None:
@@ -87,21 +119,13 @@ class OrtBackend:
         options.inter_op_num_threads = 1
         options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
         options.log_severity_level = 3
-        source: Any = str(self.path)
-        if self.dynamic:
-            try:
-                import onnx
-            except ImportError:
-                raise TrackerUnavailable(
-                    "the runtime onnxruntime needs the onnx package to run a network at two "
-                    "sizes: pip install onnx, or choose OpenCV's dnn (network_runtime=opencv for "
-                    "a preset, runtime=opencv for nanotrack:VERSION)") from None
-            source = make_dynamic(onnx.load(str(self.path))).SerializeToString()
+        source: Any = _rewritten(self.path, self.rewrite, self.dynamic) or str(self.path)
         self._session = ort.InferenceSession(source, sess_options=options,
                                              providers=["CPUExecutionProvider"])
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"path": self.path, "threads": self.threads, "dynamic": self.dynamic}
+        return {"path": self.path, "threads": self.threads, "dynamic": self.dynamic,
+                "rewrite": self.rewrite}
 
     def output_names(self) -> tuple[str, ...]:
         """See :meth:`Backend.output_names`."""
@@ -119,19 +143,22 @@ class OrtBackend:
 
 
 class DnnBackend:
-    """A file run by OpenCV's ``cv2.dnn`` (its own threads: ``cv2.setNumThreads``)."""
+    """A file run by OpenCV's ``cv2.dnn`` (its own threads: ``cv2.setNumThreads``);
+    ``rewrite`` changes it first (with ``onnx``)."""
 
-    def __init__(self, path: Path) -> None:
-        self.path = Path(path)
+    def __init__(self, path: Path, *, rewrite: Rewrite | None = None) -> None:
+        self.path, self.rewrite = Path(path), rewrite
         self._load()
 
     def _load(self) -> None:
         import cv2
 
-        self._net = cv2.dnn.readNet(str(self.path))
+        data = _rewritten(self.path, self.rewrite)
+        self._net = (cv2.dnn.readNet(str(self.path)) if data is None
+                     else cv2.dnn.readNetFromONNX(np.frombuffer(data, np.uint8)))
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"path": self.path}
+        return {"path": self.path, "rewrite": self.rewrite}
 
     def output_names(self) -> tuple[str, ...]:
         """See :meth:`Backend.output_names`."""
@@ -168,20 +195,34 @@ def choose_runtime(runtime: str = "auto", threads: int = 1) -> str:
         return "opencv"
     if _importable("onnx"):
         return "onnxruntime"
-    if "onnx" not in _NOTED:
-        _NOTED.add("onnx")
-        _LOG.warning("wmiltrack: onnxruntime is installed without the onnx package, which it "
-                     "needs to run a backbone at two sizes; the networks run on OpenCV's dnn "
-                     "(pip install onnx to run them on onnxruntime)")
+    note_once("onnx", "wmiltrack: onnxruntime is installed without the onnx package, which it "
+              "needs to run a backbone at two sizes; the networks run on OpenCV's dnn, over their "
+              "published search window only (pip install onnx to run them on onnxruntime)")
     return "opencv"
+
+
+def onnx_installed() -> bool:
+    """Whether the ``onnx`` package can be imported: a file is rewritten before it is loaded
+    (``rewrite``, ``dynamic``) only with it."""
+    return _importable("onnx")
+
+
+def note_once(key: str, message: str) -> None:
+    """Log ``message`` as a warning, once a process for each ``key`` (``"onnx"``: the one note
+    that the ``onnx`` package is missing, whatever needed it first)."""
+    if key not in _NOTED:
+        _NOTED.add(key)
+        _LOG.warning(message)
 
 
 def load_backend(path: Path, runtime: str = "auto", threads: int = 1, *,
                  dynamic: bool = False, role: str = "network", model: str | None = None,
-                 outputs: Sequence[str] = ()) -> Backend:
+                 outputs: Sequence[str] = (), rewrite: Rewrite | None = None,
+                 rewritten: str = "") -> Backend:
     """The file at ``path`` loaded by ``runtime`` (:func:`choose_runtime`); ``dynamic``: its
     spatial sizes may change from call to call (onnxruntime needs to be told, OpenCV's dnn
-    does not).
+    does not); ``rewrite``: a change made to the file's model before the runtime reads it,
+    ``rewritten`` saying which in a message (the file itself is never written).
 
     ``role`` and ``model`` (a set of :data:`~wmiltrack.networks.files.MODELS`) say what the
     file was given as, and ``outputs`` the output names a file of that role has: a file that
@@ -198,14 +239,15 @@ def load_backend(path: Path, runtime: str = "auto", threads: int = 1, *,
     if path.stat().st_size == 0:
         raise unreadable("it is empty (0 bytes)")
     try:
-        backend: Backend = (OrtBackend(path, threads, dynamic=dynamic) if chosen == "onnxruntime"
-                            else DnnBackend(path))
+        backend: Backend = (OrtBackend(path, threads, dynamic=dynamic, rewrite=rewrite)
+                            if chosen == "onnxruntime" else DnnBackend(path, rewrite=rewrite))
     except (ImportError, TrackerUnavailable):
         raise
     except Exception as exc:  # each runtime has its own errors (DecodeError, Fail, cv2.error...)
         runtime_name = "OpenCV's dnn" if chosen == "opencv" else chosen
-        raise unreadable(f"{runtime_name} cannot read it as an ONNX network (is it corrupt or "
-                         "truncated?)") from exc
+        what = f"it {rewritten}" if rewritten else "it"
+        raise unreadable(f"{runtime_name} cannot read {what} as an ONNX network (is it corrupt "
+                         "or truncated?)") from exc
     missing = [name for name in outputs if name not in backend.output_names()]
     if missing:
         raise unreadable(f"it gives the outputs {', '.join(backend.output_names())}, where a {role} "

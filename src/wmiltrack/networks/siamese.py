@@ -55,14 +55,17 @@ class SiameseStep(Protocol):
         """Take the template from the BGR ``frame`` at ``box``."""
         ...
 
-    def locate(self, frame: np.ndarray) -> Candidate:
-        """One tracking step on ``frame`` from the current state; the state follows."""
+    def locate(self, frame: np.ndarray, *, narrow: bool = False) -> Candidate:
+        """One tracking step on ``frame`` from the current state; the state follows.
+        ``narrow``: over the step's narrow search window (a smaller crop at the same scale,
+        for a target that moved little; the published window where the step has none)."""
         ...
 
     def search_at(self, frame: np.ndarray, centre: tuple[float, float],
-                  size: tuple[float, float], *, window: bool) -> Candidate:
+                  size: tuple[float, float], *, window: bool, narrow: bool = False) -> Candidate:
         """The step's choice in a search window centred at ``centre`` for a target of ``size``
-        (``window``: with the step's motion prior, as in tracking); the state does not change."""
+        (``window``: with the step's motion prior, as in tracking; ``narrow``: the narrow
+        window); the state does not change."""
         ...
 
     def recentre(self, box: FloatBox) -> None:
