@@ -13,7 +13,8 @@ and gives the frame's one verdict and box; the tracker learns there, and the net
 
 One frame::
 
-    tracked:  the network's own search; its likeness measured when the judge asks
+    tracked:  the network's own search (narrow after a frame the judge vouched for, with
+              ``narrow_search``); its likeness measured when the judge asks
     lost:     the network's own search, and the tracker's box and (after ``redetect_after``
               lost frames) ``redetect_windows`` windows a frame of a whole-frame sweep, each
               with its likeness; the judge picks the place, the network moves there
@@ -30,6 +31,7 @@ import numpy as np
 from ..networks.backends import RUNTIMES
 from ..networks.families import check_siamese, load_siamese, siamese_networks
 from ..networks.files import find_files
+from ..networks.nanotrack import check_narrow
 from ..networks.siamese import SiameseStep, as_bgr
 from .frames import IntBox
 from .geometry import centre, within
@@ -82,6 +84,15 @@ class ExpertSettings:
         before, and the tracker is moved there without learning (the record's ``rested``).
         A frame after one that was doubtful, lost or not vouched for always runs the tracker.
         1: the tracker runs on every frame.
+    narrow_search : int
+        The side, in network pixels, of the search crop on a frame after one the judge vouched
+        for (the experts agreed, the tracker said ``ok``, nothing counted against the target):
+        the published crop's scale over a smaller window (:mod:`wmiltrack.networks.nanotrack`),
+        a network pass at about two thirds of the published one's cost at 223 px; 0: the
+        published crop (255 px) on every frame. ``16 k - 1`` px, 143 to 239; needs the
+        ``onnx`` package (without it the published crop is used, said once). No preset sets
+        it: on the development set, 223 px makes rcwmil-nano about 1.1 times as fast and
+        costs 0.01 on one half, losing one sequence (docs/performance.md).
     """
 
     network: str = ""
@@ -92,6 +103,7 @@ class ExpertSettings:
     redetect_windows: int = 4
     redetect_after: int = 10
     tracker_every: int = 1
+    narrow_search: int = 0
 
     def __post_init__(self) -> None:
         ExpertSettings.check(self)
@@ -102,7 +114,9 @@ class ExpertSettings:
                               "network_runtime": RUNTIMES})
         need(isinstance(self.backbone, str) and isinstance(self.head, str),
              "backbone and head must be paths as strings ('' to find them)")
-        check_ints(self, "network_threads", "redetect_windows", "redetect_after", "tracker_every")
+        check_ints(self, "network_threads", "redetect_windows", "redetect_after", "tracker_every",
+                   "narrow_search")
+        check_narrow(self.narrow_search)
         need(self.tracker_every >= 1, f"tracker_every must be >= 1, got {self.tracker_every}")
         need(self.redetect_after >= 0, f"redetect_after must be >= 0, got {self.redetect_after}")
         need(self.network_threads >= 1, f"network_threads must be >= 1, got {self.network_threads}")
@@ -127,7 +141,8 @@ def network_files(settings: ExpertSettings) -> tuple[Path, Path]:
     found = find_files(settings.network, {"backbone": settings.backbone or None,
                                           "head": settings.head or None})
     check_siamese(settings.network, backbone=found[0], head=found[1],
-                  runtime=settings.network_runtime, threads=settings.network_threads)
+                  runtime=settings.network_runtime, threads=settings.network_threads,
+                  narrow=settings.narrow_search)
     return found[0], found[1]
 
 
@@ -143,7 +158,8 @@ class NetworkExpert:
         self.settings = settings
         self.locator: SiameseStep = load_siamese(
             settings.network, backbone=backbone, head=head,
-            runtime=settings.network_runtime, threads=settings.network_threads)
+            runtime=settings.network_runtime, threads=settings.network_threads,
+            narrow=settings.narrow_search)
         self._restart((0.0, 0.0, 0.0, 0.0))
 
     def start(self, frame: np.ndarray, box: IntBox | FloatBox) -> None:
@@ -157,6 +173,7 @@ class NetworkExpert:
         self._held: FloatBox = box  # the last tracked box: where the sweep starts
         self._sweep: list[tuple[float, float]] = []  # the sweep's centres still to search
         self._own: FloatBox = box  # the network's own choice on the last frame
+        self._narrow = False  # whether the next frame searches the narrow window
 
     def locate(self, state: FrameState) -> ExpertReport:
         """The network's search on the record's frame and its evidence: its box and that box's
@@ -164,7 +181,7 @@ class NetworkExpert:
         started with the target lost (``state.lost``), also the other places searched (the
         tracker's box ``state.box``, then the sweep's share) with their likeness."""
         img = as_bgr(state.frame)
-        found = self.locator.locate(img)
+        found = self.locator.locate(img, narrow=self._narrow and not state.lost)
         self._own = found.box
         if not state.lost:
             return ExpertReport(found.box, functools.partial(self.locator.likeness, img, found.box))
@@ -179,7 +196,10 @@ class NetworkExpert:
     def follow(self, state: FrameState) -> None:
         """The network follows the frame's verdict: on a lost target's frame where the judge
         took another place than the network's own, the network moves there; a tracked frame's
-        box is where a later sweep starts, and a found target's ends the sweep."""
+        box is where a later sweep starts, and a found target's ends the sweep. The next frame
+        searches the narrow window where the judge vouched for this one."""
+        self._narrow = (self.settings.narrow_search > 0 and state.vouched
+                        and state.verdict is Verdict.TRACKED)
         box = state.exact
         if box is None:
             return
