@@ -4,7 +4,8 @@ smaller crop at the published scale, its head rewritten for the smaller map when
 (``narrow_search``, engine/experts.py).
 
 The network's outputs are compared on NanoTrack's own files where they are there
-(``nano_network``: else the stand-ins, whose head is size-free like the rewritten one).
+(``nano_network``: else the stand-ins, whose head is size-free like the rewritten one), by both
+runtimes (onnxruntime where the ``nano`` extra is installed).
 """
 
 from __future__ import annotations
@@ -35,13 +36,18 @@ from wmiltrack.networks.nanotrack import (
 from wmiltrack.networks.siamese import as_bgr
 
 
+#: Both runtimes; onnxruntime only where the nano extra is installed (a failure under CI's extras run).
+RUNTIMES = ["opencv", pytest.param("onnxruntime", marks=pytest.mark.extras("onnxruntime"))]
+
+
+@pytest.mark.parametrize("runtime", RUNTIMES)
 @pytest.mark.parametrize("version", ["v2", "v3"])
 @pytest.mark.parametrize("narrow", [223, 191])
 def test_the_narrow_head_answers_the_smaller_map(nano_network: dict[str, tuple[Path, Path]],
-                                                 version: str, narrow: int) -> None:
+                                                 version: str, narrow: int, runtime: str) -> None:
     """A crop of ``16 k - 1`` px gives a map of ``k`` cells and an answer of the published grid
-    less one point a side per cell less; the published search is unchanged beside it."""
-    net = NanoNetwork(*nano_network[version], "onnxruntime", narrow=narrow)
+    less as many points as the map has cells fewer; the published search is unchanged beside it."""
+    net = NanoNetwork(*nano_network[version], runtime, narrow=narrow)
     rng = np.random.default_rng(0)
     template = net.features(rng.integers(0, 255, (127, 127, 3), dtype=np.uint8))
     grid = nanotrack_constants(version).grid
@@ -53,12 +59,13 @@ def test_the_narrow_head_answers_the_smaller_map(nano_network: dict[str, tuple[P
         assert scores.shape == (2, want, want) and sides.shape == (4, want, want)
 
 
+@pytest.mark.parametrize("runtime", RUNTIMES)
 @pytest.mark.parametrize("version", ["v2", "v3"])
 def test_the_narrow_answer_is_the_published_answer_near_the_centre(
-        nano_network: dict[str, tuple[Path, Path]], version: str) -> None:
-    """Over the same frame the narrow search's log-odds follow the published search's at the
-    same points (the backbone sees the same pixels at the same scale, less the margin)."""
-    net = NanoNetwork(*nano_network[version], "onnxruntime", narrow=223)
+        nano_network: dict[str, tuple[Path, Path]], version: str, runtime: str) -> None:
+    """Over the same frame the narrow search chooses about the box the published search chooses,
+    with about its score (the backbone sees the same pixels at the same scale, less the margin)."""
+    net = NanoNetwork(*nano_network[version], runtime, narrow=223)
     seq = make_sequence(2, seed=3)
     step = NanoTrackStep(net, nanotrack_constants(version))
     frames = [as_bgr(f) for f in seq.frames]
@@ -94,7 +101,8 @@ def test_a_narrow_size_that_is_no_crop_is_refused(value: object) -> None:
         wmiltrack.Tracker("rcwmil-nano", narrow_search=value)
 
 
-def test_a_head_that_cannot_be_resized_is_one_line(tmp_path: Path,
+@pytest.mark.parametrize("runtime", RUNTIMES)
+def test_a_head_that_cannot_be_resized_is_one_line(tmp_path: Path, runtime: str,
                                                    nano_network: dict[str, tuple[Path, Path]]) -> None:
     """A head whose grid does not follow the map (here: its answer sliced back to a fixed
     size) is refused when the network is loaded, in one line naming the setting."""
@@ -115,15 +123,16 @@ def test_a_head_that_cannot_be_resized_is_one_line(tmp_path: Path,
     assert TensorProto.FLOAT == out.type.tensor_type.elem_type
     broken = tmp_path / "fixed_head.onnx"
     onnx.save(model, str(broken))
-    NanoNetwork(backbone, broken, "onnxruntime")  # (the published search alone is not affected)
+    NanoNetwork(backbone, broken, runtime)  # (the published search alone is not affected)
     with pytest.raises(ModelFileUnreadable) as info:
-        NanoNetwork(backbone, broken, "onnxruntime", version="v3", narrow=223)
+        NanoNetwork(backbone, broken, runtime, version="v3", narrow=223)
     message = str(info.value)
     assert len(message.splitlines()) == 1 and "narrow_search=0" in message and str(broken) in message
 
 
-def test_copies_keep_the_narrow_search(nano_network: dict[str, tuple[Path, Path]]) -> None:
-    net = NanoNetwork(*nano_network["v3"], "onnxruntime", narrow=191)
+@pytest.mark.parametrize("runtime", RUNTIMES)
+def test_copies_keep_the_narrow_search(nano_network: dict[str, tuple[Path, Path]], runtime: str) -> None:
+    net = NanoNetwork(*nano_network["v3"], runtime, narrow=191)
     search = net.features(np.full((191, 191, 3), 90, np.uint8))
     template = net.features(np.full((127, 127, 3), 90, np.uint8))
     for other in (pickle.loads(pickle.dumps(net)), copy.deepcopy(net)):
