@@ -35,7 +35,6 @@ from wmiltrack.networks.nanotrack import (
 )
 from wmiltrack.networks.siamese import as_bgr
 
-
 #: Both runtimes; onnxruntime only where the nano extra is installed (a failure under CI's extras run).
 RUNTIMES = ["opencv", pytest.param("onnxruntime", marks=pytest.mark.extras("onnxruntime"))]
 
